@@ -1,0 +1,69 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "core/colour.h"
+#include "core/image.h"
+
+namespace photomat {
+
+// All image files go through OpenImageIO: 8/16-bit PNG and TIFF, JPEG, OpenEXR (float and half,
+// many channels), camera RAW and whatever else the installed OpenImageIO reads.
+
+struct ImageReadOptions {
+  // How integer samples encode light. Unset: 8-bit files are sRGB (what cameras and editors write),
+  // 16-bit and wider integer files are linear (what lab cameras and DiLiGenT write); float files
+  // are always linear.
+  std::optional<ColourSpace> colour_space;
+  // Photometric data have no use for alpha; map stacks keep every channel.
+  bool keep_alpha = false;
+};
+
+// What the file held, before conversion to linear float.
+struct ImageFileInfo {
+  int bits_per_sample = 0;
+  bool floating_point = false;
+  ColourSpace colour_space = ColourSpace::kLinear;
+  // Pixels with a channel at the largest code of an integer format: clipped, not measured.
+  std::size_t saturated_pixels = 0;
+  // String metadata of the file (e.g. photomat's map-stack description in an EXR header).
+  std::map<std::string, std::string> attributes;
+};
+
+struct LoadedImage {
+  Image image;  // linear float; integer formats scaled to [0, 1]
+  ImageFileInfo info;
+};
+
+// Throws Error naming `path` when the file is missing, not an image, truncated or corrupt, or
+// holds non-finite values.
+LoadedImage ReadImage(const std::filesystem::path& path, const ImageReadOptions& options = {});
+
+// A mask image: a pixel is set where any channel is above half of full scale (thresholding the
+// anti-aliased masks of real data sets at 50 %).
+Mask ReadMask(const std::filesystem::path& path);
+
+enum class SampleType { kUint8, kUint16, kHalf, kFloat };
+
+struct ImageWriteOptions {
+  SampleType sample_type = SampleType::kFloat;
+  // For integer types: kSrgb applies the sRGB curve before quantising (display images), kLinear
+  // stores linear values (16-bit data). Values are clamped to [0, 1] before quantising.
+  ColourSpace encoding = ColourSpace::kLinear;
+  // Written as string metadata where the format allows it (EXR header, PNG text).
+  std::map<std::string, std::string> attributes;
+};
+
+// Writes atomically (temporary name, then rename). The format follows the extension. Throws Error
+// naming `path` on failure (including a full disk) and for non-finite values in integer output.
+void WriteImage(const std::filesystem::path& path, const Image& image,
+                const ImageWriteOptions& options = {});
+
+// Writes a mask as an 8-bit greyscale image (0 / 255).
+void WriteMask(const std::filesystem::path& path, const Mask& mask);
+
+}  // namespace photomat

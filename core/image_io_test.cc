@@ -1,0 +1,182 @@
+#include "core/image_io.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::TempDir;
+
+std::string MessageOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(ImageIoTest, SixteenBitPngRoundTripsEveryCodeExactly) {
+  TempDir dir;
+  Image image(256, 256, 1);
+  for (int i = 0; i < 65536; ++i) image.values()[i] = static_cast<float>(i / 65535.0);
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  WriteImage(dir / "all.png", image, options);
+  const LoadedImage loaded = ReadImage(dir / "all.png");
+  EXPECT_EQ(loaded.info.bits_per_sample, 16);
+  EXPECT_EQ(loaded.info.colour_space, ColourSpace::kLinear);
+  for (int i = 0; i < 65536; ++i) {
+    ASSERT_EQ(std::lround(loaded.image.values()[i] * 65535.0), i) << "code " << i;
+  }
+  EXPECT_EQ(loaded.info.saturated_pixels, 1u);  // only code 65535
+}
+
+TEST(ImageIoTest, EightBitIsDecodedAsSrgbByDefault) {
+  TempDir dir;
+  Image image(2, 1, 1);
+  image.values()[0] = 0.5f;  // linear
+  image.values()[1] = 0.0f;
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint8;
+  options.encoding = ColourSpace::kSrgb;
+  WriteImage(dir / "srgb.png", image, options);
+  const LoadedImage loaded = ReadImage(dir / "srgb.png");
+  EXPECT_EQ(loaded.info.colour_space, ColourSpace::kSrgb);
+  // sRGB code round(255 * 0.7354) = 188 decodes to 0.5029.
+  EXPECT_NEAR(loaded.image.values()[0], 0.5, 0.005);
+  ImageReadOptions linear;
+  linear.colour_space = ColourSpace::kLinear;
+  EXPECT_NEAR(ReadImage(dir / "srgb.png", linear).image.values()[0], 188 / 255.0, 1e-6);
+}
+
+TEST(ImageIoTest, ExrKeepsFloatsChannelNamesAndAttributes) {
+  TempDir dir;
+  Image image(3, 2, std::vector<std::string>{"normal.X", "normal.Y", "normal.Z", "albedo.R"});
+  for (std::size_t i = 0; i < image.values().size(); ++i) {
+    image.values()[i] = -1.5f + 0.123456789f * static_cast<float>(i);
+  }
+  ImageWriteOptions options;
+  options.attributes["photomat:test"] = "{\"a\": 1}";
+  WriteImage(dir / "stack.exr", image, options);
+  ImageReadOptions keep;
+  keep.keep_alpha = true;
+  const LoadedImage loaded = ReadImage(dir / "stack.exr", keep);
+  ASSERT_TRUE(loaded.image.SameShape(image));
+  EXPECT_EQ(loaded.info.attributes.at("photomat:test"), "{\"a\": 1}");
+  // OpenEXR stores channels sorted by name; photomat finds them by name.
+  for (const std::string& name : image.channel_names()) {
+    const int in = image.FindChannel(name), out = loaded.image.FindChannel(name);
+    ASSERT_GE(out, 0) << name;
+    for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+      EXPECT_EQ(loaded.image.pixel(p)[out], image.pixel(p)[in]);
+    }
+  }
+}
+
+TEST(ImageIoTest, MissingFileIsNamed) {
+  EXPECT_THAT(MessageOf([] { ReadImage("/nonexistent/x.png"); }),
+              HasSubstr("/nonexistent/x.png: image file not found"));
+}
+
+TEST(ImageIoTest, CorruptImageIsNamed) {
+  TempDir dir;
+  testing::WriteFile(dir / "bad.png", "\x89PNG\r\n\x1a\nthis is not a png");
+  EXPECT_THAT(MessageOf([&] { ReadImage(dir / "bad.png"); }), HasSubstr("bad.png"));
+}
+
+TEST(ImageIoTest, TruncatedImageIsAnErrorNotAPartialImage) {
+  TempDir dir;
+  Image image(64, 64, 3);
+  for (std::size_t i = 0; i < image.values().size(); ++i) image.values()[i] = (i % 97) / 97.0f;
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  WriteImage(dir / "full.png", image, options);
+  const auto size = std::filesystem::file_size(dir / "full.png");
+  std::filesystem::copy_file(dir / "full.png", dir / "cut.png");
+  std::filesystem::resize_file(dir / "cut.png", size / 2);
+  EXPECT_THAT(MessageOf([&] { ReadImage(dir / "cut.png"); }), HasSubstr("cut.png"));
+}
+
+TEST(ImageIoTest, NanInFloatImageIsRejected) {
+  TempDir dir;
+  Image image(2, 2, 1);
+  image.values()[3] = NAN;
+  WriteImage(dir / "nan.exr", image);
+  EXPECT_THAT(MessageOf([&] { ReadImage(dir / "nan.exr"); }), HasSubstr("NaN or infinite"));
+}
+
+TEST(ImageIoTest, AlphaIsDroppedForPhotometricData) {
+  TempDir dir;
+  Image image(2, 2, 4);
+  for (float& v : image.values()) v = 1.0f;
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint8;
+  WriteImage(dir / "rgba.png", image, options);
+  // PNG writers mark the fourth channel as alpha.
+  EXPECT_EQ(ReadImage(dir / "rgba.png").image.channels(), 3);
+}
+
+TEST(ImageIoTest, MaskThresholdsAtHalf) {
+  TempDir dir;
+  Image image(3, 1, 1);
+  image.values()[0] = 0.2f;
+  image.values()[1] = 0.6f;
+  image.values()[2] = 1.0f;
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint8;
+  WriteImage(dir / "mask.png", image, options);
+  const Mask mask = ReadMask(dir / "mask.png");
+  EXPECT_FALSE(mask(0, 0));
+  EXPECT_TRUE(mask(1, 0));
+  EXPECT_TRUE(mask(2, 0));
+}
+
+TEST(ImageIoTest, FailedWriteLeavesNoFile) {
+  TempDir dir;
+  Image image(2, 2, 1);
+  image.values()[0] = NAN;
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint8;
+  EXPECT_THROW(WriteImage(dir / "x.png", image, options), Error);
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+TEST(ImageIoDeathTest, FullDiskIsAnErrorAndLeavesNoFile) {
+  TempDir dir;
+  Image image(512, 512, 3);
+  for (std::size_t i = 0; i < image.values().size(); ++i) image.values()[i] = (i % 101) / 101.0f;
+  EXPECT_EXIT(
+      {
+        testing::LimitFileSize(20000);
+        try {
+          WriteImage(dir / "big.exr", image);
+        } catch (const Error& e) {
+          const bool named = std::string(e.what()).find("big.exr") != std::string::npos;
+          _exit(named && std::filesystem::is_empty(dir.path()) ? 0 : 2);
+        }
+        _exit(1);
+      },
+      ::testing::ExitedWithCode(0), "");
+}
+
+TEST(ImageIoTest, ReadsRealSixteenBitDiligentImage) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(file, "diligent/ball/001.png");
+  const LoadedImage loaded = ReadImage(file);
+  EXPECT_EQ(loaded.image.width(), 612);
+  EXPECT_EQ(loaded.image.height(), 512);
+  EXPECT_EQ(loaded.image.channels(), 3);
+  EXPECT_EQ(loaded.info.bits_per_sample, 16);
+  EXPECT_GT(loaded.info.saturated_pixels, 0u);  // the README: highlights reach 65535
+}
+
+}  // namespace
+}  // namespace photomat

@@ -1,0 +1,53 @@
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace photomat::testing {
+
+// The real datasets (the shared/data folder) come from $PHOTOMAT_TEST_DATA, which .ci/run sets.
+// Unset: nullopt, and the test skips with that reason. Set to a folder that does not exist: the
+// test fails, because a misconfigured run must not look like a skipped one.
+constexpr const char* kTestDataVariable = "PHOTOMAT_TEST_DATA";
+std::optional<std::filesystem::path> TestDataDir();
+
+// Resolves `relative` under the data folder, or skips/fails the current test as described above.
+#define PHOTOMAT_TEST_DATA_OR_SKIP(var, relative)                                               \
+  const auto var##_root = ::photomat::testing::TestDataDir();                                    \
+  if (!var##_root) {                                                                             \
+    GTEST_SKIP() << ::photomat::testing::kTestDataVariable                                       \
+                 << " is not set: this test needs the real datasets (shared/data)";               \
+  }                                                                                              \
+  const std::filesystem::path var = *var##_root / (relative);                                    \
+  ASSERT_TRUE(std::filesystem::exists(var))                                                      \
+      << var << " is missing but " << ::photomat::testing::kTestDataVariable << " is set"
+
+// A fresh folder under the system temp folder, removed with its contents on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Writes `contents` to `path` (creating parent folders); for building malformed inputs.
+void WriteFile(const std::filesystem::path& path, const std::string& contents);
+
+// Limits the size of files this process may write to `bytes` and makes larger writes fail with
+// EFBIG instead of killing the process: a full disk, for tests of write errors (use in a child
+// process, e.g. inside EXPECT_EXIT).
+void LimitFileSize(std::size_t bytes);
+
+// The built photomat executable (for command-line tests).
+std::filesystem::path PhotomatExecutable();
+
+}  // namespace photomat::testing
