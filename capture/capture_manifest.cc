@@ -1,0 +1,151 @@
+#include "capture/capture_manifest.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/json_file.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kSlantTiltAgreementDegrees = 0.05;
+
+LightDirection ReadLight(const JsonReader& entry) {
+  const bool has_vector = entry.Has("light");
+  const bool has_angles = entry.Has("slant_deg") || entry.Has("tilt_deg");
+  if (!has_vector && !has_angles) {
+    entry.Fail("no light: give \"light\": [x, y, z] or \"slant_deg\" and \"tilt_deg\"");
+  }
+  std::optional<LightDirection> from_vector, from_angles;
+  if (has_vector) {
+    const std::vector<double> v = entry["light"].Numbers();
+    if (v.size() != 3) entry["light"].Fail("expected 3 numbers [x, y, z]");
+    if (v[2] < 0.0) entry["light"].Fail("light below the sample plane (z < 0)");
+    try {
+      from_vector = LightDirection::FromVector(v[0], v[1], v[2]);
+    } catch (const Error& error) {
+      entry["light"].Fail(error.fault());
+    }
+  }
+  if (has_angles) {
+    const double slant = entry["slant_deg"].Number();
+    const double tilt = entry["tilt_deg"].Number();
+    if (slant < 0.0 || slant > 90.0) entry["slant_deg"].Fail("slant must be in [0, 90] degrees");
+    from_angles = LightDirection::FromSlantTilt(slant, tilt);
+  }
+  if (from_vector && from_angles &&
+      from_vector->AngleToDegrees(*from_angles) > kSlantTiltAgreementDegrees) {
+    entry.Fail(fmt::format("\"light\" and \"slant_deg\"/\"tilt_deg\" disagree by {:.3f} degrees",
+                           from_vector->AngleToDegrees(*from_angles)));
+  }
+  return from_vector ? *from_vector : *from_angles;
+}
+
+std::vector<float> ReadIntensity(const JsonReader& entry) {
+  if (!entry.Has("intensity")) return {};
+  const JsonReader value = entry["intensity"];
+  std::vector<double> numbers =
+      value.value().is_array() ? value.Numbers() : std::vector<double>{value.Number()};
+  if (numbers.empty()) value.Fail("expected a number or an array of numbers");
+  std::vector<float> intensity;
+  for (double v : numbers) {
+    if (v <= 0.0) value.Fail("intensities must be positive");
+    intensity.push_back(static_cast<float>(v));
+  }
+  return intensity;
+}
+
+std::optional<std::string> OptionalString(const JsonReader& reader, const std::string& key) {
+  return reader.Has(key) ? std::optional(reader[key].String()) : std::nullopt;
+}
+
+}  // namespace
+
+CaptureManifest ReadCaptureManifest(const fs::path& path) {
+  const nlohmann::json document = ReadJsonFile(path);
+  const JsonReader root(document, path);
+  if (!document.is_object()) root.Fail("expected a JSON object");
+  if (!root.Has("format") || root["format"].String() != kCaptureManifestFormat) {
+    root.Fail(fmt::format("not a photomat capture manifest (\"format\" must be \"{}\")",
+                          kCaptureManifestFormat));
+  }
+  if (root.Has("version") && root["version"].Integer() != 1) {
+    root["version"].Fail("unsupported version (this photomat reads version 1)");
+  }
+  CaptureManifest manifest;
+  if (root.Has("colour_space")) {
+    manifest.colour_space = ParseColourSpace(root["colour_space"].String());
+    if (!manifest.colour_space) root["colour_space"].Fail("expected \"linear\" or \"srgb\"");
+  }
+  manifest.mask = OptionalString(root, "mask");
+  const JsonReader images = root["images"];
+  if (images.ArraySize() == 0) images.Fail("no images");
+  for (std::size_t i = 0; i < images.ArraySize(); ++i) {
+    const JsonReader entry = images[i];
+    manifest.images.push_back({entry["file"].String(), ReadLight(entry), ReadIntensity(entry)});
+  }
+  if (root.Has("ground_truth")) {
+    const JsonReader truth = root["ground_truth"];
+    manifest.ground_truth_normals = OptionalString(truth, "normals");
+    manifest.ground_truth_albedo = OptionalString(truth, "albedo");
+    manifest.ground_truth_height = OptionalString(truth, "height");
+  }
+  if (root.Has("provenance")) manifest.provenance = document.at("provenance");
+  return manifest;
+}
+
+void WriteCaptureManifest(const fs::path& path, const CaptureManifest& manifest) {
+  nlohmann::json document = {{"format", kCaptureManifestFormat}, {"version", 1}};
+  if (manifest.colour_space) document["colour_space"] = ToString(*manifest.colour_space);
+  if (manifest.mask) document["mask"] = *manifest.mask;
+  nlohmann::json images = nlohmann::json::array();
+  for (const CaptureManifestImage& image : manifest.images) {
+    nlohmann::json entry = {
+        {"file", image.file},
+        {"light", {image.light.x(), image.light.y(), image.light.z()}},
+        {"slant_deg", image.light.SlantDegrees()},
+        {"tilt_deg", image.light.TiltDegrees()},
+    };
+    if (!image.intensity.empty()) entry["intensity"] = image.intensity;
+    images.push_back(std::move(entry));
+  }
+  document["images"] = std::move(images);
+  nlohmann::json truth = nlohmann::json::object();
+  if (manifest.ground_truth_normals) truth["normals"] = *manifest.ground_truth_normals;
+  if (manifest.ground_truth_albedo) truth["albedo"] = *manifest.ground_truth_albedo;
+  if (manifest.ground_truth_height) truth["height"] = *manifest.ground_truth_height;
+  if (!truth.empty()) document["ground_truth"] = std::move(truth);
+  if (!manifest.provenance.is_null()) document["provenance"] = manifest.provenance;
+  WriteJsonFile(path, document);
+}
+
+CaptureManifest SavePhotometricSet(const fs::path& folder, const PhotometricSet& set,
+                                   const SaveSetOptions& options) {
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) throw Error(folder, fmt::format("cannot create folder: {}", ec.message()));
+  const bool exr = options.sample_type == SampleType::kFloat ||
+                   options.sample_type == SampleType::kHalf;
+  CaptureManifest manifest;
+  manifest.colour_space = ColourSpace::kLinear;
+  ImageWriteOptions write;
+  write.sample_type = options.sample_type;
+  for (int i = 0; i < set.size(); ++i) {
+    CaptureManifestImage entry{fmt::format("img_{:03}.{}", i, exr ? "exr" : "png"), set.light(i),
+                               {}};
+    if (!set.intensities().empty()) entry.intensity = set.intensities()[i];
+    WriteImage(folder / entry.file, set.image(i), write);
+    manifest.images.push_back(std::move(entry));
+  }
+  if (set.mask()) {
+    manifest.mask = "mask.png";
+    WriteMask(folder / *manifest.mask, *set.mask());
+  }
+  manifest.provenance = options.provenance;
+  WriteCaptureManifest(folder / kCaptureManifestName, manifest);
+  return manifest;
+}
+
+}  // namespace photomat

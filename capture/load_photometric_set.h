@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "core/colour.h"
+#include "core/photometric_set.h"
+#include "core/progress.h"
+
+namespace photomat {
+
+// The on-disk layouts photomat reads a photometric set from.
+enum class InputKind {
+  kLpFile,    // images + a .lp light-position file
+  kDiligent,  // filenames.txt, light_directions.txt, light_intensities.txt, mask.png
+  kManifest,  // photomat's manifest.json (capture_manifest.h)
+};
+std::string_view ToString(InputKind kind);
+
+struct InputLocation {
+  InputKind kind;
+  std::filesystem::path file;  // the light file or manifest; the DiLiGenT folder
+};
+
+// What is at `path`, decided from what is there (README, "Inputs"):
+//   a .json file -> manifest; a .lp file -> lp; filenames.txt / light_directions.txt -> DiLiGenT
+//   folder around it; a folder -> its manifest.json, else DiLiGenT files, else its only .lp file.
+// Throws Error naming `path` when nothing matches or several .lp files make it ambiguous.
+InputLocation DetectInput(const std::filesystem::path& path);
+
+struct LoadOptions {
+  // Divide each channel of each image by its light's intensity (DiLiGenT's light_intensities.txt,
+  // manifest "intensity"). Off keeps the raw images and the intensities beside them.
+  bool apply_intensities = true;
+  // Overrides how integer images encode light (default: 8-bit sRGB, 16-bit linear; a manifest's
+  // "colour_space" comes next).
+  std::optional<ColourSpace> colour_space;
+  Progress* progress = nullptr;
+};
+
+struct LoadedSet {
+  PhotometricSet set;
+  InputKind kind;
+  // Per image, the number of clipped pixels (a channel at full scale): these are not measurements,
+  // and robust fits leave them out.
+  std::vector<std::size_t> saturated_pixels;
+  // Ground-truth unit normals shipped with the set (synthetic manifests, DiLiGenT's
+  // gt_normals.exr), if any.
+  std::optional<std::filesystem::path> ground_truth_normals;
+};
+
+// Reads images in parallel. Every fault (missing or corrupt image, mixed sizes, malformed light
+// data) is an Error naming the file and the fault.
+LoadedSet LoadPhotometricSet(const std::filesystem::path& path, const LoadOptions& options = {});
+
+}  // namespace photomat

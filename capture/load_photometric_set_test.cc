@@ -1,0 +1,231 @@
+#include "capture/load_photometric_set.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include "capture/capture_manifest.h"
+#include "capture/text_parsing.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using testing::TempDir;
+
+// A small valid set written in each on-disk layout; each test then breaks one thing.
+struct LayoutWriter {
+  InputKind kind;
+  // Light vectors as text ("x y z"), one per image; `count` is what the layout declares.
+  std::function<void(const fs::path& dir, const std::vector<std::string>& names,
+                     const std::vector<std::string>& lights, int count)>
+      write_lights;
+  fs::path light_file;  // relative to the folder
+};
+
+void WriteImages(const fs::path& dir, const std::vector<std::string>& names, int width = 6,
+                 int height = 4) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    Image image(width, height, 3);
+    for (std::size_t v = 0; v < image.values().size(); ++v) {
+      image.values()[v] = static_cast<float>((v * 7 + i * 13) % 50) / 50.0f + 0.1f;
+    }
+    ImageWriteOptions options;
+    options.sample_type = SampleType::kUint16;
+    WriteImage(dir / names[i], image, options);
+  }
+}
+
+std::vector<LayoutWriter> Layouts() {
+  return {
+      {InputKind::kLpFile,
+       [](const fs::path& dir, const auto& names, const auto& lights, int count) {
+         std::string text = fmt::format("{}\n", count);
+         for (std::size_t i = 0; i < lights.size(); ++i) {
+           text += names[i] + " " + lights[i] + "\n";
+         }
+         testing::WriteFile(dir / "lights.lp", text);
+       },
+       "lights.lp"},
+      {InputKind::kDiligent,
+       [](const fs::path& dir, const auto& names, const auto& lights, int count) {
+         std::string files, directions, intensities;
+         for (int i = 0; i < count; ++i) {
+           files += names[i % names.size()] + "\n";
+           intensities += "1 1 1\n";
+         }
+         for (const auto& light : lights) directions += light + "\n";
+         testing::WriteFile(dir / "filenames.txt", files);
+         testing::WriteFile(dir / "light_directions.txt", directions);
+         testing::WriteFile(dir / "light_intensities.txt", intensities);
+       },
+       "light_directions.txt"},
+      {InputKind::kManifest,
+       [](const fs::path& dir, const auto& names, const auto& lights, int count) {
+         std::string images;
+         for (std::size_t i = 0; i < lights.size(); ++i) {
+           // JSON wants numbers; anything else goes in quotes (still not a number).
+           std::string vector;
+           for (auto token : SplitWhitespace(lights[i])) {
+             const std::string text(token);
+             vector += (vector.empty() ? "" : ", ") +
+                       (ParseNumber(text) ? text : "\"" + text + "\"");
+           }
+           // The declared count shows up as the number of intensity values per image.
+           std::string intensity = count == static_cast<int>(lights.size()) ? "1" : "[1, 1]";
+           images += fmt::format("{}{{\"file\": \"{}\", \"light\": [{}], \"intensity\": {}}}",
+                                 i ? ", " : "", names[i], vector, intensity);
+         }
+         testing::WriteFile(dir / "manifest.json",
+                            "{\"format\": \"photomat-capture\", \"images\": [" + images + "]}");
+       },
+       "manifest.json"},
+  };
+}
+
+class LoaderTest : public ::testing::TestWithParam<int> {
+ protected:
+  void SetUp() override {
+    layout_ = Layouts()[GetParam()];
+    WriteImages(dir_.path(), names_);
+  }
+  void WriteLights(std::vector<std::string> lights, int count = -1) {
+    layout_.write_lights(dir_.path(), names_, lights,
+                         count < 0 ? static_cast<int>(lights.size()) : count);
+  }
+  void WriteGoodLights() { WriteLights(good_lights_); }
+  std::string LoadError() {
+    try {
+      LoadPhotometricSet(dir_.path());
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  }
+
+  TempDir dir_;
+  LayoutWriter layout_;
+  std::vector<std::string> names_ = {"a.png", "b.png", "c.png", "d.png"};
+  std::vector<std::string> good_lights_ = {"0.5 0 0.866", "0 0.5 0.866", "-0.5 0 0.866",
+                                           "0 -0.5 0.866"};
+};
+
+TEST_P(LoaderTest, LoadsAValidSet) {
+  WriteGoodLights();
+  const LoadedSet loaded = LoadPhotometricSet(dir_.path());
+  EXPECT_EQ(loaded.kind, layout_.kind);
+  EXPECT_EQ(loaded.set.size(), 4);
+  EXPECT_EQ(loaded.set.width(), 6);
+  EXPECT_EQ(loaded.set.channels(), 3);
+  EXPECT_NEAR(loaded.set.light(1).y(), 0.5 / std::hypot(0.5, 0.866), 1e-12);
+}
+
+TEST_P(LoaderTest, MissingImage) {
+  WriteGoodLights();
+  fs::remove(dir_ / "c.png");
+  EXPECT_THAT(LoadError(), AllOf(HasSubstr("c.png"), HasSubstr("not found")));
+}
+
+TEST_P(LoaderTest, UnreadableImage) {
+  WriteGoodLights();
+  testing::WriteFile(dir_ / "b.png", "not an image at all");
+  EXPECT_THAT(LoadError(), AllOf(HasSubstr("b.png"), HasSubstr("cannot")));
+}
+
+TEST_P(LoaderTest, SizeMismatch) {
+  WriteGoodLights();
+  WriteImages(dir_.path(), {"d.png"}, 7, 4);
+  EXPECT_THAT(LoadError(), HasSubstr("d.png is 7x4 but"));
+}
+
+TEST_P(LoaderTest, BadLightLine) {
+  auto lights = good_lights_;
+  lights[2] = "-0.5 abc 0.866";
+  WriteLights(lights);
+  const std::string error = LoadError();
+  EXPECT_THAT(error, HasSubstr(layout_.light_file.string()));
+  if (layout_.kind == InputKind::kManifest) {
+    EXPECT_THAT(error, HasSubstr("images[2]"));
+  } else {
+    EXPECT_THAT(error, HasSubstr("line"));
+  }
+}
+
+TEST_P(LoaderTest, CountMismatch) {
+  WriteLights(good_lights_, 5);
+  const std::string error = LoadError();
+  EXPECT_THAT(error, HasSubstr(layout_.kind == InputKind::kDiligent ? "filenames.txt"
+                                                                     : layout_.light_file.string()));
+  EXPECT_THAT(error, ::testing::AnyOf(HasSubstr("count 5"), HasSubstr("lists 5 images"),
+                                      HasSubstr("2 values")));
+}
+
+TEST_P(LoaderTest, ZeroVector) {
+  auto lights = good_lights_;
+  lights[1] = "0 0 0";
+  WriteLights(lights);
+  EXPECT_THAT(LoadError(), AllOf(HasSubstr(layout_.light_file.string()),
+                                 HasSubstr("zero-length light vector")));
+}
+
+INSTANTIATE_TEST_SUITE_P(AllLayouts, LoaderTest, ::testing::Values(0, 1, 2),
+                         [](const auto& param_info) {
+                           return std::string(ToString(Layouts()[param_info.param].kind));
+                         });
+
+TEST(DetectInputTest, FindsEachLayoutAndRejectsAmbiguity) {
+  TempDir dir;
+  EXPECT_THROW(DetectInput(dir.path()), Error);
+  testing::WriteFile(dir / "a.lp", "x.png 0 0 1\n");
+  EXPECT_EQ(DetectInput(dir.path()).kind, InputKind::kLpFile);
+  testing::WriteFile(dir / "b.lp", "x.png 0 0 1\n");
+  EXPECT_THAT([&] { DetectInput(dir.path()); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("several light files (a.lp, b.lp)")));
+  EXPECT_EQ(DetectInput(dir / "b.lp").file, dir / "b.lp");
+  testing::WriteFile(dir / "light_directions.txt", "0 0 1\n");
+  EXPECT_EQ(DetectInput(dir.path()).kind, InputKind::kDiligent);
+  testing::WriteFile(dir / "manifest.json", "{}");
+  EXPECT_EQ(DetectInput(dir.path()).kind, InputKind::kManifest);
+  EXPECT_THROW(DetectInput(dir / "nothing-here"), Error);
+}
+
+TEST(LoadDiligentTest, BallLoadsWithMaskIntensitiesAndTruth) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "diligent/ball");
+  const LoadedSet loaded = LoadPhotometricSet(folder);
+  EXPECT_EQ(loaded.kind, InputKind::kDiligent);
+  ASSERT_EQ(loaded.set.size(), 96);
+  EXPECT_EQ(loaded.set.width(), 612);
+  EXPECT_EQ(loaded.set.height(), 512);
+  ASSERT_TRUE(loaded.set.mask());
+  EXPECT_EQ(loaded.set.mask()->CountSet(), 15791u);  // the README's count
+  EXPECT_TRUE(loaded.set.intensities().empty());     // applied
+  ASSERT_TRUE(loaded.ground_truth_normals);
+  EXPECT_GT(loaded.saturated_pixels[0], 0u);  // 001.png reaches 65535
+
+  LoadOptions raw;
+  raw.apply_intensities = false;
+  const LoadedSet unscaled = LoadPhotometricSet(folder, raw);
+  ASSERT_EQ(unscaled.set.intensities().size(), 96u);
+  // Applied means divided: pick a bright object pixel of image 0.
+  const float intensity = unscaled.set.intensities()[0][1];
+  EXPECT_NEAR(loaded.set.image(0).at(306, 256, 1), unscaled.set.image(0).at(306, 256, 1) / intensity,
+              1e-6);
+}
+
+TEST(LoadLpTest, PtmFitterFixtureDecodesSrgbJpegs) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(lp, "ptmfitter/reference_8x5.lp");
+  const LoadedSet loaded = LoadPhotometricSet(lp);
+  EXPECT_EQ(loaded.set.size(), 12);
+  EXPECT_EQ(loaded.set.width(), 8);
+  EXPECT_EQ(loaded.set.height(), 5);
+  EXPECT_EQ(loaded.set.channels(), 3);
+}
+
+}  // namespace
+}  // namespace photomat
