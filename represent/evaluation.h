@@ -1,0 +1,73 @@
+#pragma once
+
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <vector>
+
+#include "core/image.h"
+#include "core/photometric_set.h"
+#include "core/progress.h"
+#include "represent/method.h"
+#include "represent/observations.h"
+#include "represent/representation.h"
+
+namespace photomat {
+
+// Angular error of estimated unit normals against ground truth (thesis-independent; DiLiGenT's
+// measure), over the pixels in `mask` where the truth is non-zero.
+struct NormalErrorStats {
+  std::size_t pixels = 0;
+  double mean_degrees = 0.0;
+  double median_degrees = 0.0;
+  double max_degrees = 0.0;
+  double fraction_below_5_degrees = 0.0;
+  double fraction_below_10_degrees = 0.0;
+  nlohmann::json ToJson() const;
+};
+
+// Throws Error if the images differ in size or have fewer than 3 channels, or no pixel is valid.
+NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, const Mask& mask);
+
+struct EvaluationOptions {
+  // Leave-one-out ability-of-prediction (one fit per image); off: reconstruction only.
+  bool prediction = true;
+  // The thesis's eq. 4.5.1 as printed, e_k = (1/NM) sqrt(sum (r - i)^2), instead of the RMS
+  // sqrt((1/NM) sum (r - i)^2) that the reading in the spec reconstructs.
+  bool literal_thesis_rms = false;
+  Progress* progress = nullptr;
+};
+
+struct MethodEvaluation {
+  Method method;
+  // Dong's normalised RMS error (eq. 4.5.1): the mean over images of e_k / sigma_k, e_k the RMS of
+  // relit minus captured over the mask's pixels and all channels, sigma_k the standard deviation
+  // of captured image k over the same values.
+  double eta_reconstruction = 0.0;  // fitted from all images, relit at each of them
+  std::optional<double> eta_prediction;  // image k relit from a fit without image k
+  std::vector<double> reconstruction_per_image;
+  std::vector<double> prediction_per_image;
+  std::optional<NormalErrorStats> normals;  // methods that give normals, when truth is given
+  nlohmann::json ToJson() const;
+};
+
+// The per-image error e_k / sigma_k of `relit` values against column `image` of `observations`
+// (the rows of the selected pixels).
+double NormalisedRmsError(const Observations& observations, int image,
+                          const Eigen::VectorXf& relit, bool literal_thesis_rms = false);
+
+// Relit values of `representation` under `light` at the observations' pixels, in their row order.
+Eigen::VectorXf RelightObservedPixels(const Representation& representation,
+                                      const Observations& observations,
+                                      const LightDirection& light);
+
+// Evaluates one method on `set` (its mask selects the pixels). `truth` holds unit normals
+// (channels 0..2) in the lights' frame, or is null.
+MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& observations,
+                                const Method& method, const Image* truth,
+                                const EvaluationOptions& options = {});
+
+// The JSON of `photomat evaluate --json`: an object keyed by method name.
+nlohmann::json EvaluationsToJson(const std::vector<MethodEvaluation>& evaluations);
+
+}  // namespace photomat

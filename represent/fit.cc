@@ -1,0 +1,332 @@
+#include "represent/fit.h"
+
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fmt/format.h>
+#include <numeric>
+
+#include "core/error.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A lighting matrix whose smallest singular value is below this fraction of its largest is
+// treated as rank deficient. For Gradient: lights within about 1 degree of one plane.
+constexpr double kGradientConditionLimit = 0.02;
+constexpr double kPtmConditionLimit = 1e-6;
+// |det [l1 l2 l3]| of unit vectors; 0.05 rejects triples within about 3 degrees of a plane.
+constexpr double kThreeImageDeterminantLimit = 0.05;
+
+struct FitContext {
+  const Observations& observations;
+  const std::vector<LightDirection>& lights;
+  std::span<const int> selected;
+  const fs::path& source;
+
+  [[noreturn]] void Fail(const std::string& fault) const { throw Error(source, fault); }
+  std::vector<LightDirection> SelectedLights() const {
+    std::vector<LightDirection> out;
+    for (int i : selected) out.push_back(lights[i]);
+    return out;
+  }
+  Eigen::Index m() const { return observations.pixels(); }
+  int channels() const { return observations.channels(); }
+  // An N x d weight matrix that is `rows` (|S| x d) on the selected images and 0 elsewhere, so
+  // that I * W fits from the selected images only.
+  Eigen::MatrixXf Scatter(const Eigen::MatrixXd& rows) const {
+    Eigen::MatrixXf full = Eigen::MatrixXf::Zero(observations.images(), rows.cols());
+    for (std::size_t i = 0; i < selected.size(); ++i) {
+      full.row(selected[i]) = rows.row(static_cast<Eigen::Index>(i)).cast<float>();
+    }
+    return full;
+  }
+  // A maps image with `names`; pixels outside the selection stay 0.
+  Image NewMaps(std::vector<std::string> names) const {
+    return Image(observations.width(), observations.height(), std::move(names));
+  }
+  std::size_t PixelIndex(Eigen::Index k) const { return observations.pixel_indices()[k]; }
+};
+
+std::vector<std::string> TermNames(const std::string& prefix, int terms,
+                                   const std::vector<std::string>& channel_names) {
+  std::vector<std::string> names;
+  for (int j = 0; j < terms; ++j) {
+    for (const std::string& channel : channel_names) {
+      names.push_back(fmt::format("{}{}.{}", prefix, j, channel));
+    }
+  }
+  return names;
+}
+
+// Copies a (C*m) x k coefficient matrix, channel-major rows, into per-pixel maps j * C + c.
+void StorePerChannelTerms(const FitContext& fit, const Eigen::MatrixXf& terms, Image& maps) {
+  const int channels = fit.channels();
+  const Eigen::Index m = fit.m();
+  tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
+    const auto pixel = maps.pixel(fit.PixelIndex(k));
+    for (Eigen::Index j = 0; j < terms.cols(); ++j) {
+      for (int c = 0; c < channels; ++c) pixel[j * channels + c] = terms(c * m + k, j);
+    }
+  });
+}
+
+Eigen::JacobiSVD<Eigen::MatrixXd> CheckedSvd(const Eigen::MatrixXd& matrix) {
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(matrix, Eigen::ComputeThinU | Eigen::ComputeThinV);
+}
+
+// Pseudo-inverse (transposed, |S| x d) of a d x |S| lighting matrix via its SVD (thesis 4.4.1).
+Eigen::MatrixXd PseudoInverseTransposed(const Eigen::JacobiSVD<Eigen::MatrixXd>& svd) {
+  const Eigen::VectorXd inverse = svd.singularValues().cwiseInverse();
+  return svd.matrixV() * inverse.asDiagonal() * svd.matrixU().transpose();
+}
+
+Representation FitGradient(const FitContext& fit) {
+  const auto lights = fit.SelectedLights();
+  Eigen::MatrixXd l(3, lights.size());
+  for (std::size_t i = 0; i < lights.size(); ++i) l.col(i) = lights[i].vector();
+  const auto svd = CheckedSvd(l);
+  const Eigen::VectorXd s = svd.singularValues();
+  if (s[2] < kGradientConditionLimit * s[0]) {
+    fit.Fail(fmt::format(
+        "gradient: the {} lights are coplanar (singular values {:.3g}, {:.3g}, {:.3g}); "
+        "photometric stereo needs lights in three independent directions",
+        lights.size(), s[0], s[1], s[2]));
+  }
+  // N_a = I L+ (eq. 4.4.8), one albedo-scaled normal per channel.
+  const Eigen::MatrixXf scaled = ParallelProduct(fit.observations.matrix(),
+                                                 fit.Scatter(PseudoInverseTransposed(svd)));
+  const int channels = fit.channels();
+  const auto channel_names = OutputChannelNames(channels);
+  std::vector<std::string> names = {"normal.X", "normal.Y", "normal.Z"};
+  for (const auto& c : channel_names) names.push_back("albedo." + c);
+  Image maps = fit.NewMaps(names);
+  const Eigen::Index m = fit.m();
+  tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
+    // One normal per pixel: the sum of the channels' scaled normals, i.e. the least-squares
+    // normal of the channel sum. Each channel's albedo is its scaled normal's component along it
+    // (exact for a Lambertian pixel).
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int c = 0; c < channels; ++c) sum += scaled.row(c * m + k).transpose().cast<double>();
+    const double norm = sum.norm();
+    const Eigen::Vector3d n = norm > 0.0 ? (sum / norm).eval() : Eigen::Vector3d::UnitZ();
+    const auto pixel = maps.pixel(fit.PixelIndex(k));
+    for (int i = 0; i < 3; ++i) pixel[i] = static_cast<float>(n[i]);
+    for (int c = 0; c < channels; ++c) {
+      pixel[3 + c] = static_cast<float>(scaled.row(c * m + k).cast<double>().dot(n));
+    }
+  });
+  return Representation("gradient", std::move(maps), {3, false, true, channels},
+                        LinearLightBasis::Lambertian());
+}
+
+Eigen::MatrixXd PtmPseudoInverse(const FitContext& fit) {
+  const Eigen::MatrixXd terms = PtmTerms(fit.SelectedLights());
+  const auto svd = CheckedSvd(terms);
+  const Eigen::VectorXd s = svd.singularValues();
+  if (s[5] < kPtmConditionLimit * s[0]) {
+    fit.Fail(fmt::format(
+        "ptm: the {} lights do not determine the 6 PTM coefficients (lights on one ring of equal "
+        "slant or on one line leave the biquadratic degenerate); add lights at other slants",
+        fit.selected.size()));
+  }
+  return PseudoInverseTransposed(svd);
+}
+
+Representation FitPtm(const FitContext& fit) {
+  const Eigen::MatrixXf coefficients =
+      ParallelProduct(fit.observations.matrix(), fit.Scatter(PtmPseudoInverse(fit)));
+  Image maps = fit.NewMaps(TermNames("ptm.a", 6, OutputChannelNames(fit.channels())));
+  StorePerChannelTerms(fit, coefficients, maps);
+  return Representation("ptm", std::move(maps), {6, true, false, fit.channels()},
+                        std::make_shared<PtmLightBasis>());
+}
+
+// PTM's LRGB form: a luminance polynomial L fitted to the mean of the channels, and per channel
+// the least-squares chroma s_c = sum_k I_ck L_k / sum_k L_k^2, so that I_c ~ s_c L.
+Representation FitPtmLrgb(const FitContext& fit) {
+  const int channels = fit.channels();
+  const Eigen::Index m = fit.m();
+  Eigen::MatrixXf luminance = fit.observations.Channel(0);
+  for (int c = 1; c < channels; ++c) luminance += fit.observations.Channel(c);
+  luminance /= static_cast<float>(channels);
+  const Eigen::MatrixXf coefficients = ParallelProduct(luminance, fit.Scatter(PtmPseudoInverse(fit)));
+  const Eigen::MatrixXf terms = PtmTerms(fit.lights).cast<float>();
+  Eigen::VectorXf in_fit = Eigen::VectorXf::Zero(fit.observations.images());
+  for (int i : fit.selected) in_fit[i] = 1.0f;
+
+  std::vector<std::string> names;
+  for (int j = 0; j < 6; ++j) names.push_back(fmt::format("ptm.a{}", j));
+  for (const auto& c : OutputChannelNames(channels)) names.push_back("rgb." + c);
+  Image maps = fit.NewMaps(names);
+  tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
+    const Eigen::RowVectorXf fitted = coefficients.row(k) * terms;  // L at every light
+    const double denominator = fitted.cwiseProduct(fitted).dot(in_fit);
+    const auto pixel = maps.pixel(fit.PixelIndex(k));
+    for (int j = 0; j < 6; ++j) pixel[j] = coefficients(k, j);
+    for (int c = 0; c < channels; ++c) {
+      const double numerator =
+          fit.observations.matrix().row(c * m + k).cwiseProduct(fitted).dot(in_fit);
+      pixel[6 + c] = denominator > 0.0 ? static_cast<float>(numerator / denominator) : 0.0f;
+    }
+  });
+  return Representation("ptm-lrgb", std::move(maps), {6, false, true, channels},
+                        std::make_shared<PtmLightBasis>());
+}
+
+Representation FitThreeImage(const FitContext& fit) {
+  const std::array<int, 3> chosen = SelectThreeImageLights(fit.lights, fit.selected, fit.source);
+  Eigen::Matrix3d l;
+  for (int j = 0; j < 3; ++j) l.col(j) = fit.lights[chosen[j]].vector();
+  const Eigen::MatrixXd inverse = l.inverse();  // c = L^-1 l (eq. 4.4.9-10)
+  const int channels = fit.channels();
+  Eigen::MatrixXf images(fit.observations.matrix().rows(), 3);
+  nlohmann::json used = nlohmann::json::array();
+  for (int j = 0; j < 3; ++j) {
+    images.col(j) = fit.observations.matrix().col(chosen[j]);
+    const LightDirection& light = fit.lights[chosen[j]];
+    used.push_back({{"image", chosen[j]},
+                    {"slant_deg", light.SlantDegrees()},
+                    {"tilt_deg", light.TiltDegrees()}});
+  }
+  Image maps = fit.NewMaps(TermNames("image", 3, OutputChannelNames(channels)));
+  StorePerChannelTerms(fit, images, maps);
+  return Representation("3i", std::move(maps), {3, true, false, channels},
+                        std::make_shared<LinearLightBasis>(inverse), {{"images", used}});
+}
+
+// Eigen-k (thesis 4.4.5): I = U W V^T without mean subtraction; M1 = U_k W_k = I V_k are the basis
+// images, M2 = V_k^T the coefficients of the fitted lights. V comes from the eigenvectors of the
+// Gram matrix I^T I (IMPLEMENTER CHOICE: n x n instead of an m x n SVD; same M1, M2 up to sign).
+Representation FitEigen(const FitContext& fit, int k) {
+  const auto n = static_cast<Eigen::Index>(fit.selected.size());
+  const Eigen::MatrixXd& gram = fit.observations.Gram();
+  Eigen::MatrixXd sub(n, n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(fit.selected[a], fit.selected[b]);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(sub);
+  if (solver.info() != Eigen::Success) fit.Fail(fmt::format("eigen{}: SVD did not converge", k));
+  // Eigenvalues ascend; the k largest are the last k, reversed.
+  Eigen::MatrixXd v(n, k);
+  Eigen::VectorXd singular(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    singular[j] = std::sqrt(std::max(0.0, solver.eigenvalues()[n - 1 - j]));
+  }
+  for (int j = 0; j < k; ++j) v.col(j) = solver.eigenvectors().col(n - 1 - j);
+  Eigen::MatrixXf bases = ParallelProduct(fit.observations.matrix(), fit.Scatter(v));
+  // Each component's sign is arbitrary; make the basis images sum positive so that maps are
+  // readable and fits reproducible. The sign cancels in M1 M2.
+  for (int j = 0; j < k; ++j) {
+    if (bases.col(j).sum() < 0.0f) {
+      bases.col(j) *= -1.0f;
+      v.col(j) *= -1.0;
+    }
+  }
+  Image maps = fit.NewMaps(TermNames("eigen.", k, OutputChannelNames(fit.channels())));
+  StorePerChannelTerms(fit, bases, maps);
+  const double total = singular.squaredNorm();
+  nlohmann::json cumulative = nlohmann::json::array();
+  double sum = 0.0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    sum += singular[j] * singular[j];
+    cumulative.push_back(total > 0 ? std::sqrt(sum / total) : 0.0);  // f_cumu, eq. 4.4.13
+  }
+  const std::vector<double> singular_values(singular.data(), singular.data() + n);
+  auto basis = std::make_shared<InterpolatedLightBasis>(fit.SelectedLights(), v.transpose());
+  const std::string scheme(ToString(basis->interpolator().scheme()));
+  return Representation(fmt::format("eigen{}", k), std::move(maps),
+                        {k, true, false, fit.channels()}, std::move(basis),
+                        {{"singular_values", singular_values},
+                         {"cumulative_information", cumulative},
+                         {"interpolation", scheme}});
+}
+
+}  // namespace
+
+std::array<int, 3> SelectThreeImageLights(const std::vector<LightDirection>& lights,
+                                          std::span<const int> selected, const fs::path& source) {
+  constexpr double kTolerance = 0.5;  // degrees
+  const auto find = [&](double slant, double tilt) -> int {
+    for (int i : selected) {
+      const double dt = std::remainder(lights[i].TiltDegrees() - tilt, 360.0);
+      if (std::abs(lights[i].SlantDegrees() - slant) < kTolerance && std::abs(dt) < kTolerance) {
+        return i;
+      }
+    }
+    return -1;
+  };
+  std::vector<double> tilts;
+  for (int i : selected) {
+    if (std::abs(lights[i].SlantDegrees() - 45.0) < kTolerance) {
+      tilts.push_back(lights[i].TiltDegrees());
+    }
+  }
+  std::sort(tilts.begin(), tilts.end());
+  for (double t : tilts) {
+    const int a = find(45.0, t), b = find(45.0, t + 90.0), c = find(45.0, t + 180.0);
+    if (a >= 0 && b >= 0 && c >= 0) return {a, b, c};
+  }
+  double best = 0.0;
+  std::array<int, 3> chosen = {-1, -1, -1};
+  for (std::size_t a = 0; a < selected.size(); ++a) {
+    for (std::size_t b = a + 1; b < selected.size(); ++b) {
+      const Eigen::Vector3d ab = lights[selected[a]].vector().cross(lights[selected[b]].vector());
+      for (std::size_t c = b + 1; c < selected.size(); ++c) {
+        const double det = std::abs(ab.dot(lights[selected[c]].vector()));
+        if (det > best) best = det, chosen = {selected[a], selected[b], selected[c]};
+      }
+    }
+  }
+  if (selected.size() < 3) {
+    throw Error(source, fmt::format("3i needs 3 images; {} given", selected.size()));
+  }
+  if (best < kThreeImageDeterminantLimit) {
+    throw Error(source, fmt::format("3i: every triple of the {} lights is coplanar (largest "
+                                    "|det| {:.3g}); 3I needs three independent light directions",
+                                    selected.size(), best));
+  }
+  return chosen;
+}
+
+Representation FitObservations(const Observations& observations,
+                               const std::vector<LightDirection>& lights, const Method& method,
+                               std::span<const int> selected, const fs::path& source) {
+  const FitContext fit{observations, lights, selected, source};
+  if (static_cast<int>(selected.size()) < method.MinimumImages()) {
+    fit.Fail(fmt::format("{} needs at least {} images with distinct lights; {} given",
+                         method.Name(), method.MinimumImages(), selected.size()));
+  }
+  switch (method.kind) {
+    case Method::Kind::kThreeImage:
+      return FitThreeImage(fit);
+    case Method::Kind::kGradient:
+      return FitGradient(fit);
+    case Method::Kind::kPtm:
+      return FitPtm(fit);
+    case Method::Kind::kPtmLrgb:
+      return FitPtmLrgb(fit);
+    case Method::Kind::kEigen:
+      break;
+  }
+  return FitEigen(fit, method.eigen_k);
+}
+
+Representation Fit(const PhotometricSet& set, const Method& method) {
+  std::vector<int> all(set.size());
+  std::iota(all.begin(), all.end(), 0);
+  if (set.size() < method.MinimumImages()) {
+    set.Fail(fmt::format("{} needs at least {} images; the set has {}", method.Name(),
+                         method.MinimumImages(), set.size()));
+  }
+  const Observations observations(set);
+  return FitObservations(observations, set.lights(), method, all, set.source());
+}
+
+}  // namespace photomat

@@ -1,0 +1,167 @@
+#include "represent/fit.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "core/error.h"
+#include "represent/evaluation.h"
+#include "tests/support/synthetic_sets.h"
+
+namespace photomat {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+TEST(FitTest, GradientRecoversNormalsAndAlbedoOfALambertianSample) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBricks, 128);
+  const Representation gradient = Fit(synthetic.set, Method::Parse("gradient"));
+  const auto normals = EstimateNormals(gradient);
+  ASSERT_TRUE(normals);
+  const NormalErrorStats stats =
+      CompareNormals(*normals, synthetic.material.normals, synthetic.set.MaskOrAll());
+  EXPECT_LT(stats.mean_degrees, 0.1);
+  EXPECT_EQ(stats.pixels, 128u * 128u);
+  const int albedo = gradient.maps().FindChannel("albedo.R");
+  ASSERT_EQ(albedo, 3);
+  double worst = 0.0;
+  for (std::size_t p = 0; p < synthetic.material.albedo.pixel_count(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const double truth = synthetic.material.albedo.pixel(p)[c];
+      worst = std::max(worst, std::abs(gradient.maps().pixel(p)[albedo + c] - truth) / truth);
+    }
+  }
+  EXPECT_LT(worst, 0.005);
+}
+
+TEST(FitTest, PtmRecoversAnExactBiquadratic) {
+  // Images made from known coefficients: the fit must return them.
+  const auto lights = ThesisLightGrid();
+  const Eigen::VectorXd truth = (Eigen::VectorXd(6) << -0.3, -0.2, 0.1, 0.25, -0.15, 0.6).finished();
+  std::vector<Image> images;
+  for (const auto& light : lights) {
+    Image image(3, 2, 1);
+    const double value = truth.dot(PtmLightBasis().Coefficients(light));
+    for (float& v : image.values()) v = static_cast<float>(value);
+    images.push_back(image);
+  }
+  const Representation ptm = Fit(PhotometricSet(images, lights), Method::Parse("ptm"));
+  for (int j = 0; j < 6; ++j) EXPECT_NEAR(ptm.maps().at(1, 1, j), truth[j], 1e-5);
+  EXPECT_EQ(ptm.maps().channel_names()[3], "ptm.a3.Y");
+}
+
+TEST(FitTest, PtmLrgbSeparatesLuminanceAndChroma) {
+  const auto lights = ThesisLightGrid();
+  const Eigen::VectorXd lum = (Eigen::VectorXd(6) << -0.3, -0.2, 0.1, 0.25, -0.15, 0.6).finished();
+  const Eigen::Vector3d chroma(0.5, 1.0, 1.5);
+  std::vector<Image> images;
+  for (const auto& light : lights) {
+    Image image(2, 2, 3);
+    const double l = lum.dot(PtmLightBasis().Coefficients(light));
+    for (std::size_t p = 0; p < 4; ++p) {
+      for (int c = 0; c < 3; ++c) image.pixel(p)[c] = static_cast<float>(chroma[c] * l);
+    }
+    images.push_back(image);
+  }
+  const PhotometricSet set(images, lights);
+  const Representation lrgb = Fit(set, Method::Parse("ptm-lrgb"));
+  for (int i = 0; i < set.size(); i += 7) {
+    const Image relit = lrgb.Relight(set.light(i));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(relit.at(1, 0, c), set.image(i).at(1, 0, c), 1e-5);
+  }
+}
+
+TEST(FitTest, EigenWithAllComponentsReproducesEveryImage) {
+  const auto synthetic = testing::ShadowedSpecularSet(32);
+  const Representation eigen = Fit(synthetic.set, Method::Parse("eigen36"));
+  for (int i : {0, 13, 35}) {
+    const Image relit = eigen.Relight(synthetic.set.light(i));
+    for (std::size_t v = 0; v < relit.values().size(); v += 17) {
+      EXPECT_NEAR(relit.values()[v], synthetic.set.image(i).values()[v], 2e-4);
+    }
+  }
+  EXPECT_EQ(eigen.details().at("singular_values").size(), 36u);
+  EXPECT_EQ(eigen.details().at("interpolation"), "slant-rings");
+}
+
+TEST(FitTest, EigenBasesAreOrderedBySingularValue) {
+  const auto synthetic = testing::ShadowedSpecularSet(32);
+  const Representation eigen = Fit(synthetic.set, Method::Parse("eigen6"));
+  const auto singular = eigen.details().at("singular_values").get<std::vector<double>>();
+  EXPECT_TRUE(std::is_sorted(singular.rbegin(), singular.rend()));
+  const auto cumulative = eigen.details().at("cumulative_information").get<std::vector<double>>();
+  EXPECT_GT(cumulative[5], 0.99);  // "the first few eigenvectors account for more than 99 %"
+  EXPECT_NEAR(cumulative.back(), 1.0, 1e-12);
+}
+
+TEST(FitTest, ThreeImageUsesTheThesisLightsAndRotatesWhenOneIsMissing) {
+  const auto grid = ThesisLightGrid();
+  std::vector<int> all(36);
+  std::iota(all.begin(), all.end(), 0);
+  EXPECT_EQ(SelectThreeImageLights(grid, all), (std::array<int, 3>{12, 15, 18}));  // 0, 90, 180
+  std::vector<int> without_90 = all;
+  without_90.erase(without_90.begin() + 15);
+  EXPECT_EQ(SelectThreeImageLights(grid, without_90), (std::array<int, 3>{13, 16, 19}));
+}
+
+TEST(FitTest, ThreeImageReconstructsItsOwnImagesExactly) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 32);
+  const Representation three = Fit(synthetic.set, Method::Parse("3i"));
+  const Image relit = three.Relight(synthetic.set.light(15));
+  for (std::size_t v = 0; v < relit.values().size(); ++v) {
+    ASSERT_NEAR(relit.values()[v], synthetic.set.image(15).values()[v], 1e-6);
+  }
+}
+
+// Degenerate light sets (the malformed-input classes the fit detects).
+PhotometricSet FlatSet(const std::vector<LightDirection>& lights) {
+  std::vector<Image> images;
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    Image image(4, 4, 1);
+    for (float& v : image.values()) v = 0.5f + 0.01f * static_cast<float>(i);
+    images.push_back(image);
+  }
+  return PhotometricSet(images, lights, {}, "lights.lp");
+}
+
+TEST(FitErrorTest, FewerLightsThanTheMethodNeeds) {
+  const auto set = FlatSet({LightDirection::FromSlantTilt(30, 0),
+                            LightDirection::FromSlantTilt(30, 120),
+                            LightDirection::FromSlantTilt(45, 240),
+                            LightDirection::FromSlantTilt(60, 60),
+                            LightDirection::FromSlantTilt(60, 300)});
+  EXPECT_THAT([&] { Fit(set, Method::Parse("ptm")); },
+              ThrowsMessage<Error>(HasSubstr("lights.lp: ptm needs at least 6 images; the set has 5")));
+  EXPECT_THAT([&] { Fit(set, Method::Parse("eigen6")); },
+              ThrowsMessage<Error>(HasSubstr("eigen6 needs at least 6 images")));
+  const auto two = FlatSet({LightDirection::FromSlantTilt(30, 0),
+                            LightDirection::FromSlantTilt(30, 90)});
+  EXPECT_THAT([&] { Fit(two, Method::Parse("gradient")); },
+              ThrowsMessage<Error>(HasSubstr("gradient needs at least 3 images")));
+}
+
+TEST(FitErrorTest, CoplanarLightsForGradientAnd3I) {
+  // All lights in the x-z plane (tilts 0 and 180 only).
+  const auto set = FlatSet({LightDirection::FromSlantTilt(30, 0),
+                            LightDirection::FromSlantTilt(50, 0),
+                            LightDirection::FromSlantTilt(30, 180),
+                            LightDirection::FromSlantTilt(60, 180)});
+  EXPECT_THAT([&] { Fit(set, Method::Parse("gradient")); },
+              ThrowsMessage<Error>(HasSubstr("lights.lp: gradient: the 4 lights are coplanar")));
+  EXPECT_THAT([&] { Fit(set, Method::Parse("3i")); },
+              ThrowsMessage<Error>(HasSubstr("3i: every triple of the 4 lights is coplanar")));
+}
+
+TEST(FitErrorTest, SingleRingLeavesPtmDegenerate) {
+  std::vector<LightDirection> ring;
+  for (int t = 0; t < 360; t += 30) ring.push_back(LightDirection::FromSlantTilt(40, t));
+  EXPECT_THAT([&] { Fit(FlatSet(ring), Method::Parse("ptm")); },
+              ThrowsMessage<Error>(HasSubstr("do not determine the 6 PTM coefficients")));
+  EXPECT_NO_THROW(Fit(FlatSet(ring), Method::Parse("gradient")));
+}
+
+}  // namespace
+}  // namespace photomat

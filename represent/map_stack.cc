@@ -1,0 +1,162 @@
+#include "represent/map_stack.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+MapLayout LayoutFromJson(const JsonReader& json) {
+  MapLayout layout;
+  layout.basis_size = json["basis_size"].Integer();
+  layout.basis_per_channel = json["basis_per_channel"].Boolean();
+  layout.has_gain = json["has_gain"].Boolean();
+  layout.output_channels = json["output_channels"].Integer();
+  if (layout.basis_size < 1 || layout.basis_size > 1024 || layout.output_channels < 1 ||
+      layout.output_channels > 64) {
+    json.Fail("implausible map layout");
+  }
+  return layout;
+}
+
+}  // namespace
+
+void SaveRepresentation(const fs::path& path, const Representation& representation,
+                        const StackProvenance& provenance) {
+  const Image& maps = representation.maps();
+  if (static_cast<int>(maps.channel_names().size()) != maps.channels()) {
+    throw Error(path, "the maps have no channel names");
+  }
+  nlohmann::json lights = nlohmann::json::array();
+  for (const auto& l : provenance.capture_lights) lights.push_back({l.x(), l.y(), l.z()});
+  const nlohmann::json description = {
+      {"format", kStackFormat},
+      {"version", 1},
+      {"method", representation.method()},
+      {"layout", representation.layout().ToJson()},
+      {"channels", maps.channel_names()},
+      {"basis", representation.basis().ToJson()},
+      {"details", representation.details()},
+      {"capture",
+       {{"lights", lights},
+        {"colour_space", provenance.colour_space},
+        {"source", provenance.source}}},
+  };
+  ImageWriteOptions options;
+  options.attributes[kStackAttribute] = description.dump();
+  WriteImage(path, maps, options);
+}
+
+LoadedStack LoadRepresentation(const fs::path& path) {
+  ImageReadOptions read;
+  read.keep_alpha = true;
+  LoadedImage loaded = ReadImage(path, read);
+  const auto attribute = loaded.info.attributes.find(kStackAttribute);
+  if (attribute == loaded.info.attributes.end()) {
+    throw Error(path, fmt::format("not a photomat map stack (no \"{}\" header attribute)",
+                                  kStackAttribute));
+  }
+  nlohmann::json description;
+  try {
+    description = nlohmann::json::parse(attribute->second);
+  } catch (const nlohmann::json::exception&) {
+    throw Error(path, fmt::format("the \"{}\" header attribute is not valid JSON", kStackAttribute));
+  }
+  const JsonReader json(description, path, kStackAttribute);
+  if (!description.is_object() || json["format"].String() != kStackFormat) {
+    json.Fail(fmt::format("expected format \"{}\"", kStackFormat));
+  }
+  if (json["version"].Integer() != 1) json["version"].Fail("unsupported version");
+  const MapLayout layout = LayoutFromJson(json["layout"]);
+  const JsonReader channels = json["channels"];
+  if (static_cast<int>(channels.ArraySize()) != layout.MapCount()) {
+    channels.Fail(fmt::format("{} names for a layout of {} maps", channels.ArraySize(),
+                              layout.MapCount()));
+  }
+  // OpenEXR keeps channels sorted by name: put them back in layout order.
+  const Image& stored = loaded.image;
+  std::vector<std::string> names;
+  std::vector<int> source_channel;
+  for (std::size_t i = 0; i < channels.ArraySize(); ++i) {
+    names.push_back(channels[i].String());
+    source_channel.push_back(stored.FindChannel(names.back()));
+    if (source_channel.back() < 0) {
+      channels[i].Fail(fmt::format("map \"{}\" is not in the file", names.back()));
+    }
+  }
+  Image maps(stored.width(), stored.height(), names);
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    const auto in = stored.pixel(p);
+    const auto out = maps.pixel(p);
+    for (std::size_t c = 0; c < names.size(); ++c) out[c] = in[source_channel[c]];
+  }
+  StackProvenance provenance;
+  if (json.Has("capture")) {
+    const JsonReader capture = json["capture"];
+    if (capture.Has("lights")) {
+      const JsonReader lights = capture["lights"];
+      for (std::size_t i = 0; i < lights.ArraySize(); ++i) {
+        const auto v = lights[i].Numbers();
+        if (v.size() != 3) lights[i].Fail("expected 3 numbers");
+        provenance.capture_lights.push_back(LightDirection::FromVector(v[0], v[1], v[2]));
+      }
+    }
+    if (capture.Has("colour_space")) provenance.colour_space = capture["colour_space"].String();
+    if (capture.Has("source")) provenance.source = capture["source"].String();
+  }
+  try {
+    return {Representation(json["method"].String(), std::move(maps), layout,
+                           LightBasisFromJson(json["basis"]),
+                           description.value("details", nlohmann::json::object())),
+            std::move(provenance)};
+  } catch (const Error& error) {
+    throw error.InFile(path);
+  }
+}
+
+void WriteFitManifest(const fs::path& folder, const std::string& input,
+                      const std::map<std::string, std::string>& stacks) {
+  WriteJsonFile(folder / kFitManifestName,
+                {{"format", "photomat-fit"}, {"version", 1}, {"input", input}, {"stacks", stacks}});
+}
+
+std::map<std::string, fs::path> ReadFitManifest(const fs::path& folder) {
+  const fs::path path = folder / kFitManifestName;
+  const nlohmann::json document = ReadJsonFile(path);
+  const JsonReader json(document, path);
+  if (json["format"].String() != "photomat-fit") json["format"].Fail("expected \"photomat-fit\"");
+  std::map<std::string, fs::path> stacks;
+  const JsonReader entries = json["stacks"];
+  if (!entries.value().is_object()) entries.Fail("expected an object");
+  for (const auto& [method, file] : entries.value().items()) {
+    stacks[method] = folder / entries[method].String();
+  }
+  return stacks;
+}
+
+fs::path ResolveStack(const fs::path& path, const std::optional<std::string>& method) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) {
+    if (!fs::exists(path, ec)) throw Error(path, "no such map stack");
+    return path;
+  }
+  const auto stacks = ReadFitManifest(path);
+  std::string available;
+  for (const auto& [name, file] : stacks) available += (available.empty() ? "" : ", ") + name;
+  if (method) {
+    const auto it = stacks.find(*method);
+    if (it == stacks.end()) {
+      throw Error(path, fmt::format("no \"{}\" stack here; available: {}", *method, available));
+    }
+    return it->second;
+  }
+  if (stacks.size() == 1) return stacks.begin()->second;
+  throw Error(path, fmt::format("holds several stacks ({}); choose one with --method", available));
+}
+
+}  // namespace photomat

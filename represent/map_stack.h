@@ -1,0 +1,56 @@
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/light_direction.h"
+#include "represent/representation.h"
+
+namespace photomat {
+
+// A representation on disk: one multi-layer OpenEXR (float32) whose channels are the maps, named
+// by meaning ("normal.X", "albedo.R", "ptm.a3.G", "eigen.2.B", "image0.R"), so any EXR viewer shows
+// each term as a layer. The header attribute "photomat:stack" holds JSON (README, "Map stacks"):
+//   {"format": "photomat-map-stack", "version": 1, "method": "ptm",
+//    "layout": {...MapLayout}, "channels": [map names in layout order],
+//    "basis": {...LightBasis, everything needed to turn a light into coefficients},
+//    "details": {...}, "capture": {"lights": [[x, y, z], ...], "colour_space": "linear",
+//    "source": "..."}}
+inline constexpr const char* kStackAttribute = "photomat:stack";
+inline constexpr const char* kStackFormat = "photomat-map-stack";
+
+// Where the maps came from.
+struct StackProvenance {
+  std::vector<LightDirection> capture_lights;
+  std::string colour_space = "linear";
+  std::string source;
+};
+
+// Atomic write; throws Error naming `path`.
+void SaveRepresentation(const std::filesystem::path& path, const Representation& representation,
+                        const StackProvenance& provenance = {});
+
+struct LoadedStack {
+  Representation representation;
+  StackProvenance provenance;
+};
+// Throws Error naming `path` when it is not a photomat map stack or its description is damaged.
+LoadedStack LoadRepresentation(const std::filesystem::path& path);
+
+// The folder `photomat fit --out DIR` writes: one stack per method and a "stacks.json":
+//   {"format": "photomat-fit", "version": 1, "input": "...", "stacks": {"gradient": "gradient.exr"}}
+inline constexpr const char* kFitManifestName = "stacks.json";
+void WriteFitManifest(const std::filesystem::path& folder, const std::string& input,
+                      const std::map<std::string, std::string>& stacks);
+// Stack files by method name, from a fit folder.
+std::map<std::string, std::filesystem::path> ReadFitManifest(const std::filesystem::path& folder);
+
+// `path` is a stack file (returned as is) or a fit folder, where `method` picks the stack (may be
+// omitted when the folder holds one). Throws Error listing the methods available.
+std::filesystem::path ResolveStack(const std::filesystem::path& path,
+                                   const std::optional<std::string>& method);
+
+}  // namespace photomat

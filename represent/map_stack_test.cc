@@ -1,0 +1,72 @@
+#include "represent/map_stack.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "represent/fit.h"
+#include "tests/support/synthetic_sets.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+TEST(MapStackTest, EveryMethodRoundTripsExactly) {
+  testing::TempDir dir;
+  const auto synthetic = testing::ShadowedSpecularSet(24);
+  for (const Method& method : AllMethods()) {
+    const Representation fitted = Fit(synthetic.set, method);
+    const auto path = dir / (method.Name() + ".exr");
+    SaveRepresentation(path, fitted, {synthetic.set.lights(), "linear", "synthetic"});
+    const LoadedStack loaded = LoadRepresentation(path);
+    const Representation& r = loaded.representation;
+    EXPECT_EQ(r.method(), method.Name());
+    EXPECT_EQ(r.maps().channel_names(), fitted.maps().channel_names());
+    EXPECT_EQ(loaded.provenance.capture_lights.size(), 36u);
+    for (const auto& light : {LightDirection::FromSlantTilt(60, 60),
+                              LightDirection::FromSlantTilt(38, 200)}) {
+      const Image a = fitted.Relight(light), b = r.Relight(light);
+      for (std::size_t v = 0; v < a.values().size(); ++v) {
+        ASSERT_EQ(a.values()[v], b.values()[v]) << method.Name();
+      }
+    }
+  }
+}
+
+TEST(MapStackTest, PlainExrIsNotAStack) {
+  testing::TempDir dir;
+  WriteImage(dir / "plain.exr", Image(2, 2, 3));
+  EXPECT_THAT([&] { LoadRepresentation(dir / "plain.exr"); },
+              ThrowsMessage<Error>(HasSubstr("plain.exr: not a photomat map stack")));
+}
+
+TEST(MapStackTest, DamagedDescriptionIsNamed) {
+  testing::TempDir dir;
+  ImageWriteOptions options;
+  options.attributes[kStackAttribute] = R"({"format": "photomat-map-stack", "version": 1,
+      "method": "ptm", "layout": {"basis_size": 6, "basis_per_channel": true, "has_gain": false,
+      "output_channels": 1}, "channels": ["a"], "basis": {"kind": "ptm"}})";
+  WriteImage(dir / "bad.exr", Image(2, 2, 1), options);
+  EXPECT_THAT([&] { LoadRepresentation(dir / "bad.exr"); },
+              ThrowsMessage<Error>(HasSubstr("bad.exr: photomat:stack.channels: 1 names for a "
+                                             "layout of 6 maps")));
+}
+
+TEST(MapStackTest, FitFolderResolvesByMethod) {
+  testing::TempDir dir;
+  testing::WriteFile(dir / "gradient.exr", "x");
+  testing::WriteFile(dir / "ptm.exr", "x");
+  WriteFitManifest(dir.path(), "in", {{"gradient", "gradient.exr"}, {"ptm", "ptm.exr"}});
+  EXPECT_EQ(ResolveStack(dir.path(), "ptm"), dir / "ptm.exr");
+  EXPECT_THAT([&] { ResolveStack(dir.path(), std::nullopt); },
+              ThrowsMessage<Error>(HasSubstr("several stacks (gradient, ptm)")));
+  EXPECT_THAT([&] { ResolveStack(dir.path(), "eigen3"); },
+              ThrowsMessage<Error>(HasSubstr("no \"eigen3\" stack here; available: gradient, ptm")));
+}
+
+}  // namespace
+}  // namespace photomat

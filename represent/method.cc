@@ -1,0 +1,78 @@
+#include "represent/method.h"
+
+#include <charconv>
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace photomat {
+
+std::string Method::Name() const {
+  switch (kind) {
+    case Kind::kThreeImage:
+      return "3i";
+    case Kind::kGradient:
+      return "gradient";
+    case Kind::kPtm:
+      return "ptm";
+    case Kind::kPtmLrgb:
+      return "ptm-lrgb";
+    case Kind::kEigen:
+      break;
+  }
+  return fmt::format("eigen{}", eigen_k);
+}
+
+int Method::MinimumImages() const {
+  switch (kind) {
+    case Kind::kThreeImage:
+    case Kind::kGradient:
+      return 3;
+    case Kind::kPtm:
+    case Kind::kPtmLrgb:
+      return 6;
+    case Kind::kEigen:
+      break;
+  }
+  return eigen_k;
+}
+
+Method Method::Parse(std::string_view name) {
+  for (Kind kind : {Kind::kThreeImage, Kind::kGradient, Kind::kPtm, Kind::kPtmLrgb}) {
+    if (name == Method{kind}.Name()) return {kind};
+  }
+  if (name.starts_with("eigen")) {
+    const std::string_view digits = name.substr(5);
+    int k = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), k);
+    if (ec == std::errc() && end == digits.data() + digits.size() && k >= 1 && k <= 64) {
+      return {Kind::kEigen, k};
+    }
+  }
+  throw Error(fmt::format(
+      "unknown method \"{}\": expected 3i, gradient, ptm, ptm-lrgb or eigenK (K = 1..64, e.g. "
+      "eigen3, eigen6), or all",
+      name));
+}
+
+std::vector<Method> ParseMethodList(std::string_view list) {
+  if (list == "all") return AllMethods();
+  std::vector<Method> methods;
+  while (!list.empty()) {
+    const auto comma = list.find(',');
+    const std::string_view name = list.substr(0, comma);
+    if (!name.empty()) methods.push_back(Method::Parse(name));
+    if (comma == std::string_view::npos) break;
+    list.remove_prefix(comma + 1);
+  }
+  if (methods.empty()) throw Error("no method named");
+  return methods;
+}
+
+std::vector<Method> AllMethods() {
+  using K = Method::Kind;
+  return {{K::kThreeImage}, {K::kGradient}, {K::kPtm}, {K::kPtmLrgb}, {K::kEigen, 3},
+          {K::kEigen, 6}};
+}
+
+}  // namespace photomat

@@ -1,0 +1,34 @@
+#include "represent/method.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+
+namespace photomat {
+namespace {
+
+TEST(MethodTest, NamesRoundTrip) {
+  for (const Method& method : AllMethods()) EXPECT_EQ(Method::Parse(method.Name()), method);
+  EXPECT_EQ(Method::Parse("eigen12").eigen_k, 12);
+  EXPECT_EQ(Method::Parse("eigen12").MinimumImages(), 12);
+}
+
+TEST(MethodTest, AllIsTheThesisFiveAndLrgb) {
+  std::vector<std::string> names;
+  for (const Method& m : ParseMethodList("all")) names.push_back(m.Name());
+  EXPECT_EQ(names, (std::vector<std::string>{"3i", "gradient", "ptm", "ptm-lrgb", "eigen3",
+                                             "eigen6"}));
+  EXPECT_EQ(ParseMethodList("ptm,eigen4").size(), 2u);
+}
+
+TEST(MethodTest, UnknownNamesListTheValidOnes) {
+  EXPECT_THAT([] { Method::Parse("hsh9"); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("expected 3i, gradient")));
+  EXPECT_THROW(Method::Parse("eigen0"), Error);
+  EXPECT_THROW(Method::Parse("eigenx"), Error);
+  EXPECT_THROW(ParseMethodList(","), Error);
+}
+
+}  // namespace
+}  // namespace photomat

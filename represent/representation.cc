@@ -1,0 +1,140 @@
+#include "represent/representation.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace photomat {
+
+nlohmann::json MapLayout::ToJson() const {
+  return {{"basis_size", basis_size},
+          {"basis_per_channel", basis_per_channel},
+          {"has_gain", has_gain},
+          {"output_channels", output_channels}};
+}
+
+std::vector<std::string> OutputChannelNames(int channels) {
+  if (channels == 1) return {"Y"};
+  if (channels == 3) return {"R", "G", "B"};
+  std::vector<std::string> names;
+  for (int c = 0; c < channels; ++c) names.push_back(fmt::format("C{}", c));
+  return names;
+}
+
+Representation::Representation(std::string method, Image maps, MapLayout layout,
+                               std::shared_ptr<const LightBasis> basis, nlohmann::json details)
+    : method_(std::move(method)),
+      maps_(std::move(maps)),
+      layout_(layout),
+      basis_(std::move(basis)),
+      details_(std::move(details)) {
+  if (!basis_) throw Error(fmt::format("{}: no light basis", method_));
+  if (layout_.output_channels < 1 || layout_.basis_size < 1) {
+    throw Error(fmt::format("{}: empty map layout", method_));
+  }
+  if (maps_.channels() != layout_.MapCount()) {
+    throw Error(fmt::format("{}: {} maps, but the layout needs {}", method_, maps_.channels(),
+                            layout_.MapCount()));
+  }
+  if (basis_->size() != layout_.basis_size) {
+    throw Error(fmt::format("{}: the light basis has {} terms, the maps {}", method_,
+                            basis_->size(), layout_.basis_size));
+  }
+}
+
+void Representation::RelightPixel(std::span<const float> maps, const Eigen::VectorXf& coefficients,
+                                  std::span<float> out) const {
+  const int per_term = layout_.BasisMapsPerTerm();
+  for (int o = 0; o < layout_.output_channels; ++o) {
+    const int b = layout_.basis_per_channel ? o : 0;
+    float sum = 0.0f;
+    for (int j = 0; j < layout_.basis_size; ++j) sum += coefficients[j] * maps[j * per_term + b];
+    out[o] = layout_.has_gain ? sum * maps[layout_.GainOffset() + o] : sum;
+  }
+}
+
+Image Representation::Relight(const LightDirection& light, const RelightOptions& options) const {
+  const Eigen::VectorXf coefficients = basis_->Coefficients(light).cast<float>();
+  Image image(maps_.width(), maps_.height(), OutputChannelNames(layout_.output_channels));
+  tbb::parallel_for(0, maps_.height(), [&](int y) {
+    for (int x = 0; x < maps_.width(); ++x) {
+      const auto out = image.pixel(x, y);
+      RelightPixel(maps_.pixel(x, y), coefficients, out);
+      if (options.clamp_negative) {
+        for (float& v : out) v = std::max(v, 0.0f);
+      }
+    }
+  });
+  return image;
+}
+
+Representation Representation::WithMaps(Image maps) const {
+  if (maps.channels() != maps_.channels()) {
+    throw Error(fmt::format("{}: {} maps given, the representation has {}", method_,
+                            maps.channels(), maps_.channels()));
+  }
+  if (maps.channel_names().empty()) maps.set_channel_names(maps_.channel_names());
+  return Representation(method_, std::move(maps), layout_, basis_, details_);
+}
+
+namespace {
+
+Image NormalImage(int width, int height) {
+  return Image(width, height, std::vector<std::string>{"normal.X", "normal.Y", "normal.Z"});
+}
+
+void StoreNormal(Image& normals, std::size_t p, Eigen::Vector3d n) {
+  const double norm = n.norm();
+  n = norm > 0.0 ? (n / norm).eval() : Eigen::Vector3d::UnitZ();
+  for (int c = 0; c < 3; ++c) normals.pixel(p)[c] = static_cast<float>(n[c]);
+}
+
+// Sum over output channels of gain_o * B_j,o: the luminance-like weight of basis term j.
+double CombinedBasis(const Representation& r, std::span<const float> maps, int j) {
+  const MapLayout& layout = r.layout();
+  double sum = 0.0;
+  for (int o = 0; o < layout.output_channels; ++o) {
+    const double b = maps[j * layout.BasisMapsPerTerm() + (layout.basis_per_channel ? o : 0)];
+    sum += layout.has_gain ? b * maps[layout.GainOffset() + o] : b;
+  }
+  return sum;
+}
+
+}  // namespace
+
+std::optional<Image> EstimateNormals(const Representation& r) {
+  const std::optional<Eigen::MatrixXd> linear = r.basis().LinearInLight();
+  const bool ptm = r.basis().kind() == "ptm";
+  if (!linear && !ptm) return std::nullopt;
+  Image normals = NormalImage(r.width(), r.height());
+  const int k = r.layout().basis_size;
+  tbb::parallel_for(std::size_t{0}, normals.pixel_count(), [&](std::size_t p) {
+    const auto maps = r.maps().pixel(p);
+    Eigen::VectorXd combined(k);
+    for (int j = 0; j < k; ++j) combined[j] = CombinedBasis(r, maps, j);
+    if (linear) {
+      // i = sum_j c_j B_j = sum_j (A l)_j B_j = (A^T B) . l: the albedo-scaled normal is A^T B.
+      StoreNormal(normals, p, linear->transpose() * combined);
+      return;
+    }
+    // Luminance L(u, v) = a0 u^2 + a1 v^2 + a2 uv + a3 u + a4 v + a5 is largest where its
+    // gradient vanishes (Malzbender 2001, eq. 16-17); the maximum is clamped to the unit disc.
+    const double a0 = combined[0], a1 = combined[1], a2 = combined[2], a3 = combined[3],
+                 a4 = combined[4];
+    const double det = 4 * a0 * a1 - a2 * a2;
+    double u = 0.0, v = 0.0;
+    if (std::abs(det) > 1e-12) {
+      u = (a2 * a4 - 2 * a1 * a3) / det;
+      v = (a2 * a3 - 2 * a0 * a4) / det;
+    }
+    const double radius = std::hypot(u, v);
+    if (radius > 1.0) u /= radius, v /= radius;
+    StoreNormal(normals, p, {u, v, std::sqrt(std::max(0.0, 1.0 - u * u - v * v))});
+  });
+  return normals;
+}
+
+}  // namespace photomat

@@ -1,0 +1,23 @@
+#pragma once
+
+#include "capture/synthetic_capture.h"
+#include "core/light_direction.h"
+#include "core/photometric_set.h"
+
+namespace photomat::testing {
+
+// Synthetic captures with known truth, shared by the tests of several modules.
+struct SyntheticSet {
+  SyntheticMaterial material;
+  PhotometricSet set;
+};
+
+// The thesis grid (36 lights) over a `size` x `size` material with default relief (25 degrees:
+// no shadow on this grid), pure Lambertian.
+SyntheticSet LambertianSet(SurfacePattern pattern = SurfacePattern::kBricks, int size = 64);
+
+// The thesis grid over a steep material (55 degrees) with attached and cast shadows and
+// Blinn-Phong highlights: what Lambertian methods cannot represent.
+SyntheticSet ShadowedSpecularSet(int size = 64);
+
+}  // namespace photomat::testing
