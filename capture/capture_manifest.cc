@@ -122,23 +122,29 @@ void WriteCaptureManifest(const fs::path& path, const CaptureManifest& manifest)
 }
 
 CaptureManifest SavePhotometricSet(const fs::path& folder, const PhotometricSet& set,
-                                   const SaveSetOptions& options) {
+                                   const SaveSetOptions& options, Progress* progress) {
   std::error_code ec;
   fs::create_directories(folder, ec);
   if (ec) throw Error(folder, fmt::format("cannot create folder: {}", ec.message()));
   const bool exr = options.sample_type == SampleType::kFloat ||
                    options.sample_type == SampleType::kHalf;
   CaptureManifest manifest;
-  manifest.colour_space = ColourSpace::kLinear;
+  manifest.colour_space = exr ? ColourSpace::kLinear : options.encoding;
   ImageWriteOptions write;
   write.sample_type = options.sample_type;
+  write.encoding = *manifest.colour_space;
+  NullProgress no_progress;
+  Progress& report = OrNull(progress, no_progress);
+  report.Start("write", set.size());
   for (int i = 0; i < set.size(); ++i) {
-    CaptureManifestImage entry{fmt::format("img_{:03}.{}", i, exr ? "exr" : "png"), set.light(i),
-                               {}};
+    CaptureManifestImage entry{
+        fmt::format("{}_{:03}.{}", options.prefix, i, exr ? "exr" : "png"), set.light(i), {}};
     if (!set.intensities().empty()) entry.intensity = set.intensities()[i];
     WriteImage(folder / entry.file, set.image(i), write);
     manifest.images.push_back(std::move(entry));
+    report.Advance();
   }
+  report.Finish();
   if (set.mask()) {
     manifest.mask = "mask.png";
     WriteMask(folder / *manifest.mask, *set.mask());

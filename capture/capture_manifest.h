@@ -10,6 +10,7 @@
 #include "core/image_io.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
+#include "core/progress.h"
 
 namespace photomat {
 
@@ -56,12 +57,19 @@ void WriteCaptureManifest(const std::filesystem::path& path, const CaptureManife
 struct SaveSetOptions {
   // 16-bit linear PNG by default (what lab cameras give); kFloat writes EXR.
   SampleType sample_type = SampleType::kUint16;
+  // Encoding of integer images (kSrgb for 8-bit images meant for viewing); recorded in the
+  // manifest's "colour_space" so that readers linearise them again.
+  ColourSpace encoding = ColourSpace::kLinear;
+  // File names are "<prefix>_000.png", ...
+  std::string prefix = "img";
   nlohmann::json provenance;
 };
 
 // Writes the images of `set` (named img_000.png, ...; negative values clamp to 0 in integer
 // files), its mask, and manifest.json into `folder` (created if needed). Returns the manifest.
+// Reports each image to `progress` when given.
 CaptureManifest SavePhotometricSet(const std::filesystem::path& folder, const PhotometricSet& set,
-                                   const SaveSetOptions& options = {});
+                                   const SaveSetOptions& options = {},
+                                   Progress* progress = nullptr);
 
 }  // namespace photomat

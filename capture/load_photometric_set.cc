@@ -125,6 +125,24 @@ InputLocation DetectInput(const fs::path& path) {
               "filenames.txt and light_directions.txt");
 }
 
+std::vector<LightDirection> ReadLightDirections(const fs::path& path) {
+  const InputLocation input = DetectInput(path);
+  switch (input.kind) {
+    case InputKind::kLpFile: {
+      std::vector<LightDirection> lights;
+      for (const LightFileEntry& entry : ReadLpFile(input.file)) lights.push_back(entry.light);
+      return lights;
+    }
+    case InputKind::kDiligent:
+      return ReadDiligentFiles(input.file).lights;
+    case InputKind::kManifest:
+      break;
+  }
+  std::vector<LightDirection> lights;
+  for (const auto& image : ReadCaptureManifest(input.file).images) lights.push_back(image.light);
+  return lights;
+}
+
 LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
   const InputLocation input = DetectInput(path);
   SetDescription description;

@@ -52,6 +52,11 @@ struct LoadedSet {
   std::optional<std::filesystem::path> ground_truth_normals;
 };
 
+// The light directions of any light file photomat reads (a .lp file, a manifest, DiLiGenT's
+// light_directions.txt or its folder), without reading images. For relighting under a dome's
+// lights or another capture's.
+std::vector<LightDirection> ReadLightDirections(const std::filesystem::path& path);
+
 // Reads images in parallel. Every fault (missing or corrupt image, mixed sizes, malformed light
 // data) is an Error naming the file and the fault.
 LoadedSet LoadPhotometricSet(const std::filesystem::path& path, const LoadOptions& options = {});

@@ -1,0 +1,117 @@
+#include "apps/cli_support.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "capture/text_parsing.h"
+#include "core/error.h"
+#include "relight/relight.h"
+
+namespace photomat::app {
+
+LightDirection ParseSlantTilt(const std::string& text) {
+  const auto comma = text.find(',');
+  const auto slant = comma == std::string::npos ? std::nullopt
+                                                : ParseNumber(text.substr(0, comma));
+  const auto tilt = comma == std::string::npos ? std::nullopt : ParseNumber(text.substr(comma + 1));
+  if (!slant || !tilt) throw Error(fmt::format("\"{}\": expected SLANT,TILT in degrees", text));
+  if (*slant < 0.0 || *slant > 90.0) {
+    throw Error(fmt::format("\"{}\": slant must be in [0, 90] degrees", text));
+  }
+  return LightDirection::FromSlantTilt(*slant, *tilt);
+}
+
+std::vector<LightDirection> ParseSweep(const std::string& text) {
+  const auto comma = text.find(',');
+  const auto count = ParseNumber(text.substr(0, comma));
+  const auto slant = comma == std::string::npos ? std::optional(60.0)
+                                                : ParseNumber(text.substr(comma + 1));
+  if (!count || *count != static_cast<int>(*count) || !slant) {
+    throw Error(fmt::format("\"{}\": expected COUNT[,SLANT], e.g. 36,60", text));
+  }
+  return LightSweep(static_cast<int>(*count), *slant);
+}
+
+std::pair<int, int> ParseSize(const std::string& text) {
+  const auto x = text.find('x');
+  const auto w = x == std::string::npos ? std::nullopt : ParseNumber(text.substr(0, x));
+  const auto h = x == std::string::npos ? std::nullopt : ParseNumber(text.substr(x + 1));
+  if (!w || !h || *w != static_cast<int>(*w) || *h != static_cast<int>(*h) || *w < 1 || *h < 1) {
+    throw Error(fmt::format("\"{}\": expected a size WIDTHxHEIGHT, e.g. 128x128", text));
+  }
+  return {static_cast<int>(*w), static_cast<int>(*h)};
+}
+
+LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options) {
+  TerminalProgressBar bar;
+  LoadOptions with_progress = options;
+  with_progress.progress = &bar;
+  LoadedSet loaded = LoadPhotometricSet(input, with_progress);
+  std::size_t images = 0, worst = 0;
+  int worst_index = 0;
+  for (std::size_t i = 0; i < loaded.saturated_pixels.size(); ++i) {
+    if (loaded.saturated_pixels[i] == 0) continue;
+    ++images;
+    if (loaded.saturated_pixels[i] > worst) worst = loaded.saturated_pixels[i], worst_index = i;
+  }
+  if (images > 0) {
+    spdlog::warn("{} of {} images have clipped pixels (most: {} in {}); clipped values are not "
+                 "measurements and bias least-squares fits",
+                 images, loaded.set.size(), worst, loaded.set.image_name(worst_index));
+  }
+  return loaded;
+}
+
+void CreateFolder(const std::filesystem::path& folder) {
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec) throw Error(folder, fmt::format("cannot create folder: {}", ec.message()));
+}
+
+std::string FormatEvaluationTable(const std::vector<MethodEvaluation>& evaluations) {
+  const bool normals = std::any_of(evaluations.begin(), evaluations.end(),
+                                   [](const auto& e) { return e.normals.has_value(); });
+  std::string table = fmt::format("{:<10} {:>14} {:>14}", "method", "eta_reconstr.",
+                                  "eta_predict.");
+  if (normals) table += fmt::format(" {:>10} {:>10} {:>7} {:>7}", "mean_deg", "median_deg",
+                                    "<5deg", "<10deg");
+  table += "\n";
+  for (const MethodEvaluation& e : evaluations) {
+    table += fmt::format("{:<10} {:>14.6f} {:>14}", e.method.Name(), e.eta_reconstruction,
+                         e.eta_prediction ? fmt::format("{:.6f}", *e.eta_prediction) : "-");
+    if (e.normals) {
+      table += fmt::format(" {:>10.3f} {:>10.3f} {:>6.1f}% {:>6.1f}%", e.normals->mean_degrees,
+                           e.normals->median_degrees, 100 * e.normals->fraction_below_5_degrees,
+                           100 * e.normals->fraction_below_10_degrees);
+    }
+    table += "\n";
+  }
+  return table;
+}
+
+int WriteSyntheticSet(const std::filesystem::path& folder, const GenerateOptions& options) {
+  CreateFolder(folder);
+  const std::vector<LightDirection> lights =
+      options.lights ? ReadLightDirections(*options.lights) : ThesisLightGrid();
+  const SyntheticMaterial material = MakeSyntheticMaterial(options.material);
+  const PhotometricSet set = RenderSyntheticCapture(material, lights, options.render);
+  SaveSetOptions save;
+  save.sample_type = options.exr ? SampleType::kFloat : SampleType::kUint16;
+  save.provenance = {
+      {"generator", "photomat generate"},
+      {"pattern", ToString(options.material.pattern)},
+      {"size", {options.material.width, options.material.height}},
+      {"max_slope_deg", options.material.max_slope_degrees},
+      {"seed", options.material.seed},
+      {"shadows", options.render.shadows},
+      {"specular", options.render.specular},
+      {"shininess", options.render.shininess},
+      {"noise_sigma", options.render.noise_sigma},
+  };
+  WriteSyntheticCapture(folder, material, set, save);
+  return set.size();
+}
+
+}  // namespace photomat::app

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "capture/load_photometric_set.h"
+#include "capture/synthetic_capture.h"
+#include "core/light_direction.h"
+#include "represent/evaluation.h"
+
+namespace photomat::app {
+
+// Helpers shared by the subcommands.
+
+// "SLANT,TILT" in degrees.
+LightDirection ParseSlantTilt(const std::string& text);
+// "COUNT[,SLANT]": COUNT lights circling at SLANT degrees (default 60).
+std::vector<LightDirection> ParseSweep(const std::string& text);
+// "WxH".
+std::pair<int, int> ParseSize(const std::string& text);
+
+// Loads a set with a progress bar and warns (stderr) about clipped pixels.
+LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options);
+
+// Creates `folder` (and parents); Error naming it on failure.
+void CreateFolder(const std::filesystem::path& folder);
+
+// The evaluation table as printed by `evaluate` and `demo`.
+std::string FormatEvaluationTable(const std::vector<MethodEvaluation>& evaluations);
+
+// Options of a synthetic capture, shared by `generate` and `demo`.
+struct GenerateOptions {
+  SyntheticMaterialOptions material;
+  SyntheticRenderOptions render;
+  std::optional<std::filesystem::path> lights;  // default: the thesis grid
+  bool exr = false;
+};
+// Renders and writes the capture; returns the number of images.
+int WriteSyntheticSet(const std::filesystem::path& folder, const GenerateOptions& options);
+
+}  // namespace photomat::app

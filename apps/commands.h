@@ -1,0 +1,15 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace photomat::app {
+
+// Each subcommand registers its options and its action on the top-level app. The action runs
+// after parsing; it throws photomat::Error on bad input, which main() prints as one line.
+void AddGenerateCommand(CLI::App& app);
+void AddFitCommand(CLI::App& app);
+void AddRelightCommand(CLI::App& app);
+void AddEvaluateCommand(CLI::App& app);
+void AddDemoCommand(CLI::App& app);
+
+}  // namespace photomat::app

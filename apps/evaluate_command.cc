@@ -1,0 +1,74 @@
+#include <fmt/format.h>
+
+#include "apps/cli_support.h"
+#include "apps/commands.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "represent/evaluation.h"
+
+namespace photomat::app {
+
+void AddEvaluateCommand(CLI::App& app) {
+  struct Options {
+    std::filesystem::path input;
+    std::string methods = "all";
+    std::filesystem::path gt_normals;
+    std::filesystem::path json;
+    bool no_prediction = false;
+    bool literal_rms = false;
+    bool raw_intensities = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "evaluate",
+      "Measure how well each method relights the captured images: Dong's normalised RMS error "
+      "for reconstruction (fit all, relight each) and leave-one-out prediction, and the normal "
+      "angular error against ground truth.");
+  command->add_option("input", options->input, "Photometric set (folder, .lp, manifest, DiLiGenT)")
+      ->required();
+  command->add_option("--methods", options->methods, "Comma-separated methods, or all")
+      ->capture_default_str();
+  command->add_option("--gt-normals", options->gt_normals,
+                      "Float EXR of unit normals (x right, y up, z to camera); default: the one "
+                      "the input names (manifest ground_truth, DiLiGenT gt_normals.exr)");
+  command->add_option("--json", options->json, "Also write the results as JSON");
+  command->add_flag("--no-prediction", options->no_prediction,
+                    "Skip leave-one-out prediction (one fit per image)");
+  command->add_flag("--literal-rms", options->literal_rms,
+                    "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
+  command->add_flag("--ignore-intensities", options->raw_intensities,
+                    "Do not divide the images by the light intensities the input gives");
+  command->callback([options] {
+    const std::vector<Method> methods = ParseMethodList(options->methods);
+    LoadOptions load;
+    load.apply_intensities = !options->raw_intensities;
+    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    std::optional<Image> truth;
+    const auto truth_path = options->gt_normals.empty() ? loaded.ground_truth_normals
+                                                        : std::optional(options->gt_normals);
+    if (truth_path) truth = ReadImage(*truth_path).image;
+    if (truth && (truth->width() != loaded.set.width() || truth->height() != loaded.set.height())) {
+      throw Error(*truth_path, fmt::format("normals are {}x{} but the images are {}x{}",
+                                           truth->width(), truth->height(), loaded.set.width(),
+                                           loaded.set.height()));
+    }
+    const Observations observations(loaded.set);
+    TerminalProgressBar bar;
+    EvaluationOptions evaluation;
+    evaluation.prediction = !options->no_prediction;
+    evaluation.literal_thesis_rms = options->literal_rms;
+    evaluation.progress = &bar;
+    std::vector<MethodEvaluation> results;
+    for (const Method& method : methods) {
+      results.push_back(EvaluateMethod(loaded.set, observations, method,
+                                       truth ? &*truth : nullptr, evaluation));
+    }
+    fmt::print("{} images, {} pixels{}\n{}", loaded.set.size(), observations.pixels(),
+               truth ? fmt::format(", ground truth {}", truth_path->string()) : "",
+               FormatEvaluationTable(results));
+    if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+  });
+}
+
+}  // namespace photomat::app

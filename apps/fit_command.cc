@@ -1,0 +1,62 @@
+#include <fmt/format.h>
+
+#include "apps/cli_support.h"
+#include "apps/commands.h"
+#include "core/colour.h"
+#include "core/error.h"
+#include "represent/fit.h"
+#include "represent/map_stack.h"
+
+namespace photomat::app {
+
+void AddFitCommand(CLI::App& app) {
+  struct Options {
+    std::filesystem::path input;
+    std::string methods = "all";
+    std::filesystem::path out;
+    bool raw_intensities = false;
+    std::string colour_space;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "fit",
+      "Fit relightable representations to a photometric set; writes one multi-layer EXR map "
+      "stack per method and stacks.json into --out.");
+  command->add_option("input", options->input,
+                      "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")
+      ->required();
+  command->add_option("--method", options->methods,
+                      "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), a "
+                      "comma-separated list, or all")
+      ->capture_default_str();
+  command->add_option("--out", options->out, "Output folder")->required();
+  command->add_flag("--ignore-intensities", options->raw_intensities,
+                    "Do not divide the images by the light intensities the input gives");
+  command->add_option("--colour-space", options->colour_space,
+                      "How integer images encode light: linear or srgb (default: 8-bit sRGB, "
+                      "16-bit linear, or what the manifest says)");
+  command->callback([options] {
+    const std::vector<Method> methods = ParseMethodList(options->methods);
+    LoadOptions load;
+    load.apply_intensities = !options->raw_intensities;
+    if (!options->colour_space.empty()) {
+      load.colour_space = ParseColourSpace(options->colour_space);
+      if (!load.colour_space) throw Error("--colour-space: expected linear or srgb");
+    }
+    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    CreateFolder(options->out);
+    std::map<std::string, std::string> stacks;
+    const StackProvenance provenance{loaded.set.lights(), "linear", options->input.string()};
+    for (const Method& method : methods) {
+      const Representation representation = Fit(loaded.set, method);
+      const std::string file = method.Name() + ".exr";
+      SaveRepresentation(options->out / file, representation, provenance);
+      stacks[method.Name()] = file;
+      fmt::print("{:<10} {} maps -> {}\n", method.Name(), representation.maps().channels(),
+                 (options->out / file).string());
+    }
+    WriteFitManifest(options->out, options->input.string(), stacks);
+  });
+}
+
+}  // namespace photomat::app

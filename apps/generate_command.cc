@@ -1,0 +1,65 @@
+#include <fmt/format.h>
+
+#include "apps/cli_support.h"
+#include "apps/commands.h"
+#include "core/error.h"
+
+namespace photomat::app {
+
+void AddGenerateCommand(CLI::App& app) {
+  struct Options {
+    std::filesystem::path out;
+    std::string size = "128x128";
+    std::string pattern = "bricks";
+    std::string lights;
+    GenerateOptions generate;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "generate",
+      "Render a synthetic capture with ground truth: a procedural material (height field and RGB "
+      "albedo) under known lights. Writes images, manifest.json and gt_normals/albedo/height.exr.");
+  command->add_option("--out", options->out, "Output folder")->required();
+  command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  command->add_option("--pattern", options->pattern, "Material: bricks, bumps or grooves")
+      ->capture_default_str();
+  command->add_option("--relief", options->generate.material.max_slope_degrees,
+                      "Steepest surface slope in degrees (25 casts no shadow on the default "
+                      "lights; 50+ makes shadows)")
+      ->capture_default_str();
+  command->add_flag("--shadows", options->generate.render.shadows,
+                    "Attached and cast shadows (off: the linear Lambertian model)");
+  command->add_option("--specular", options->generate.render.specular,
+                      "Blinn-Phong specular coefficient k_s (0: Lambertian)")
+      ->capture_default_str();
+  command->add_option("--shininess", options->generate.render.shininess, "Blinn-Phong exponent")
+      ->capture_default_str();
+  command->add_option("--noise", options->generate.render.noise_sigma,
+                      "Gaussian noise sigma, in units of full scale")
+      ->capture_default_str();
+  command->add_option("--seed", options->generate.material.seed,
+                      "Seed of the material and the noise")
+      ->capture_default_str();
+  command->add_option("--lights", options->lights,
+                      "Light file (.lp, manifest.json, DiLiGenT folder); default: the thesis grid "
+                      "(12 tilts x slants 30, 45, 60)");
+  command->add_flag("--exr", options->generate.exr, "Write float EXR images instead of 16-bit PNG");
+  command->callback([options] {
+    GenerateOptions generate = options->generate;
+    std::tie(generate.material.width, generate.material.height) = ParseSize(options->size);
+    const auto pattern = ParseSurfacePattern(options->pattern);
+    if (!pattern) {
+      throw Error(fmt::format("unknown pattern \"{}\": expected bricks, bumps or grooves",
+                              options->pattern));
+    }
+    generate.material.pattern = *pattern;
+    generate.render.noise_seed = generate.material.seed;
+    if (!options->lights.empty()) generate.lights = options->lights;
+    const int images = WriteSyntheticSet(options->out, generate);
+    fmt::print("wrote {} images of a {}x{} {} sample with ground truth to {}\n", images,
+               generate.material.width, generate.material.height, options->pattern,
+               options->out.string());
+  });
+}
+
+}  // namespace photomat::app

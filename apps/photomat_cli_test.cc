@@ -1,0 +1,107 @@
+// End-to-end tests of the photomat command line: each runs the built executable.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+
+#include "capture/load_photometric_set.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "represent/map_stack.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::TempDir;
+
+struct RunResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunPhotomat(const std::string& arguments) {
+  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+TEST(PhotomatCliTest, GenerateFitRelightEvaluate) {
+  TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 4").exit_code,
+            0);
+  EXPECT_EQ(LoadPhotometricSet(capture).set.size(), 36);
+
+  const RunResult fit = RunPhotomat("fit " + capture + " --method gradient,ptm,eigen6 --out " +
+                            (dir / "stacks").string());
+  ASSERT_EQ(fit.exit_code, 0) << fit.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "stacks" / "stacks.json"));
+  const LoadedStack ptm = LoadRepresentation(dir / "stacks" / "ptm.exr");
+  EXPECT_EQ(ptm.representation.maps().channels(), 18);
+
+  const RunResult one = RunPhotomat("relight " + (dir / "stacks").string() +
+                            " --method gradient --light 60,120 --out " + (dir / "g.png").string());
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  EXPECT_EQ(ReadImage(dir / "g.png").image.width(), 40);
+
+  const RunResult sweep = RunPhotomat("relight " + (dir / "stacks" / "eigen6.exr").string() +
+                              " --sweep 5,45 --format exr --out " + (dir / "sweep").string());
+  ASSERT_EQ(sweep.exit_code, 0) << sweep.output;
+  EXPECT_EQ(LoadPhotometricSet(dir / "sweep").set.size(), 5);
+
+  const RunResult evaluate = RunPhotomat("evaluate " + capture + " --methods 3i,gradient,eigen3 --json " +
+                                 (dir / "e.json").string());
+  ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
+  EXPECT_THAT(evaluate.output, HasSubstr("eta_reconstr."));
+  const nlohmann::json json = ReadJsonFile(dir / "e.json");
+  for (const char* method : {"3i", "gradient", "eigen3"}) {
+    ASSERT_TRUE(json.contains(method)) << method;
+    EXPECT_LT(json[method]["eta_reconstruction"].get<double>(), 1e-3);
+    EXPECT_TRUE(json[method].contains("eta_prediction"));
+  }
+  // The manifest names its ground truth, so normals are scored without --gt-normals.
+  EXPECT_LT(json["gradient"]["normals"]["mean_angular_error_deg"].get<double>(), 0.1);
+  EXPECT_FALSE(json["eigen3"].contains("normals"));
+}
+
+TEST(PhotomatCliTest, ErrorsAreOneLineAndNonZero) {
+  const RunResult missing = RunPhotomat("fit /nonexistent/set --out /tmp/x");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_EQ(missing.output, "photomat: error: /nonexistent/set: no such file or folder\n");
+  TempDir dir;
+  const RunResult method = RunPhotomat("fit " + dir.path().string() + " --method hsh --out /tmp/x");
+  EXPECT_EQ(method.exit_code, 1);
+  EXPECT_THAT(method.output, HasSubstr("unknown method \"hsh\""));
+  const RunResult light = RunPhotomat("relight x.exr --light 100,0 --out y.png");
+  EXPECT_EQ(light.exit_code, 1);
+}
+
+TEST(PhotomatCliTest, EverySubcommandHasHelp) {
+  for (const char* command : {"generate", "fit", "relight", "evaluate", "demo"}) {
+    const RunResult help = RunPhotomat(std::string(command) + " --help");
+    EXPECT_EQ(help.exit_code, 0) << command;
+    EXPECT_THAT(help.output, HasSubstr("Usage: photomat " + std::string(command))) << command;
+  }
+  EXPECT_NE(RunPhotomat("").exit_code, 0);  // a subcommand is required
+}
+
+TEST(PhotomatCliTest, DemoRunsTheWholePipeline) {
+  TempDir dir;
+  const RunResult demo = RunPhotomat("demo --size 32 --sweep 4 --out " + dir.path().string());
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  EXPECT_THAT(demo.output, HasSubstr("4/4 relight"));
+  const nlohmann::json evaluation = ReadJsonFile(dir / "evaluation.json");
+  EXPECT_EQ(evaluation.size(), 6u);
+  EXPECT_EQ(LoadPhotometricSet(dir / "relit" / "eigen6").set.size(), 4);
+}
+
+}  // namespace
+}  // namespace photomat
