@@ -176,8 +176,11 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
 
   std::vector<std::string> names;
   for (const auto& file : description.image_files) names.push_back(file.string());
+  // The set's source is the file its lights came from: messages about the lights point there.
+  const fs::path source =
+      input.kind == InputKind::kDiligent ? input.file / "light_directions.txt" : input.file;
   LoadedSet loaded{PhotometricSet(std::move(images), std::move(description.lights),
-                                  std::move(names), input.file),
+                                  std::move(names), source),
                    input.kind, std::move(saturated), description.ground_truth_normals};
   if (description.mask) {
     try {

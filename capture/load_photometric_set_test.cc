@@ -6,9 +6,9 @@
 #include <fmt/format.h>
 
 #include "capture/capture_manifest.h"
-#include "capture/text_parsing.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "tests/support/layouts.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {
@@ -17,77 +17,10 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using testing::Layouts;
+using testing::LayoutWriter;
 using testing::TempDir;
-
-// A small valid set written in each on-disk layout; each test then breaks one thing.
-struct LayoutWriter {
-  InputKind kind;
-  // Light vectors as text ("x y z"), one per image; `count` is what the layout declares.
-  std::function<void(const fs::path& dir, const std::vector<std::string>& names,
-                     const std::vector<std::string>& lights, int count)>
-      write_lights;
-  fs::path light_file;  // relative to the folder
-};
-
-void WriteImages(const fs::path& dir, const std::vector<std::string>& names, int width = 6,
-                 int height = 4) {
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    Image image(width, height, 3);
-    for (std::size_t v = 0; v < image.values().size(); ++v) {
-      image.values()[v] = static_cast<float>((v * 7 + i * 13) % 50) / 50.0f + 0.1f;
-    }
-    ImageWriteOptions options;
-    options.sample_type = SampleType::kUint16;
-    WriteImage(dir / names[i], image, options);
-  }
-}
-
-std::vector<LayoutWriter> Layouts() {
-  return {
-      {InputKind::kLpFile,
-       [](const fs::path& dir, const auto& names, const auto& lights, int count) {
-         std::string text = fmt::format("{}\n", count);
-         for (std::size_t i = 0; i < lights.size(); ++i) {
-           text += names[i] + " " + lights[i] + "\n";
-         }
-         testing::WriteFile(dir / "lights.lp", text);
-       },
-       "lights.lp"},
-      {InputKind::kDiligent,
-       [](const fs::path& dir, const auto& names, const auto& lights, int count) {
-         std::string files, directions, intensities;
-         for (int i = 0; i < count; ++i) {
-           files += names[i % names.size()] + "\n";
-           intensities += "1 1 1\n";
-         }
-         for (const auto& light : lights) directions += light + "\n";
-         testing::WriteFile(dir / "filenames.txt", files);
-         testing::WriteFile(dir / "light_directions.txt", directions);
-         testing::WriteFile(dir / "light_intensities.txt", intensities);
-       },
-       "light_directions.txt"},
-      {InputKind::kManifest,
-       [](const fs::path& dir, const auto& names, const auto& lights, int count) {
-         std::string images;
-         for (std::size_t i = 0; i < lights.size(); ++i) {
-           // JSON wants numbers; anything else goes in quotes (still not a number).
-           std::string vector;
-           for (auto token : SplitWhitespace(lights[i])) {
-             const std::string text(token);
-             vector += (vector.empty() ? "" : ", ") +
-                       (ParseNumber(text) ? text : "\"" + text + "\"");
-           }
-           // The declared count shows up as the number of intensity values per image.
-           std::string intensity = count == static_cast<int>(lights.size()) ? "1" : "[1, 1]";
-           images += fmt::format("{}{{\"file\": \"{}\", \"light\": [{}], \"intensity\": {}}}",
-                                 i ? ", " : "", names[i], vector, intensity);
-         }
-         testing::WriteFile(dir / "manifest.json",
-                            "{\"format\": \"photomat-capture\", \"images\": [" + images + "]}");
-       },
-       "manifest.json"},
-  };
-}
+using testing::WriteImages;
 
 class LoaderTest : public ::testing::TestWithParam<int> {
  protected:

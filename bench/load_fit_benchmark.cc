@@ -1,0 +1,57 @@
+// Load and fit times on a real capture (default: DiLiGenT cat, 96 images, 612x512, 16-bit RGB).
+// Run through bench/load_fit_table, which starts one process per case so that each case's peak
+// memory is its own, and prints the table the foundation issue asks for.
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "capture/load_photometric_set.h"
+#include "represent/fit.h"
+
+namespace photomat {
+namespace {
+
+std::filesystem::path CaptureFolder() {
+  if (const char* set = std::getenv("PHOTOMAT_BENCH_SET")) return set;
+  const char* data = std::getenv("PHOTOMAT_TEST_DATA");
+  return std::filesystem::path(data ? data : "../shared/data") / "diligent" / "cat";
+}
+
+void ReportPeakMemory(benchmark::State& state) {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  state.counters["peak_rss_mb"] = static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB -> MiB
+}
+
+void BM_Load(benchmark::State& state) {
+  for (auto _ : state) {
+    LoadedSet loaded = LoadPhotometricSet(CaptureFolder());
+    benchmark::DoNotOptimize(loaded.set.image(0).values().data());
+  }
+  ReportPeakMemory(state);
+}
+
+void BM_LoadAndFit(benchmark::State& state, const std::string& method) {
+  for (auto _ : state) {
+    const LoadedSet loaded = LoadPhotometricSet(CaptureFolder());
+    const Representation representation = Fit(loaded.set, Method::Parse(method));
+    benchmark::DoNotOptimize(representation.maps().values().data());
+  }
+  ReportPeakMemory(state);
+}
+
+BENCHMARK(BM_Load)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK_CAPTURE(BM_LoadAndFit, gradient, std::string("gradient"))
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK_CAPTURE(BM_LoadAndFit, ptm, std::string("ptm"))
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK_CAPTURE(BM_LoadAndFit, eigen6, std::string("eigen6"))
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+}  // namespace
+}  // namespace photomat
+
+BENCHMARK_MAIN();
