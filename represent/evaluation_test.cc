@@ -86,17 +86,23 @@ TEST(EvaluationTest, NormalStatisticsOfAKnownRotation) {
   EXPECT_DOUBLE_EQ(stats.fraction_below_10_degrees, 0.75);
 }
 
+// Mean angular error of `method`'s normals on a DiLiGenT object, all 96 images.
+double DiligentMeanError(const std::filesystem::path& folder, const char* method) {
+  const LoadedSet loaded = LoadPhotometricSet(folder);
+  EXPECT_EQ(loaded.set.size(), 96);
+  EXPECT_TRUE(loaded.ground_truth_normals);
+  const Image truth = ReadImage(*loaded.ground_truth_normals).image;
+  const auto normals = EstimateNormals(Fit(loaded.set, Method::Parse(method)));
+  const double mean = CompareNormals(*normals, truth, *loaded.set.mask()).mean_degrees;
+  ::testing::Test::RecordProperty(std::string(method) + "_mean_angular_error_deg",
+                                  std::to_string(mean));
+  return mean;
+}
+
 // DiLiGenT's published least-squares baseline (README of the data): 4.10 (ball), 8.41 (cat).
 void ExpectDiligentLeastSquares(const std::string& object, double published) {
   PHOTOMAT_TEST_DATA_OR_SKIP(folder, "diligent/" + object);
-  const LoadedSet loaded = LoadPhotometricSet(folder);
-  ASSERT_EQ(loaded.set.size(), 96);
-  ASSERT_TRUE(loaded.ground_truth_normals);
-  const Image truth = ReadImage(*loaded.ground_truth_normals).image;
-  const auto normals = EstimateNormals(Fit(loaded.set, Method::Parse("gradient")));
-  const NormalErrorStats stats = CompareNormals(*normals, truth, *loaded.set.mask());
-  ::testing::Test::RecordProperty("mean_angular_error_deg", std::to_string(stats.mean_degrees));
-  EXPECT_NEAR(stats.mean_degrees, published, 0.5) << object;
+  EXPECT_NEAR(DiligentMeanError(folder, "gradient"), published, 0.5) << object;
 }
 
 TEST(DiligentTest, BallLeastSquaresMatchesThePublishedBaseline) {
@@ -105,6 +111,13 @@ TEST(DiligentTest, BallLeastSquaresMatchesThePublishedBaseline) {
 
 TEST(DiligentTest, CatLeastSquaresMatchesThePublishedBaseline) {
   ExpectDiligentLeastSquares("cat", 8.41);
+}
+
+// PTM's linear terms give normals at least as good as least squares on the specular ball (the
+// biquadratic absorbs part of the highlight): measured 3.45 degrees against 4.29.
+TEST(DiligentTest, PtmNormalsOnTheBallBeatLeastSquares) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "diligent/ball");
+  EXPECT_LT(DiligentMeanError(folder, "ptm"), DiligentMeanError(folder, "gradient"));
 }
 
 }  // namespace
