@@ -40,6 +40,22 @@ TEST(ImageIoTest, SixteenBitPngRoundTripsEveryCodeExactly) {
   EXPECT_EQ(loaded.info.saturated_pixels, 1u);  // only code 65535
 }
 
+TEST(ImageIoTest, SixteenBitTiffIsReadAtFullPrecision) {
+  TempDir dir;
+  Image image(3, 2, 3);
+  for (std::size_t i = 0; i < image.values().size(); ++i) {
+    image.values()[i] = static_cast<float>((i * 3851 + 17) % 65536 / 65535.0);
+  }
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  WriteImage(dir / "x.tif", image, options);
+  const LoadedImage loaded = ReadImage(dir / "x.tif");
+  EXPECT_EQ(loaded.info.bits_per_sample, 16);
+  for (std::size_t i = 0; i < image.values().size(); ++i) {
+    EXPECT_EQ(loaded.image.values()[i], image.values()[i]);
+  }
+}
+
 TEST(ImageIoTest, EightBitIsDecodedAsSrgbByDefault) {
   TempDir dir;
   Image image(2, 1, 1);
