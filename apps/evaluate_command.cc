@@ -2,12 +2,33 @@
 
 #include "apps/cli_support.h"
 #include "apps/commands.h"
+#include "capture/text_parsing.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/evaluation_report.h"
 #include "represent/evaluation.h"
 
 namespace photomat::app {
+namespace {
+
+// "3,17,40": image indices for the report; empty: none given.
+std::vector<int> ParseIndexList(const std::string& text) {
+  std::vector<int> indices;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const auto number = ParseNumber(text.substr(start, comma - start));
+    if (!number || *number < 0 || *number != static_cast<int>(*number)) {
+      throw Error(fmt::format("\"{}\": expected image indices, e.g. 0,12,30", text));
+    }
+    indices.push_back(static_cast<int>(*number));
+    start = comma + 1;
+  }
+  return indices;
+}
+
+}  // namespace
 
 void AddEvaluateCommand(CLI::App& app) {
   struct Options {
@@ -18,6 +39,8 @@ void AddEvaluateCommand(CLI::App& app) {
     bool no_prediction = false;
     bool literal_rms = false;
     bool raw_intensities = false;
+    std::filesystem::path report;
+    std::string report_images;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -39,6 +62,12 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "Do not divide the images by the light intensities the input gives");
+  command->add_option("--report", options->report,
+                      "Also write an HTML report (table, charts, normal error maps, captured "
+                      "beside relit images) into this folder");
+  command->add_option("--report-images", options->report_images,
+                      "Comma-separated indices of the captured images the report shows beside "
+                      "their relighting (default: three spread-out lights)");
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
     LoadOptions load;
@@ -68,6 +97,15 @@ void AddEvaluateCommand(CLI::App& app) {
                truth ? fmt::format(", ground truth {}", truth_path->string()) : "",
                FormatEvaluationTable(results));
     if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+    if (!options->report.empty()) {
+      EvaluationReportOptions report;
+      report.title = fmt::format("photomat evaluation of {}", options->input.string());
+      report.images = ParseIndexList(options->report_images);
+      report.progress = &bar;
+      WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
+                            report);
+      fmt::print("report: {}\n", (options->report / "index.html").string());
+    }
   });
 }
 
