@@ -70,6 +70,7 @@ void AddEvaluateCommand(CLI::App& app) {
                       "their relighting (default: three spread-out lights)");
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
+    const std::vector<int> report_images = ParseIndexList(options->report_images);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
     const LoadedSet loaded = LoadSetForCommand(options->input, load);
@@ -81,6 +82,12 @@ void AddEvaluateCommand(CLI::App& app) {
       throw Error(*truth_path, fmt::format("normals are {}x{} but the images are {}x{}",
                                            truth->width(), truth->height(), loaded.set.width(),
                                            loaded.set.height()));
+    }
+    for (int index : report_images) {
+      if (index >= loaded.set.size()) {
+        throw Error(fmt::format("--report-images: image {} is not in the set (0 to {})", index,
+                                loaded.set.size() - 1));
+      }
     }
     const Observations observations(loaded.set);
     TerminalProgressBar bar;
@@ -100,7 +107,7 @@ void AddEvaluateCommand(CLI::App& app) {
     if (!options->report.empty()) {
       EvaluationReportOptions report;
       report.title = fmt::format("photomat evaluation of {}", options->input.string());
-      report.images = ParseIndexList(options->report_images);
+      report.images = report_images;
       report.progress = &bar;
       WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
                             report);

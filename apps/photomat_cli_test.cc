@@ -101,6 +101,39 @@ TEST(PhotomatCliTest, DemoRunsTheWholePipeline) {
   const nlohmann::json evaluation = ReadJsonFile(dir / "evaluation.json");
   EXPECT_EQ(evaluation.size(), 6u);
   EXPECT_EQ(LoadPhotometricSet(dir / "relit" / "eigen6").set.size(), 4);
+  // The report and the viewer, and where to open them.
+  EXPECT_THAT(demo.output, HasSubstr((dir / "report" / "index.html").string()));
+  EXPECT_THAT(demo.output, HasSubstr("http.server --directory " + (dir / "viewer").string()));
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "images" / "normal-error-gradient.png"));
+  const nlohmann::json viewer = ReadJsonFile(dir / "viewer" / "viewer.json");
+  EXPECT_EQ(viewer["methods"].size(), 6u);
+  EXPECT_EQ(viewer["capture_lights"].size(), 36u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "viewer" / "index.html"));
+}
+
+TEST(PhotomatCliTest, EvaluateWritesAReportOfTheChosenImages) {
+  TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 2").exit_code, 0);
+  const RunResult evaluate =
+      RunPhotomat("evaluate " + capture + " --methods gradient,ptm --no-prediction --report " +
+                  (dir / "report").string() + " --report-images 1,35");
+  ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
+  EXPECT_THAT(evaluate.output, HasSubstr((dir / "report" / "index.html").string()));
+  const nlohmann::json report = ReadJsonFile(dir / "report" / "report.json");
+  EXPECT_EQ(report["images_shown"], nlohmann::json({1, 35}));
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "images" / "relit-ptm-35.png"));
+
+  const RunResult bad = RunPhotomat("evaluate " + capture + " --methods gradient --no-prediction " +
+                                    "--report " + (dir / "r2").string() + " --report-images 1,x");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_THAT(bad.output, HasSubstr("expected image indices"));
+  const RunResult outside = RunPhotomat("evaluate " + capture + " --methods gradient " +
+                                        "--no-prediction --report " + (dir / "r3").string() +
+                                        " --report-images 36");
+  EXPECT_EQ(outside.exit_code, 1);
+  EXPECT_THAT(outside.output, HasSubstr("image 36 is not in the set"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "r3"));
 }
 
 }  // namespace

@@ -295,7 +295,7 @@ function setLight(slant, tilt) {
 function hemisphereGeometry() {
   const widget = $('hemisphere');
   const size = widget.width;
-  return { widget, centre: size / 2, radius: size / 2 - 18 * (window.devicePixelRatio || 1) };
+  return { widget, centre: size / 2, radius: size / 2 - 26 * (window.devicePixelRatio || 1) };
 }
 
 function drawHemisphere() {
@@ -325,13 +325,13 @@ function drawHemisphere() {
   ctx.font = `${10 * ratio}px system-ui, sans-serif`;
   ctx.textAlign = 'center';
   ctx.textBaseline = 'middle';
-  const label = radius + 9 * ratio;
+  const label = radius + 10 * ratio;
   ctx.fillText('90', centre, centre - label);
   ctx.fillText('270', centre, centre + label);
   ctx.textAlign = 'left';
-  ctx.fillText('0', centre + radius + 3 * ratio, centre);
+  ctx.fillText('0', centre + radius + 4 * ratio, centre);
   ctx.textAlign = 'right';
-  ctx.fillText('180', centre - radius - 3 * ratio, centre);
+  ctx.fillText('180', centre - radius - 4 * ratio, centre);
   const toWidget = (l) => {
     const r = (radius * Math.min(slantDegrees(l), 90)) / 90;
     const t = (tiltDegrees(l) * Math.PI) / 180;
@@ -389,7 +389,9 @@ function setZoom(zoom, anchor = [canvas.width / 2, canvas.height / 2]) {
 function fitImage() {
   resizeCanvas();
   const { width, height } = state.manifest;
-  const z = Math.min(canvas.width / width, canvas.height / height) * 0.96;
+  // Enlargements by whole factors, so that every image pixel is drawn the same size.
+  const fit = Math.min(canvas.width / width, canvas.height / height) * 0.96;
+  const z = fit > 1 ? Math.floor(fit) : fit;
   state.zoom = z;
   state.origin = [(canvas.width - width * z) / 2, (canvas.height - height * z) / 2];
   $('zoom-readout').textContent = `${Math.round(z * 100)} %`;
@@ -462,6 +464,9 @@ async function selectView(name) {
   if (name !== 'relit' && !state.views.has(name)) throw new Error(`no view "${name}"`);
   state.view = name;
   for (const input of document.querySelectorAll('#views input')) input.checked = input.value === name;
+  const source = state.views.get(name)?.json;
+  $('view-info').textContent = source
+    ? `${source.label} map from the ${state.methods.get(source.source)?.json.label ?? source.source} fit` : '';
   if (name !== 'relit') await loadView(state.views.get(name));
   requestDraw();
 }
@@ -629,6 +634,13 @@ window.photomatViewer = {
   fit: () => fitImage(),
   actualPixels: () => actualPixels(),
   centre: () => centreImage(),
+  // The light disc in CSS pixels of the page: its centre and the radius of its rim (slant 90).
+  lightDisc: () => {
+    const { widget, centre, radius } = hemisphereGeometry();
+    const box = widget.getBoundingClientRect();
+    const scale = box.width / widget.width;
+    return { x: box.left + centre * scale, y: box.top + centre * scale, radius: radius * scale };
+  },
   state: () => ({
     method: state.method, view: state.view, slant: slantDegrees(state.light), tilt: tiltDegrees(state.light),
     light: [...state.light], zoom: state.zoom, origin: [...state.origin],

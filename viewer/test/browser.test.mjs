@@ -120,9 +120,9 @@ describe('viewer controls', () => {
   after(() => page.close());
 
   test('dragging on the light disc sets slant and tilt', async () => {
-    const box = await page.locator('#hemisphere').boundingBox();
-    const centre = [box.x + box.width / 2, box.y + box.height / 2];
-    const radius = box.width / 2 - 18; // the disc's rim (slant 90)
+    const disc = await page.evaluate(() => window.photomatViewer.lightDisc());
+    const centre = [disc.x, disc.y];
+    const radius = disc.radius; // the rim: slant 90
     // Half way to the rim, straight up: slant 45, tilt 90.
     await page.mouse.move(centre[0], centre[1]);
     await page.mouse.down();
