@@ -328,9 +328,16 @@ std::vector<LightDirection> ViewerCheckLights(const LightBasis& basis, int spira
   return lights;
 }
 
+bool ViewerEvaluatesExactly(const LightBasis& basis) {
+  return dynamic_cast<const LinearLightBasis*>(&basis) ||
+         dynamic_cast<const PtmLightBasis*>(&basis) ||
+         dynamic_cast<const InterpolatedLightBasis*>(&basis) ||
+         (basis.kind() == "hsh" && basis.ToJson().contains("terms"));
+}
+
 nlohmann::json ViewerBasisJson(const LightBasis& basis, bool table,
                                std::vector<float>* table_values) {
-  if (!table) {
+  if (!table && ViewerEvaluatesExactly(basis)) {
     if (const auto* linear = dynamic_cast<const LinearLightBasis*>(&basis)) {
       return {{"kind", "linear"}, {"matrix", MatrixRows(*linear->LinearInLight())}};
     }
@@ -338,6 +345,9 @@ nlohmann::json ViewerBasisJson(const LightBasis& basis, bool table,
     if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
       return InterpolatedJson(*interpolated);
     }
+    // Hemispherical harmonics: their own description, {"kind": "hsh", "terms": N}, is all
+    // basis.js needs (by kind, so that this module needs no HSH class).
+    if (basis.kind() == "hsh") return basis.ToJson();
   }
   const CoefficientTable coefficients(basis);
   if (table_values) *table_values = coefficients.values();
@@ -362,10 +372,8 @@ void ExportViewer(const fs::path& folder, const std::vector<Representation>& rep
     std::vector<LightDirection> capture_lights = options.capture_lights;
     for (const Representation& r : representations) {
       const std::string stem = FileStem(r.method());
-      const bool table = options.table_methods.contains(r.method()) ||
-                         !(dynamic_cast<const LinearLightBasis*>(&r.basis()) ||
-                           dynamic_cast<const PtmLightBasis*>(&r.basis()) ||
-                           dynamic_cast<const InterpolatedLightBasis*>(&r.basis()));
+      const bool table =
+          options.table_methods.contains(r.method()) || !ViewerEvaluatesExactly(r.basis());
       std::vector<float> table_values;
       nlohmann::json basis = ViewerBasisJson(r.basis(), table, &table_values);
       std::optional<CoefficientTable> check_table;

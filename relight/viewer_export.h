@@ -42,7 +42,7 @@ struct ViewerExportOptions {
   std::vector<LightDirection> capture_lights;
   // Methods whose coefficients the viewer reads from a dense (slant, tilt) table even though
   // basis.js has the exact formula (for tests of the table; bases basis.js does not know always
-  // use it).
+  // use it: ViewerEvaluatesExactly).
   std::set<std::string> table_methods;
   // Write normal, albedo and height display maps (from the first method that gives normals).
   bool display_maps = true;
@@ -56,15 +56,20 @@ void ExportViewer(const std::filesystem::path& folder,
                   const std::vector<Representation>& representations,
                   const ViewerExportOptions& options = {});
 
-// A light basis as the viewer evaluates it (README "Web viewer"):
+// True when basis.js has the basis's formula: linear, PTM, interpolated (Eigen-k) and
+// hemispherical harmonics (kind "hsh", {"terms": 4, 9 or 16}). Others go through the table.
+bool ViewerEvaluatesExactly(const LightBasis& basis);
+
+// A light basis as the viewer evaluates it (README "Web viewer and evaluation report"):
 //   {"kind": "linear", "matrix": [[...] x k]}                       c = A l
 //   {"kind": "ptm"}                                                  (u^2, v^2, uv, u, v, 1)
 //   {"kind": "interpolated", "scheme": "slant-rings" | "triangulation", "values": [[k] per node],
 //    "nodes": [[x, y, z]...], "rings": [{"slant": deg, "by_tilt": [[tilt, node]...]}],
 //    "pole_slant_deg": 0.5, "projection_scale": 1000, "projected": [[u, v]...],
 //    "triangles": [[a, b, c]...], "boundary": [[a, b]...]}     LightInterpolator's weights
+//   {"kind": "hsh", "terms": 4 | 9 | 16}                            HSH, RTIViewer's term order
 //   {"kind": "table", ...CoefficientTable}                           bilinear in (slant, tilt)
-// `table` forces the table for any kind; kinds without a formula (e.g. HSH) always get one. The
+// `table` forces the table for any kind; kinds without a formula always get one. The
 // table's values go to `table_values` (slant-major, then tilt, then term), written as a binary
 // float32 file next to viewer.json.
 nlohmann::json ViewerBasisJson(const LightBasis& basis, bool table,

@@ -292,6 +292,53 @@ TEST(ViewerExportTest, RejectsBadInputAndNeverOverwritesOtherFolders) {
   EXPECT_EQ(ReadJsonFile(dir / "v" / "viewer.json")["methods"].size(), 1u);
 }
 
+// A basis of a kind basis.js has no formula for: smooth in the light, two terms.
+class LobeBasis final : public LightBasis {
+ public:
+  std::string_view kind() const override { return "lobe"; }
+  int size() const override { return 2; }
+  Eigen::VectorXd Coefficients(const LightDirection& l) const override {
+    Eigen::VectorXd c(2);
+    c << l.z() * l.z() * l.z(), 0.5 * l.x() + 0.25 * l.y() * l.z();
+    return c;
+  }
+  nlohmann::json ToJson() const override { return {{"kind", "lobe"}}; }
+};
+
+// Stands in for hemispherical harmonics, which the viewer recognises by kind and terms.
+class HshKindBasis final : public LightBasis {
+ public:
+  std::string_view kind() const override { return "hsh"; }
+  int size() const override { return 4; }
+  Eigen::VectorXd Coefficients(const LightDirection& l) const override {
+    return Eigen::Vector4d(1.0, l.x(), l.y(), l.z());
+  }
+  nlohmann::json ToJson() const override { return {{"kind", "hsh"}, {"terms", 4}}; }
+};
+
+TEST(ViewerExportTest, UnknownBasesGoThroughTheTableAndHshThroughItsFormula) {
+  TempDir dir;
+  Image maps(8, 6, 4);
+  for (std::size_t i = 0; i < maps.values().size(); ++i) maps.values()[i] = 0.01f * (i % 97);
+  const MapLayout shared{
+      .basis_size = 2, .basis_per_channel = false, .has_gain = true, .output_channels = 2};
+  const MapLayout hsh_layout{
+      .basis_size = 4, .basis_per_channel = false, .has_gain = false, .output_channels = 1};
+  const Representation lobe("lobe", maps, shared, std::make_shared<LobeBasis>());
+  const Representation hsh("hsh4", maps, hsh_layout, std::make_shared<HshKindBasis>());
+  EXPECT_FALSE(ViewerEvaluatesExactly(lobe.basis()));
+  EXPECT_TRUE(ViewerEvaluatesExactly(hsh.basis()));
+  ExportViewer(dir / "viewer", {lobe, hsh});
+  const nlohmann::json manifest = ReadJsonFile(dir / "viewer" / "viewer.json");
+  const nlohmann::json& table = manifest["methods"][0]["basis"];
+  EXPECT_EQ(table["kind"], "table");
+  EXPECT_EQ(table["source_kind"], "lobe");
+  EXPECT_LT(table["max_error"].get<double>(), 5e-4);
+  EXPECT_TRUE(fs::exists(dir / "viewer" / table["file"].get<std::string>()));
+  EXPECT_EQ(manifest["methods"][1]["basis"], nlohmann::json({{"kind", "hsh"}, {"terms", 4}}));
+  EXPECT_TRUE(manifest["views"].empty());  // neither gives normals
+}
+
 TEST(ViewerExportTest, MethodLabels) {
   EXPECT_EQ(MethodLabel("3i"), "3I");
   EXPECT_EQ(MethodLabel("ptm-lrgb"), "PTM LRGB");

@@ -147,6 +147,45 @@ function interpolatedBasis(json) {
   };
 }
 
+// Hemispherical harmonics (Gautron et al. 2004) in RTIViewer's term order and signs, as HSH .rti
+// files and photomat's HshLightBasis define them: theta the slant, phi the tilt, over the upper
+// hemisphere through c = cos(theta) (a light below the horizon is taken at the horizon).
+function hshBasis(json) {
+  const terms = json.terms;
+  if (![4, 9, 16].includes(terms)) throw new Error(`HSH has 4, 9 or 16 terms, not ${terms}`);
+  const pi = Math.PI;
+  return {
+    size: terms,
+    coefficients(l) {
+      const c = Math.min(Math.max(l[2], 0), 1);
+      const phi = Math.atan2(l[1], l[0]);
+      const s = Math.sqrt(Math.max(0, c - c * c));
+      const c2 = c * c;
+      const h = new Float64Array(terms);
+      h[0] = 1 / Math.sqrt(2 * pi);
+      h[1] = Math.sqrt(6 / pi) * s * Math.cos(phi);
+      h[2] = Math.sqrt(3 / (2 * pi)) * (2 * c - 1);
+      h[3] = Math.sqrt(6 / pi) * s * Math.sin(phi);
+      if (terms === 4) return h;
+      h[4] = Math.sqrt(30 / pi) * (c2 - c) * Math.cos(2 * phi);
+      h[5] = Math.sqrt(30 / pi) * (2 * c - 1) * s * Math.cos(phi);
+      h[6] = Math.sqrt(5 / (2 * pi)) * (6 * c2 - 6 * c + 1);
+      h[7] = Math.sqrt(30 / pi) * (2 * c - 1) * s * Math.sin(phi);
+      h[8] = Math.sqrt(30 / pi) * (c2 - c) * Math.sin(2 * phi);
+      if (terms === 9) return h;
+      const s3 = s * s * s;
+      h[9] = 2 * Math.sqrt(35 / pi) * s3 * Math.cos(3 * phi);
+      h[10] = Math.sqrt(210 / pi) * (2 * c - 1) * (c2 - c) * Math.cos(2 * phi);
+      h[11] = 2 * Math.sqrt(21 / pi) * s * (5 * c2 - 5 * c + 1) * Math.cos(phi);
+      h[12] = Math.sqrt(7 / (2 * pi)) * (20 * c2 * c - 30 * c2 + 12 * c - 1);
+      h[13] = 2 * Math.sqrt(21 / pi) * s * (5 * c2 - 5 * c + 1) * Math.sin(phi);
+      h[14] = Math.sqrt(210 / pi) * (2 * c - 1) * (c2 - c) * Math.sin(2 * phi);
+      h[15] = 2 * Math.sqrt(35 / pi) * s3 * Math.sin(3 * phi);
+      return h;
+    },
+  };
+}
+
 // CoefficientTable::Coefficients (relight/viewer_export.h): bilinear in (slant, tilt) over float32
 // values, term-fastest, then tilt, then slant.
 function tableBasis(json, table) {
@@ -205,6 +244,9 @@ export function makeBasis(json, table = null) {
       break;
     case 'interpolated':
       basis = interpolatedBasis(json);
+      break;
+    case 'hsh':
+      basis = hshBasis(json);
       break;
     case 'table':
       basis = tableBasis(json, table);

@@ -34,6 +34,28 @@ test('slant and tilt follow photomat\'s light frame', () => {
   assert.ok(Math.abs(tiltDegrees(lightFromSlantTilt(40, -10)) - 350) < 1e-12);
 });
 
+// Gautron's hemispherical harmonics are orthonormal over the upper hemisphere: a check of every
+// term's constant, sign convention aside, independent of photomat's C++.
+test('HSH terms are orthonormal over the hemisphere', () => {
+  const basis = makeBasis({ kind: 'hsh', terms: 16 });
+  const n = 240;
+  const gram = Array.from({ length: 16 }, () => new Float64Array(16));
+  for (let i = 0; i < n; ++i) {
+    const theta = ((i + 0.5) / n) * (Math.PI / 2);
+    for (let k = 0; k < 2 * n; ++k) {
+      const phi = ((k + 0.5) / (2 * n)) * 2 * Math.PI;
+      const weight = Math.sin(theta) * (Math.PI / 2 / n) * (Math.PI / n);
+      const h = basis.coefficients([Math.sin(theta) * Math.cos(phi), Math.sin(theta) * Math.sin(phi), Math.cos(theta)]);
+      for (let a = 0; a < 16; ++a) for (let b = 0; b < 16; ++b) gram[a][b] += weight * h[a] * h[b];
+    }
+  }
+  for (let a = 0; a < 16; ++a) {
+    for (let b = 0; b < 16; ++b) assert.ok(Math.abs(gram[a][b] - (a === b ? 1 : 0)) < 2e-3, `<h${a}, h${b}> = ${gram[a][b]}`);
+  }
+  assert.equal(makeBasis({ kind: 'hsh', terms: 9 }).size, 9);
+  assert.throws(() => makeBasis({ kind: 'hsh', terms: 7 }), /4, 9 or 16/);
+});
+
 test('unknown basis kinds are refused', () => {
   assert.throws(() => makeBasis({ kind: 'spherical-harmonics' }), /unknown light basis/);
   assert.throws(() => makeBasis({ kind: 'linear', matrix: [[1, 0, 0]] }).coefficients([0, 0, 0]), /not a light/);
