@@ -1,8 +1,9 @@
 #include <fmt/format.h>
 
+#include <charconv>
+
 #include "apps/cli_support.h"
 #include "apps/commands.h"
-#include "capture/text_parsing.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -18,11 +19,13 @@ std::vector<int> ParseIndexList(const std::string& text) {
   std::size_t start = 0;
   while (start < text.size()) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
-    const auto number = ParseNumber(text.substr(start, comma - start));
-    if (!number || *number < 0 || *number != static_cast<int>(*number)) {
+    const std::string item = text.substr(start, comma - start);
+    int index = -1;
+    const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), index);
+    if (ec != std::errc() || end != item.data() + item.size() || index < 0) {
       throw Error(fmt::format("\"{}\": expected image indices, e.g. 0,12,30", text));
     }
-    indices.push_back(static_cast<int>(*number));
+    indices.push_back(index);
     start = comma + 1;
   }
   return indices;
@@ -36,11 +39,11 @@ void AddEvaluateCommand(CLI::App& app) {
     std::string methods = "all";
     std::filesystem::path gt_normals;
     std::filesystem::path json;
+    std::filesystem::path report;
+    std::string report_images;
     bool no_prediction = false;
     bool literal_rms = false;
     bool raw_intensities = false;
-    std::filesystem::path report;
-    std::string report_images;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -56,21 +59,20 @@ void AddEvaluateCommand(CLI::App& app) {
                       "Float EXR of unit normals (x right, y up, z to camera); default: the one "
                       "the input names (manifest ground_truth, DiLiGenT gt_normals.exr)");
   command->add_option("--json", options->json, "Also write the results as JSON");
-  command->add_flag("--no-prediction", options->no_prediction,
-                    "Skip leave-one-out prediction (one fit per image)");
-  command->add_flag("--literal-rms", options->literal_rms,
-                    "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "Do not divide the images by the light intensities the input gives");
   command->add_option("--report", options->report,
                       "Also write an HTML report (table, charts, normal error maps, captured "
                       "beside relit images) into this folder");
   command->add_option("--report-images", options->report_images,
                       "Comma-separated indices of the captured images the report shows beside "
                       "their relighting (default: three spread-out lights)");
+  command->add_flag("--no-prediction", options->no_prediction,
+                    "Skip leave-one-out prediction (one fit per image)");
+  command->add_flag("--literal-rms", options->literal_rms,
+                    "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
+  command->add_flag("--ignore-intensities", options->raw_intensities,
+                    "Do not divide the images by the light intensities the input gives");
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
-    const std::vector<int> report_images = ParseIndexList(options->report_images);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
     const LoadedSet loaded = LoadSetForCommand(options->input, load);
@@ -83,6 +85,8 @@ void AddEvaluateCommand(CLI::App& app) {
                                            truth->width(), truth->height(), loaded.set.width(),
                                            loaded.set.height()));
     }
+    // Checked before the evaluation, which can take minutes.
+    const std::vector<int> report_images = ParseIndexList(options->report_images);
     for (int index : report_images) {
       if (index >= loaded.set.size()) {
         throw Error(fmt::format("--report-images: image {} is not in the set (0 to {})", index,
