@@ -26,7 +26,7 @@ void AddDemoCommand(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "demo",
       "Run the whole pipeline on the built-in synthetic sample: generate, fit all methods, "
-      "evaluate, relight a light sweep, and write the evaluation report and the web viewer.");
+      "evaluate, relight a light sweep.");
   command->add_option("--out", options->out, "Output folder")->capture_default_str();
   command->add_option("--size", options->size, "Sample width and height in pixels")
       ->capture_default_str()
