@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/display_image.h"
 #include "relight/output_folder.h"
 #include "represent/fit.h"
 
@@ -84,12 +85,6 @@ void WriteDisplayImage(const fs::path& path, const Image& linear) {
   WriteImage(path, linear, options);
 }
 
-void WriteColourImage(const fs::path& path, const Image& colours) {
-  ImageWriteOptions options;
-  options.sample_type = SampleType::kUint8;
-  WriteImage(path, colours, options);
-}
-
 std::string ColourBarSvg(double max_degrees) {
   std::string svg = fmt::format(
       "<svg class=\"colour-bar\" viewBox=\"0 0 320 44\" width=\"320\" height=\"44\" role=\"img\" "
@@ -142,6 +137,7 @@ figure { margin: 0; }
 figcaption { font-size: 13px; color: #444; max-width: 220px; }
 img.pixels { image-rendering: pixelated; min-width: 200px; max-width: 280px; height: auto; background: #222; }
 .compare td, .compare th { vertical-align: top; text-align: center; border: none; }
+.compare th { min-width: 130px; }
 .compare img { display: block; margin: 0 auto; }
 .note { color: #555; font-size: 13px; }
 )";
@@ -447,7 +443,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         if (!errors[m]) continue;
         const std::string name = evaluations[m].method.Name();
         const std::string file = fmt::format("images/normal-error-{}.png", name);
-        WriteColourImage(temp / file, HeatMap(*errors[m], scale));
+        WriteDisplayCodes(temp / file, HeatMap(*errors[m], scale));
         html += fmt::format(
             "<figure><img class=\"pixels heat-map\" src=\"{}\" alt=\"normal error "
             "of {}\"><figcaption>{}: mean {:.2f}&#176;, median {:.2f}&#176;"

@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/display_image.h"
 #include "relight/output_folder.h"
 #include "relight/viewer_assets.h"
 #include "represent/surface_integration.h"
@@ -145,13 +146,12 @@ nlohmann::json WriteDisplayMaps(const fs::path& folder, const Representation& so
     for (int c = 0; c < albedo.channels(); ++c) albedo.pixel(p)[c] = std::max(out[c], 0.0f);
   });
 
-  ImageWriteOptions linear8;
-  linear8.sample_type = SampleType::kUint8;
-  ImageWriteOptions srgb8 = linear8;
+  ImageWriteOptions srgb8;
+  srgb8.sample_type = SampleType::kUint8;
   srgb8.encoding = ColourSpace::kSrgb;
   nlohmann::json views = nlohmann::json::array();
   const std::string from = source.method();
-  WriteImage(folder / "maps" / "normal.png", normal_colours, linear8);
+  WriteDisplayCodes(folder / "maps" / "normal.png", normal_colours);
   views.push_back({{"name", "normal"},
                    {"label", "Normal"},
                    {"file", "maps/normal.png"},
@@ -178,7 +178,7 @@ nlohmann::json WriteDisplayMaps(const fs::path& folder, const Representation& so
       grey.pixel(p)[0] =
           high > low ? static_cast<float>((height.pixel(p)[0] - low) / (high - low)) : 0.5f;
     }
-    WriteImage(folder / "maps" / "height.png", grey, linear8);
+    WriteDisplayCodes(folder / "maps" / "height.png", grey);
     views.push_back({{"name", "height"},
                      {"label", "Height"},
                      {"file", "maps/height.png"},

@@ -375,6 +375,14 @@ function lightFromImageDrag(event) {
   setLight(Math.min(Math.hypot(x, y) / reach, 1) * 90, (Math.atan2(y, x) * 180) / Math.PI);
 }
 
+// Exposure in stops: the linear values are scaled by 2^stops before the sRGB curve.
+function setExposure(stops) {
+  state.exposure = stops;
+  $('exposure').value = stops;
+  $('exposure-readout').textContent = `${stops > 0 ? '+' : ''}${stops} EV`;
+  requestDraw();
+}
+
 // ---- zoom and pan --------------------------------------------------------------------------
 
 function setZoom(zoom, anchor = [canvas.width / 2, canvas.height / 2]) {
@@ -532,11 +540,7 @@ function buildInterface() {
     }
   });
 
-  $('exposure').addEventListener('input', () => {
-    state.exposure = parseFloat($('exposure').value);
-    $('exposure-readout').textContent = `${state.exposure > 0 ? '+' : ''}${state.exposure} EV`;
-    requestDraw();
-  });
+  $('exposure').addEventListener('input', () => setExposure(parseFloat($('exposure').value)));
 
   $('zoom-fit').addEventListener('click', fitImage);
   $('zoom-1').addEventListener('click', actualPixels);
@@ -626,11 +630,7 @@ window.photomatViewer = {
   setMethod: (name) => selectMethod(name),
   setView: (name) => selectView(name),
   setLight: (slant, tilt) => setLight(slant, tilt),
-  setExposure: (stops) => {
-    state.exposure = stops;
-    $('exposure').value = stops;
-    requestDraw();
-  },
+  setExposure: (stops) => setExposure(stops),
   fit: () => fitImage(),
   actualPixels: () => actualPixels(),
   centre: () => centreImage(),
