@@ -66,7 +66,8 @@ export function launchBrowser() {
   });
 }
 
-// A page that records console errors, uncaught exceptions and failed requests.
+// A page that records console errors, uncaught exceptions, failed requests and any request that
+// leaves the static server.
 export async function openPage(browser, url, viewport = { width: 1200, height: 820 }) {
   const page = await browser.newPage({ viewport, deviceScaleFactor: 1 });
   const problems = [];
@@ -75,6 +76,14 @@ export async function openPage(browser, url, viewport = { width: 1200, height: 8
   });
   page.on('pageerror', (error) => problems.push(`page error: ${error.message}`));
   page.on('requestfailed', (request) => problems.push(`request failed: ${request.url()}`));
+  // Nothing but the folder it is served from: no network access at run time.
+  const origin = new URL(url).origin;
+  page.on('request', (request) => {
+    const requested = request.url();
+    if (!requested.startsWith(`${origin}/`) && !requested.startsWith('data:')) {
+      problems.push(`request outside the served folder: ${requested}`);
+    }
+  });
   page.on('response', (response) => {
     if (response.status() >= 400) problems.push(`HTTP ${response.status()}: ${response.url()}`);
   });
