@@ -335,25 +335,19 @@ bool ViewerEvaluatesExactly(const LightBasis& basis) {
          (basis.kind() == "hsh" && basis.ToJson().contains("terms"));
 }
 
-nlohmann::json ViewerBasisJson(const LightBasis& basis, bool table,
-                               std::vector<float>* table_values) {
-  if (!table && ViewerEvaluatesExactly(basis)) {
-    if (const auto* linear = dynamic_cast<const LinearLightBasis*>(&basis)) {
-      return {{"kind", "linear"}, {"matrix", MatrixRows(*linear->LinearInLight())}};
-    }
-    if (dynamic_cast<const PtmLightBasis*>(&basis)) return {{"kind", "ptm"}};
-    if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
-      return InterpolatedJson(*interpolated);
-    }
-    // Hemispherical harmonics: their own description, {"kind": "hsh", "terms": N}, is all
-    // basis.js needs (by kind, so that this module needs no HSH class).
-    if (basis.kind() == "hsh") return basis.ToJson();
+nlohmann::json ViewerBasisJson(const LightBasis& basis) {
+  if (const auto* linear = dynamic_cast<const LinearLightBasis*>(&basis)) {
+    return {{"kind", "linear"}, {"matrix", MatrixRows(*linear->LinearInLight())}};
   }
-  const CoefficientTable coefficients(basis);
-  if (table_values) *table_values = coefficients.values();
-  nlohmann::json json = coefficients.ToJson();
-  json["source_kind"] = basis.kind();
-  return json;
+  if (dynamic_cast<const PtmLightBasis*>(&basis)) return {{"kind", "ptm"}};
+  if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
+    return InterpolatedJson(*interpolated);
+  }
+  // Hemispherical harmonics: their own description, {"kind": "hsh", "terms": N}, is all basis.js
+  // needs (by kind, so that this module needs no HSH class).
+  if (ViewerEvaluatesExactly(basis)) return basis.ToJson();
+  throw Error(
+      fmt::format("the viewer has no formula for light bases of kind \"{}\"", basis.kind()));
 }
 
 void ExportViewer(const fs::path& folder, const std::vector<Representation>& representations,
@@ -374,16 +368,19 @@ void ExportViewer(const fs::path& folder, const std::vector<Representation>& rep
       const std::string stem = FileStem(r.method());
       const bool table =
           options.table_methods.contains(r.method()) || !ViewerEvaluatesExactly(r.basis());
-      std::vector<float> table_values;
-      nlohmann::json basis = ViewerBasisJson(r.basis(), table, &table_values);
-      std::optional<CoefficientTable> check_table;
+      nlohmann::json basis;
+      std::optional<CoefficientTable> coefficient_table;
       if (table) {
+        coefficient_table.emplace(r.basis());
         const std::string file = fmt::format("maps/{}.coefficients.f32", stem);
         std::string bytes;
-        for (float v : table_values) AppendFloat(bytes, v);
+        for (float v : coefficient_table->values()) AppendFloat(bytes, v);
         WriteTextFileAtomically(temp / file, bytes);
+        basis = coefficient_table->ToJson();
+        basis["source_kind"] = r.basis().kind();
         basis["file"] = file;
-        check_table.emplace(r.basis());
+      } else {
+        basis = ViewerBasisJson(r.basis());
       }
       if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&r.basis());
           interpolated && capture_lights.empty()) {
@@ -399,7 +396,7 @@ void ExportViewer(const fs::path& folder, const std::vector<Representation>& rep
            {"data",
             {{"file", data}, {"type", "float32"}, {"layers", (r.maps().channels() + 3) / 4}}},
            {"basis", std::move(basis)},
-           {"check", CheckJson(r.basis(), check_table)}});
+           {"check", CheckJson(r.basis(), coefficient_table)}});
       progress.Advance();
     }
 

@@ -60,7 +60,8 @@ void ExportViewer(const std::filesystem::path& folder,
 // hemispherical harmonics (kind "hsh", {"terms": 4, 9 or 16}). Others go through the table.
 bool ViewerEvaluatesExactly(const LightBasis& basis);
 
-// A light basis as the viewer evaluates it (README "Web viewer and evaluation report"):
+// A light basis that ViewerEvaluatesExactly, as basis.js reads it (README "Web viewer and
+// evaluation report"):
 //   {"kind": "linear", "matrix": [[...] x k]}                       c = A l
 //   {"kind": "ptm"}                                                  (u^2, v^2, uv, u, v, 1)
 //   {"kind": "interpolated", "scheme": "slant-rings" | "triangulation", "values": [[k] per node],
@@ -68,12 +69,9 @@ bool ViewerEvaluatesExactly(const LightBasis& basis);
 //    "pole_slant_deg": 0.5, "projection_scale": 1000, "projected": [[u, v]...],
 //    "triangles": [[a, b, c]...], "boundary": [[a, b]...]}     LightInterpolator's weights
 //   {"kind": "hsh", "terms": 4 | 9 | 16}                            HSH, RTIViewer's term order
-//   {"kind": "table", ...CoefficientTable}                           bilinear in (slant, tilt)
-// `table` forces the table for any kind; kinds without a formula always get one. The
-// table's values go to `table_values` (slant-major, then tilt, then term), written as a binary
-// float32 file next to viewer.json.
-nlohmann::json ViewerBasisJson(const LightBasis& basis, bool table,
-                               std::vector<float>* table_values);
+// Other bases go to the viewer as {"kind": "table", ...CoefficientTable::ToJson(), "source_kind",
+// "file"}, the table's values in a float32 file. Throws Error for a basis without a formula.
+nlohmann::json ViewerBasisJson(const LightBasis& basis);
 
 // A dense table of a basis's coefficients over the hemisphere, for bases without a formula in
 // basis.js: rows at slants 0, step, ..., 90 degrees, columns at tilts 0, step, ..., 360 (the last

@@ -128,17 +128,17 @@ TEST(ViewerExportTest, CheckLightsCarryTheCxxCoefficientsOverTheHemisphereAndThe
 TEST(ViewerExportTest, BasesAreDescribedExactly) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 12);
   const Representation three = Fit(synthetic.set, Method::Parse("3i"));
-  const nlohmann::json linear = ViewerBasisJson(three.basis(), false, nullptr);
+  const nlohmann::json linear = ViewerBasisJson(three.basis());
   EXPECT_EQ(linear["kind"], "linear");
   const Eigen::MatrixXd matrix = *three.basis().LinearInLight();
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) EXPECT_EQ(linear["matrix"][r][c].get<double>(), matrix(r, c));
   }
-  EXPECT_EQ(ViewerBasisJson(PtmLightBasis(), false, nullptr)["kind"], "ptm");
+  EXPECT_EQ(ViewerBasisJson(PtmLightBasis())["kind"], "ptm");
 
   // The thesis grid: three rings of twelve, by increasing slant, with their tilts and nodes.
   const Representation eigen = Fit(synthetic.set, Method::Parse("eigen3"));
-  const nlohmann::json rings = ViewerBasisJson(eigen.basis(), false, nullptr);
+  const nlohmann::json rings = ViewerBasisJson(eigen.basis());
   EXPECT_EQ(rings["kind"], "interpolated");
   EXPECT_EQ(rings["scheme"], "slant-rings");
   ASSERT_EQ(rings["rings"].size(), 3u);
@@ -165,7 +165,7 @@ TEST(ViewerExportTest, IrregularLightsExportTheirTriangulation) {
   const auto lights = IrregularLights(30, 11);
   const PhotometricSet set = RenderSyntheticCapture(material, lights);
   const Representation eigen = Fit(set, Method::Parse("eigen3"));
-  const nlohmann::json json = ViewerBasisJson(eigen.basis(), false, nullptr);
+  const nlohmann::json json = ViewerBasisJson(eigen.basis());
   EXPECT_EQ(json["scheme"], "triangulation");
   const auto& interpolator =
       dynamic_cast<const InterpolatedLightBasis&>(eigen.basis()).interpolator();
@@ -327,6 +327,7 @@ TEST(ViewerExportTest, UnknownBasesGoThroughTheTableAndHshThroughItsFormula) {
   const Representation lobe("lobe", maps, shared, std::make_shared<LobeBasis>());
   const Representation hsh("hsh4", maps, hsh_layout, std::make_shared<HshKindBasis>());
   EXPECT_FALSE(ViewerEvaluatesExactly(lobe.basis()));
+  EXPECT_THROW(ViewerBasisJson(lobe.basis()), Error);
   EXPECT_TRUE(ViewerEvaluatesExactly(hsh.basis()));
   ExportViewer(dir / "viewer", {lobe, hsh});
   const nlohmann::json manifest = ReadJsonFile(dir / "viewer" / "viewer.json");
