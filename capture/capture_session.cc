@@ -1,7 +1,8 @@
 #include "capture/capture_session.h"
 
-#include <algorithm>
 #include <fmt/format.h>
+
+#include <algorithm>
 #include <thread>
 
 #include "capture/capture_manifest.h"
@@ -137,11 +138,11 @@ class Session {
       Frame frame = source_.Grab(s.frame_timeout);
       if (frame.metadata.timestamp < ready) {
         if (Clock::now() > deadline) {
-          throw Error(source_.name(), fmt::format("frame time-out: no frame exposed after the "
-                                                  "{} ms settle time came within {} ms",
-                                                  s.settle.count(),
-                                                  (s.frame_timeout * (s.frames_per_light + 1))
-                                                      .count()));
+          throw Error(
+              source_.name(),
+              fmt::format("frame time-out: no frame exposed after the "
+                          "{} ms settle time came within {} ms",
+                          s.settle.count(), (s.frame_timeout * (s.frames_per_light + 1)).count()));
         }
         continue;
       }
@@ -235,8 +236,8 @@ class Session {
       }
       out[i] = static_cast<float>(signal / weight);
     }
-    clipped_pixels = static_cast<std::size_t>(
-        std::count(pixel_clipped.begin(), pixel_clipped.end(), 1));
+    clipped_pixels =
+        static_cast<std::size_t>(std::count(pixel_clipped.begin(), pixel_clipped.end(), 1));
     return merged;
   }
 
@@ -272,16 +273,15 @@ class Session {
     }
     json bracket = json::array();
     for (double f : state_.settings.bracket) bracket.push_back(f);
-    manifest.provenance = {
-        {"capture",
-         {{"device", state_.device},
-          {"camera_format", ToString(state_.format)},
-          {"frames_per_light", state_.settings.frames_per_light},
-          {"bracket", bracket},
-          {"dark_frames", state_.dark_files},
-          {"plan", state_.plan.source},
-          {"lights_planned", state_.plan.lights.size()},
-          {"session", kCaptureSessionName}}}};
+    manifest.provenance = {{"capture",
+                            {{"device", state_.device},
+                             {"camera_format", ToString(state_.format)},
+                             {"frames_per_light", state_.settings.frames_per_light},
+                             {"bracket", bracket},
+                             {"dark_frames", state_.dark_files},
+                             {"plan", state_.plan.source},
+                             {"lights_planned", state_.plan.lights.size()},
+                             {"session", kCaptureSessionName}}}};
     WriteCaptureManifest(out_ / kCaptureManifestName, manifest);
   }
 
@@ -414,8 +414,8 @@ CaptureSummary ResumeCaptureSession(FrameSource& source, LightController& contro
                                     const std::optional<LightPlan>& plan, Progress* progress) {
   std::error_code ec;
   if (!fs::exists(out / kCaptureSessionName, ec)) {
-    throw Error(out, fmt::format("no capture session to resume ({} is missing)",
-                                 kCaptureSessionName));
+    throw Error(out,
+                fmt::format("no capture session to resume ({} is missing)", kCaptureSessionName));
   }
   CaptureSessionState state = ReadCaptureSession(out / kCaptureSessionName);
   CheckSettings(state.settings);

@@ -13,8 +13,10 @@ FolderFrameSource::FolderFrameSource(std::filesystem::path path, double max_ligh
       set_(LoadPhotometricSet(path_).set) {}
 
 std::vector<OfferedFormat> FolderFrameSource::ListFormats() {
-  return {{"FLOAT", fmt::format("linear float replay of {} images", set_.size()),
-           PixelFormat::kFloat, {{set_.width(), set_.height()}}}};
+  return {{"FLOAT",
+           fmt::format("linear float replay of {} images", set_.size()),
+           PixelFormat::kFloat,
+           {{set_.width(), set_.height()}}}};
 }
 
 FrameFormat FolderFrameSource::DefaultFormat() {
@@ -60,8 +62,8 @@ void FolderFrameSource::LightChanged(const LightState& light) {
 
 Frame FolderFrameSource::Grab(std::chrono::milliseconds /*timeout*/) {
   Frame frame;
-  frame.image = current_ ? set_.image(*current_)
-                         : Image(set_.width(), set_.height(), set_.channels());
+  frame.image =
+      current_ ? set_.image(*current_) : Image(set_.width(), set_.height(), set_.channels());
   frame.metadata = {sequence_++, std::chrono::steady_clock::now(), exposure_us_, gain_};
   return frame;
 }

@@ -1,7 +1,8 @@
 #include "capture/frame_source.h"
 
-#include <algorithm>
 #include <fmt/format.h>
+
+#include <algorithm>
 
 #include "core/error.h"
 

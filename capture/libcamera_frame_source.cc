@@ -1,12 +1,14 @@
 #include "capture/libcamera_frame_source.h"
 
+#include <fmt/format.h>
+#include <libcamera/libcamera.h>
 #include <sys/mman.h>
 
 #include <algorithm>
 #include <condition_variable>
+#include <cstdlib>
+#include <cstring>
 #include <deque>
-#include <fmt/format.h>
-#include <libcamera/libcamera.h>
 #include <map>
 #include <mutex>
 
@@ -30,43 +32,59 @@ std::optional<PixelFormat> FromLibcamera(const lc::PixelFormat& format) {
 
 std::optional<lc::PixelFormat> ToLibcamera(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kGrey: return lc::formats::R8;
-    case PixelFormat::kYuyv: return lc::formats::YUYV;
-    case PixelFormat::kMjpeg: return lc::formats::MJPEG;
-    case PixelFormat::kRgb24: return lc::formats::BGR888;
-    case PixelFormat::kBgr24: return lc::formats::RGB888;
-    default: return std::nullopt;  // no 16-bit grey in libcamera 0.0.x
+    case PixelFormat::kGrey:
+      return lc::formats::R8;
+    case PixelFormat::kYuyv:
+      return lc::formats::YUYV;
+    case PixelFormat::kMjpeg:
+      return lc::formats::MJPEG;
+    case PixelFormat::kRgb24:
+      return lc::formats::BGR888;
+    case PixelFormat::kBgr24:
+      return lc::formats::RGB888;
+    default:
+      return std::nullopt;  // no 16-bit grey in libcamera 0.0.x
   }
 }
 
 std::optional<double> ToDouble(const lc::ControlValue& value) {
   if (value.isArray()) return std::nullopt;
   switch (value.type()) {
-    case lc::ControlTypeBool: return value.get<bool>() ? 1.0 : 0.0;
-    case lc::ControlTypeByte: return value.get<uint8_t>();
-    case lc::ControlTypeInteger32: return value.get<int32_t>();
-    case lc::ControlTypeInteger64: return static_cast<double>(value.get<int64_t>());
-    case lc::ControlTypeFloat: return value.get<float>();
-    default: return std::nullopt;
+    case lc::ControlTypeBool:
+      return value.get<bool>() ? 1.0 : 0.0;
+    case lc::ControlTypeByte:
+      return value.get<uint8_t>();
+    case lc::ControlTypeInteger32:
+      return value.get<int32_t>();
+    case lc::ControlTypeInteger64:
+      return static_cast<double>(value.get<int64_t>());
+    case lc::ControlTypeFloat:
+      return value.get<float>();
+    default:
+      return std::nullopt;
   }
 }
 
-// libcamera logs to stderr at INFO by default; a capture's terminal is for its progress bar.
-void QuietLogging() { lc::logSetLevel("*", "WARN"); }
+// libcamera logs INFO and WARN lines to stderr by default (its version, missing IPA modules); a
+// capture's terminal is for its progress bar and photomat's own errors. Setting
+// LIBCAMERA_LOG_LEVELS (libcamera's own variable) keeps libcamera's logging for diagnosis.
+void QuietLogging() {
+  if (!std::getenv("LIBCAMERA_LOG_LEVELS")) lc::logSetTarget(lc::LoggingTargetNone);
+}
 
 std::unique_ptr<lc::CameraManager> StartManager() {
   QuietLogging();
   auto manager = std::make_unique<lc::CameraManager>();
   if (const int result = manager->start(); result != 0) {
-    throw Error(fmt::format("libcamera: the camera manager did not start: {}",
-                            std::strerror(-result)));
+    throw Error(
+        fmt::format("libcamera: the camera manager did not start: {}", std::strerror(-result)));
   }
   return manager;
 }
 
 std::vector<OfferedFormat> OfferedFormats(lc::Camera& camera, bool raw) {
-  std::unique_ptr<lc::CameraConfiguration> config = camera.generateConfiguration(
-      {raw ? lc::StreamRole::Raw : lc::StreamRole::StillCapture});
+  std::unique_ptr<lc::CameraConfiguration> config =
+      camera.generateConfiguration({raw ? lc::StreamRole::Raw : lc::StreamRole::StillCapture});
   std::vector<OfferedFormat> offered;
   if (!config || config->empty()) return offered;
   const lc::StreamFormats& formats = config->at(0).formats();
@@ -85,8 +103,8 @@ std::vector<CameraControl> Controls(const lc::Camera& camera) {
   for (const auto& [id, info] : camera.controls()) {
     const auto minimum = ToDouble(info.min()), maximum = ToDouble(info.max());
     if (!minimum || !maximum) continue;
-    controls.push_back({id->name(), *minimum, *maximum, 0.0, ToDouble(info.def()).value_or(0.0),
-                        std::nullopt});
+    controls.push_back(
+        {id->name(), *minimum, *maximum, 0.0, ToDouble(info.def()).value_or(0.0), std::nullopt});
   }
   std::sort(controls.begin(), controls.end(),
             [](const CameraControl& a, const CameraControl& b) { return a.name < b.name; });
@@ -158,9 +176,9 @@ class LibcameraFrameSource::Impl {
                                       ToString(wanted)));
     }
     if (stream.pixelFormat != *format) {
-      throw Error(Name(), fmt::format("unsupported format: asked for {}, the camera set {}",
-                                      ToString(wanted.pixel_format),
-                                      stream.pixelFormat.toString()));
+      throw Error(Name(),
+                  fmt::format("unsupported format: asked for {}, the camera set {}",
+                              ToString(wanted.pixel_format), stream.pixelFormat.toString()));
     }
     if (camera_->configure(config_.get()) != 0) {
       throw Error(Name(), fmt::format("cannot configure {}", stream.toString()));
@@ -223,8 +241,8 @@ class LibcameraFrameSource::Impl {
         std::unique_lock lock(mutex_);
         if (!ready_.wait_until(lock, deadline,
                                [&] { return disconnected_ || !completed_.empty(); })) {
-          throw Error(Name(), fmt::format("frame time-out: no frame within {} ms",
-                                          timeout.count()));
+          throw Error(Name(),
+                      fmt::format("frame time-out: no frame within {} ms", timeout.count()));
         }
         if (disconnected_) throw Error(Name(), "device disconnected while streaming");
         request = completed_.front();
@@ -238,8 +256,8 @@ class LibcameraFrameSource::Impl {
           metadata.status == lc::FrameMetadata::FrameSuccess) {
         frame.emplace();
         frame->metadata.sequence = metadata.sequence;
-        frame->metadata.timestamp = Clock::time_point(
-            std::chrono::duration_cast<Clock::duration>(std::chrono::nanoseconds(metadata.timestamp)));
+        frame->metadata.timestamp = Clock::time_point(std::chrono::duration_cast<Clock::duration>(
+            std::chrono::nanoseconds(metadata.timestamp)));
         if (auto t = request->metadata().get(lc::controls::ExposureTime)) {
           frame->metadata.exposure_us = *t;
         }
@@ -248,9 +266,9 @@ class LibcameraFrameSource::Impl {
         }
         const std::span<const std::uint8_t> bytes = mappings_.at(buffer);
         const std::size_t used =
-            metadata.planes().empty() ? bytes.size()
-                                      : std::min<std::size_t>(bytes.size(),
-                                                              metadata.planes()[0].bytesused);
+            metadata.planes().empty()
+                ? bytes.size()
+                : std::min<std::size_t>(bytes.size(), metadata.planes()[0].bytesused);
         try {
           frame->image = DecodeFrame(layout_, bytes.first(used), options_.eight_bit_encoding);
         } catch (const Error& error) {
@@ -302,8 +320,8 @@ class LibcameraFrameSource::Impl {
                                       buffer.planes().size()));
     }
     const lc::FrameBuffer::Plane& plane = buffer.planes()[0];
-    const std::size_t offset = plane.offset == lc::FrameBuffer::Plane::kInvalidOffset ? 0
-                                                                                       : plane.offset;
+    const std::size_t offset =
+        plane.offset == lc::FrameBuffer::Plane::kInvalidOffset ? 0 : plane.offset;
     void* address = mmap(nullptr, offset + plane.length, PROT_READ, MAP_SHARED, plane.fd.get(), 0);
     if (address == MAP_FAILED) throw Error(Name(), "cannot map a frame buffer");
     mapped_.push_back({address, offset + plane.length});
@@ -365,9 +383,7 @@ void LibcameraFrameSource::SetManualControls(const ManualControls& controls) {
 void LibcameraFrameSource::SetExposure(double exposure_us) { impl_->SetExposure(exposure_us); }
 void LibcameraFrameSource::Start() { impl_->Start(); }
 void LibcameraFrameSource::Stop() { impl_->StopStreaming(); }
-Frame LibcameraFrameSource::Grab(std::chrono::milliseconds timeout) {
-  return impl_->Grab(timeout);
-}
+Frame LibcameraFrameSource::Grab(std::chrono::milliseconds timeout) { return impl_->Grab(timeout); }
 
 std::vector<DeviceDescription> ListLibcameraCameras(const LibcameraOptions& options) {
   std::unique_ptr<lc::CameraManager> manager = StartManager();

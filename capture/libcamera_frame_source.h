@@ -54,7 +54,7 @@ class LibcameraFrameSource final : public FrameSource {
 // Error when the manager cannot start.
 std::vector<DeviceDescription> ListLibcameraCameras(const LibcameraOptions& options = {});
 
-// The version of the libcamera library in use ("0.0.3").
+// The version of the libcamera library in use ("v0.0.3").
 std::string LibcameraVersion();
 
 }  // namespace photomat

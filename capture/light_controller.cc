@@ -1,6 +1,7 @@
 #include "capture/light_controller.h"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
@@ -10,7 +11,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <fmt/format.h>
 #include <iostream>
 #include <thread>
 
@@ -44,8 +44,8 @@ std::string RunOnce(const std::string& command, std::chrono::milliseconds timeou
   posix_spawnattr_setpgroup(&attributes, 0);
   const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
   pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, "/bin/sh", nullptr, &attributes,
-                                  const_cast<char* const*>(argv), environ);
+  const int spawned =
+      posix_spawn(&pid, "/bin/sh", nullptr, &attributes, const_cast<char* const*>(argv), environ);
   posix_spawnattr_destroy(&attributes);
   if (spawned != 0) return fmt::format("cannot start /bin/sh: {}", std::strerror(spawned));
   const Clock::time_point deadline = Clock::now() + timeout;
@@ -69,14 +69,22 @@ std::string RunOnce(const std::string& command, std::chrono::milliseconds timeou
 
 speed_t BaudConstant(int baud, const std::filesystem::path& port) {
   switch (baud) {
-    case 9600: return B9600;
-    case 19200: return B19200;
-    case 38400: return B38400;
-    case 57600: return B57600;
-    case 115200: return B115200;
-    case 230400: return B230400;
-    case 460800: return B460800;
-    case 921600: return B921600;
+    case 9600:
+      return B9600;
+    case 19200:
+      return B19200;
+    case 38400:
+      return B38400;
+    case 57600:
+      return B57600;
+    case 115200:
+      return B115200;
+    case 230400:
+      return B230400;
+    case 460800:
+      return B460800;
+    case 921600:
+      return B921600;
     default:
       throw Error(port, fmt::format("unsupported baud rate {} (9600, 19200, 38400, 57600, 115200, "
                                     "230400, 460800, 921600)",
@@ -135,9 +143,10 @@ void CommandLightController::SwitchTo(const LightState& light) {
     failure = RunOnce(command, options_.timeout);
     if (failure.empty()) return;
   }
-  throw Error(fmt::format("light controller not answering: command `{}` for {} failed: {} (after "
-                          "{} attempts)",
-                          command, Describe(light), failure, attempts));
+  throw Error(
+      fmt::format("light controller not answering: command `{}` for {} failed: {} (after "
+                  "{} attempts)",
+                  command, Describe(light), failure, attempts));
 }
 
 SerialLightController::SerialLightController(std::filesystem::path port,
@@ -192,14 +201,14 @@ std::optional<std::string> SerialLightController::Exchange(const std::string& co
   }
   std::string pending;
   while (true) {
-    for (std::size_t end = pending.find('\n'); end != std::string::npos;
-         end = pending.find('\n')) {
+    for (std::size_t end = pending.find('\n'); end != std::string::npos; end = pending.find('\n')) {
       std::string line = pending.substr(0, end);
       pending.erase(0, end + 1);
       if (!line.empty() && line.back() == '\r') line.pop_back();
       if (line == "OK" || line.rfind("ERR", 0) == 0) return line;
     }
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left.count() <= 0) return std::nullopt;
     pollfd request{fd_, POLLIN, 0};
     const int ready = ::poll(&request, 1, static_cast<int>(left.count()));
@@ -258,9 +267,10 @@ std::unique_ptr<LightController> MakeLightController(const std::string& spec,
     }
     return std::make_unique<SerialLightController>(port, options);
   }
-  throw Error(fmt::format("unknown light controller \"{}\": expected manual, command:TEMPLATE or "
-                          "serial:PORT[,BAUD]",
-                          spec));
+  throw Error(
+      fmt::format("unknown light controller \"{}\": expected manual, command:TEMPLATE or "
+                  "serial:PORT[,BAUD]",
+                  spec));
 }
 
 }  // namespace photomat

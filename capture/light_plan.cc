@@ -1,7 +1,8 @@
 #include "capture/light_plan.h"
 
-#include <filesystem>
 #include <fmt/format.h>
+
+#include <filesystem>
 #include <sstream>
 
 #include "capture/load_photometric_set.h"
@@ -19,12 +20,12 @@ LightDirection ParseEntry(const std::string& entry, int index) {
   double slant = 0.0, tilt = 0.0;
   std::string extra;
   if (!(in >> slant >> tilt) || (in >> extra)) {
-    throw Error(fmt::format("light list entry {} \"{}\": expected SLANT,TILT in degrees", index,
-                            entry));
+    throw Error(
+        fmt::format("light list entry {} \"{}\": expected SLANT,TILT in degrees", index, entry));
   }
   if (slant < 0.0 || slant > 90.0) {
-    throw Error(fmt::format("light list entry {} \"{}\": slant must be in [0, 90] degrees", index,
-                            entry));
+    throw Error(
+        fmt::format("light list entry {} \"{}\": slant must be in [0, 90] degrees", index, entry));
   }
   return LightDirection::FromSlantTilt(slant, tilt);
 }
@@ -45,8 +46,9 @@ LightPlan ReadLightPlan(const std::string& spec) {
     return plan;
   }
   if (!std::filesystem::exists(spec)) {
-    throw Error(spec, "no such light plan: expected \"thesis\", a list \"SLANT,TILT;...\" or a "
-                      "light file (.lp, manifest.json, light_directions.txt)");
+    throw Error(spec,
+                "no such light plan: expected \"thesis\", a list \"SLANT,TILT;...\" or a "
+                "light file (.lp, manifest.json, light_directions.txt)");
   }
   LightPlan plan{ReadLightDirections(spec), spec};
   for (std::size_t i = 0; i < plan.lights.size(); ++i) {

@@ -1,12 +1,12 @@
 #include "capture/pixel_format.h"
 
+#include <fmt/format.h>
 #include <linux/videodev2.h>
 #include <turbojpeg.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <fmt/format.h>
 #include <memory>
 #include <vector>
 
@@ -15,9 +15,9 @@
 namespace photomat {
 namespace {
 
-constexpr std::array<PixelFormat, 6> kAllFormats = {PixelFormat::kY16,  PixelFormat::kRgb24,
+constexpr std::array<PixelFormat, 6> kAllFormats = {PixelFormat::kY16,   PixelFormat::kRgb24,
                                                     PixelFormat::kBgr24, PixelFormat::kYuyv,
-                                                    PixelFormat::kGrey, PixelFormat::kMjpeg};
+                                                    PixelFormat::kGrey,  PixelFormat::kMjpeg};
 
 // 8-bit code -> linear value, for one encoding.
 std::array<float, 256> EightBitTable(ColourSpace encoding) {
@@ -131,9 +131,8 @@ Image DecodeMjpeg(const FrameLayout& layout, std::span<const std::uint8_t> bytes
   // The TurboJPEG 2.1 API takes a non-const buffer but does not write to it.
   auto* data = const_cast<unsigned char*>(bytes.data());
   const auto size = static_cast<unsigned long>(bytes.size());
-  if (bytes.empty() ||
-      tjDecompressHeader3(jpeg.handle, data, size, &width, &height, &subsampling, &colour_space) !=
-          0) {
+  if (bytes.empty() || tjDecompressHeader3(jpeg.handle, data, size, &width, &height, &subsampling,
+                                           &colour_space) != 0) {
     throw Error(fmt::format("corrupt MJPEG frame ({} bytes): {}", bytes.size(),
                             bytes.empty() ? "empty" : tjGetErrorStr2(jpeg.handle)));
   }
@@ -157,13 +156,20 @@ Image DecodeMjpeg(const FrameLayout& layout, std::span<const std::uint8_t> bytes
 
 std::string_view ToString(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kGrey: return "GREY";
-    case PixelFormat::kY16: return "Y16";
-    case PixelFormat::kYuyv: return "YUYV";
-    case PixelFormat::kMjpeg: return "MJPG";
-    case PixelFormat::kRgb24: return "RGB3";
-    case PixelFormat::kBgr24: return "BGR3";
-    case PixelFormat::kFloat: return "FLOAT";
+    case PixelFormat::kGrey:
+      return "GREY";
+    case PixelFormat::kY16:
+      return "Y16";
+    case PixelFormat::kYuyv:
+      return "YUYV";
+    case PixelFormat::kMjpeg:
+      return "MJPG";
+    case PixelFormat::kRgb24:
+      return "RGB3";
+    case PixelFormat::kBgr24:
+      return "BGR3";
+    case PixelFormat::kFloat:
+      return "FLOAT";
   }
   return "?";
 }
@@ -198,26 +204,40 @@ int ChannelCount(PixelFormat format) {
 
 int BytesPerPixel(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kGrey: return 1;
-    case PixelFormat::kY16: return 2;
-    case PixelFormat::kYuyv: return 2;
-    case PixelFormat::kMjpeg: return 0;
-    case PixelFormat::kRgb24: return 3;
-    case PixelFormat::kBgr24: return 3;
-    case PixelFormat::kFloat: return 12;
+    case PixelFormat::kGrey:
+      return 1;
+    case PixelFormat::kY16:
+      return 2;
+    case PixelFormat::kYuyv:
+      return 2;
+    case PixelFormat::kMjpeg:
+      return 0;
+    case PixelFormat::kRgb24:
+      return 3;
+    case PixelFormat::kBgr24:
+      return 3;
+    case PixelFormat::kFloat:
+      return 12;
   }
   return 0;
 }
 
 std::uint32_t V4l2FourCc(PixelFormat format) {
   switch (format) {
-    case PixelFormat::kGrey: return V4L2_PIX_FMT_GREY;
-    case PixelFormat::kY16: return V4L2_PIX_FMT_Y16;
-    case PixelFormat::kYuyv: return V4L2_PIX_FMT_YUYV;
-    case PixelFormat::kMjpeg: return V4L2_PIX_FMT_MJPEG;
-    case PixelFormat::kRgb24: return V4L2_PIX_FMT_RGB24;
-    case PixelFormat::kBgr24: return V4L2_PIX_FMT_BGR24;
-    case PixelFormat::kFloat: return 0;
+    case PixelFormat::kGrey:
+      return V4L2_PIX_FMT_GREY;
+    case PixelFormat::kY16:
+      return V4L2_PIX_FMT_Y16;
+    case PixelFormat::kYuyv:
+      return V4L2_PIX_FMT_YUYV;
+    case PixelFormat::kMjpeg:
+      return V4L2_PIX_FMT_MJPEG;
+    case PixelFormat::kRgb24:
+      return V4L2_PIX_FMT_RGB24;
+    case PixelFormat::kBgr24:
+      return V4L2_PIX_FMT_BGR24;
+    case PixelFormat::kFloat:
+      return 0;
   }
   return 0;
 }
@@ -242,20 +262,26 @@ std::string FourCcToString(std::uint32_t fourcc) {
 Image DecodeFrame(const FrameLayout& layout, std::span<const std::uint8_t> bytes,
                   ColourSpace eight_bit_encoding) {
   if (layout.width <= 0 || layout.height <= 0) {
-    throw Error(fmt::format("{} frame has no pixels ({}x{})", ToString(layout.format),
-                            layout.width, layout.height));
+    throw Error(fmt::format("{} frame has no pixels ({}x{})", ToString(layout.format), layout.width,
+                            layout.height));
   }
   const std::array<float, 256> table = EightBitTable(eight_bit_encoding);
   if (layout.format == PixelFormat::kMjpeg) return DecodeMjpeg(layout, bytes, table);
   CheckSize(layout, bytes.size());
   switch (layout.format) {
-    case PixelFormat::kGrey: return DecodeEightBit(layout, bytes, table, 1, {0, 0, 0});
-    case PixelFormat::kY16: return DecodeY16(layout, bytes);
-    case PixelFormat::kYuyv: return DecodeYuyv(layout, bytes, eight_bit_encoding);
-    case PixelFormat::kRgb24: return DecodeEightBit(layout, bytes, table, 3, {0, 1, 2});
-    case PixelFormat::kBgr24: return DecodeEightBit(layout, bytes, table, 3, {2, 1, 0});
+    case PixelFormat::kGrey:
+      return DecodeEightBit(layout, bytes, table, 1, {0, 0, 0});
+    case PixelFormat::kY16:
+      return DecodeY16(layout, bytes);
+    case PixelFormat::kYuyv:
+      return DecodeYuyv(layout, bytes, eight_bit_encoding);
+    case PixelFormat::kRgb24:
+      return DecodeEightBit(layout, bytes, table, 3, {0, 1, 2});
+    case PixelFormat::kBgr24:
+      return DecodeEightBit(layout, bytes, table, 3, {2, 1, 0});
     case PixelFormat::kMjpeg:
-    case PixelFormat::kFloat: break;
+    case PixelFormat::kFloat:
+      break;
   }
   throw Error(fmt::format("{} is not a camera pixel format", ToString(layout.format)));
 }

@@ -57,7 +57,8 @@ struct FrameLayout {
 // `eight_bit_encoding` says how 8-bit samples (GREY, YUYV, MJPEG, RGB3, BGR3) encode light: kSrgb
 // for video cameras (their output is gamma-encoded), kLinear for machine-vision cameras with the
 // gamma off. Y16 is always linear. Throws Error (without a file name; callers add the device) for a
-// buffer too short for the layout, kFloat (not a camera format), a corrupt JPEG, or a JPEG of another size than the layout's.
+// buffer too short for the layout, kFloat (not a camera format), a corrupt JPEG, or a JPEG of
+// another size than the layout's.
 Image DecodeFrame(const FrameLayout& layout, std::span<const std::uint8_t> bytes,
                   ColourSpace eight_bit_encoding);
 

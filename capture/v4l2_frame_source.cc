@@ -1,6 +1,7 @@
 #include "capture/v4l2_frame_source.h"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <linux/videodev2.h>
 #include <sys/mman.h>
 
@@ -8,7 +9,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <fmt/format.h>
 
 #include "core/error.h"
 
@@ -24,7 +24,8 @@ std::string CString(const __u8* text, std::size_t size) {
 }
 
 std::string ErrnoText(int error) {
-  return fmt::format("{} ({})", std::strerror(error), strerrorname_np(error) ? strerrorname_np(error) : "?");
+  return fmt::format("{} ({})", std::strerror(error),
+                     strerrorname_np(error) ? strerrorname_np(error) : "?");
 }
 
 // V4L2 reports capture time as a timeval on CLOCK_MONOTONIC when it says so in the flags, which is
@@ -40,8 +41,7 @@ Clock::time_point FrameTime(const v4l2_buffer& buffer) {
 
 }  // namespace
 
-V4l2FrameSource::V4l2FrameSource(fs::path path, V4l2Syscalls& syscalls,
-                                 const V4l2Options& options)
+V4l2FrameSource::V4l2FrameSource(fs::path path, V4l2Syscalls& syscalls, const V4l2Options& options)
     : path_(std::move(path)), syscalls_(syscalls), options_(options) {
   fd_ = syscalls_.Open(path_.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
@@ -58,8 +58,9 @@ V4l2FrameSource::V4l2FrameSource(fs::path path, V4l2Syscalls& syscalls,
       throw Error(path_, "not a video capture device (no V4L2_CAP_VIDEO_CAPTURE)");
     }
     if (!(device_caps & V4L2_CAP_STREAMING)) {
-      throw Error(path_, "the device cannot stream (no V4L2_CAP_STREAMING); photomat needs mmap "
-                         "streaming");
+      throw Error(path_,
+                  "the device cannot stream (no V4L2_CAP_STREAMING); photomat needs mmap "
+                  "streaming");
     }
   } catch (...) {
     syscalls_.Close(fd_);
@@ -80,7 +81,10 @@ V4l2FrameSource::~V4l2FrameSource() {
 void V4l2FrameSource::Xioctl(unsigned long request, void* argument, const char* what) {
   if (syscalls_.Ioctl(fd_, request, argument) != 0) {
     const int error = errno;
-    if (error == ENODEV) throw Error(path_, fmt::format("device disconnected ({} failed)", what));
+    if (error == ENODEV) {
+      throw Error(path_, fmt::format("device disconnected{} ({} failed)",
+                                     streaming_ ? " while streaming" : "", what));
+    }
     throw Error(path_, fmt::format("{} failed: {}", what, ErrnoText(error)));
   }
 }
@@ -122,12 +126,10 @@ std::vector<CameraControl> V4l2FrameSource::ListControls() {
   query.id = V4L2_CTRL_FLAG_NEXT_CTRL;
   while (syscalls_.Ioctl(fd_, VIDIOC_QUERYCTRL, &query) == 0) {
     if (!(query.flags & V4L2_CTRL_FLAG_DISABLED) && query.type != V4L2_CTRL_TYPE_CTRL_CLASS) {
-      CameraControl control{CString(query.name, sizeof query.name),
-                            static_cast<double>(query.minimum),
-                            static_cast<double>(query.maximum),
-                            static_cast<double>(query.step),
-                            static_cast<double>(query.default_value),
-                            std::nullopt};
+      CameraControl control{
+          CString(query.name, sizeof query.name),   static_cast<double>(query.minimum),
+          static_cast<double>(query.maximum),       static_cast<double>(query.step),
+          static_cast<double>(query.default_value), std::nullopt};
       if (auto value = GetControl(query.id)) control.current = *value;
       controls.push_back(std::move(control));
     }
@@ -144,10 +146,10 @@ FrameFormat V4l2FrameSource::SetFormat(const FrameFormat& wanted) {
                    [&](const OfferedFormat& f) { return f.pixel_format == wanted.pixel_format; })) {
     std::string codes;
     for (const OfferedFormat& f : offered) codes += (codes.empty() ? "" : ", ") + f.code;
-    throw Error(path_, fmt::format("unsupported format: the device does not offer {} (it offers "
-                                   "{}; photomat decodes {})",
-                                   code, codes.empty() ? "nothing" : codes,
-                                   SupportedPixelFormatList()));
+    throw Error(path_,
+                fmt::format("unsupported format: the device does not offer {} (it offers "
+                            "{}; photomat decodes {})",
+                            code, codes.empty() ? "nothing" : codes, SupportedPixelFormatList()));
   }
   v4l2_format format{};
   format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -251,8 +253,8 @@ void V4l2FrameSource::Start() {
       buffer.memory = V4L2_MEMORY_MMAP;
       buffer.index = i;
       Xioctl(VIDIOC_QUERYBUF, &buffer, "VIDIOC_QUERYBUF");
-      void* address = syscalls_.Mmap(buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_,
-                                     buffer.m.offset);
+      void* address =
+          syscalls_.Mmap(buffer.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, buffer.m.offset);
       if (address == MAP_FAILED) {
         throw Error(path_, fmt::format("mmap of buffer {} failed: {}", i, ErrnoText(errno)));
       }
@@ -297,13 +299,18 @@ void V4l2FrameSource::ReleaseBuffers() {
 
 void V4l2FrameSource::FailStreaming(const std::string& what, int error) {
   if (error == ENODEV || error == EIO) {
-    throw Error(path_, fmt::format("device disconnected while streaming ({}: {})", what,
-                                   ErrnoText(error)));
+    throw Error(
+        path_, fmt::format("device disconnected while streaming ({}: {})", what, ErrnoText(error)));
   }
   throw Error(path_, fmt::format("{} failed: {}", what, ErrnoText(error)));
 }
 
 Frame V4l2FrameSource::Grab(std::chrono::milliseconds timeout) {
+  if (pending_error_) {
+    const Error error = *pending_error_;
+    pending_error_.reset();
+    throw error;
+  }
   if (!streaming_) Start();
   const Clock::time_point deadline = Clock::now() + timeout;
   while (true) {
@@ -329,8 +336,8 @@ Frame V4l2FrameSource::Grab(std::chrono::milliseconds timeout) {
       FailStreaming("VIDIOC_DQBUF", errno);
     }
     if (buffer.index >= buffers_.size()) {
-      throw Error(path_, fmt::format("driver returned buffer {} of {}", buffer.index,
-                                     buffers_.size()));
+      throw Error(path_,
+                  fmt::format("driver returned buffer {} of {}", buffer.index, buffers_.size()));
     }
     Frame frame;
     frame.metadata = {buffer.sequence, FrameTime(buffer), exposure_us_, gain_};
@@ -338,15 +345,25 @@ Frame V4l2FrameSource::Grab(std::chrono::milliseconds timeout) {
     std::optional<Error> decode_error;
     if (!corrupt) {
       const auto* bytes = static_cast<const std::uint8_t*>(buffers_[buffer.index].address);
-      const std::size_t used = std::min<std::size_t>(buffer.bytesused, buffers_[buffer.index].length);
+      const std::size_t used =
+          std::min<std::size_t>(buffer.bytesused, buffers_[buffer.index].length);
       try {
         frame.image = DecodeFrame(layout_, {bytes, used}, options_.eight_bit_encoding);
       } catch (const Error& error) {
         decode_error = error.InFile(path_);
       }
     }
-    // The buffer goes back to the driver before anything else can throw.
-    Xioctl(VIDIOC_QBUF, &buffer, "VIDIOC_QBUF");
+    // The buffer goes back to the driver before anything else can throw. A good frame is
+    // returned even if that fails (the device vanished just after it); the next Grab reports it.
+    if (syscalls_.Ioctl(fd_, VIDIOC_QBUF, &buffer) != 0) {
+      const int error = errno;
+      try {
+        FailStreaming("VIDIOC_QBUF", error);
+      } catch (const Error& failure) {
+        if (decode_error || corrupt) throw failure;
+        pending_error_ = failure;
+      }
+    }
     if (decode_error) throw *decode_error;
     if (corrupt) {
       if (Clock::now() >= deadline) {

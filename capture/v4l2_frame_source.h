@@ -8,6 +8,7 @@
 #include "capture/frame_source.h"
 #include "capture/v4l2_syscalls.h"
 #include "core/colour.h"
+#include "core/error.h"
 
 namespace photomat {
 
@@ -72,6 +73,8 @@ class V4l2FrameSource final : public FrameSource {
   std::vector<MappedBuffer> buffers_;
   std::optional<double> exposure_us_;
   std::optional<double> gain_;
+  // A failure to requeue the buffer of a frame that was returned: reported by the next Grab.
+  std::optional<Error> pending_error_;
 };
 
 // The V4L2 capture devices under /dev (video0, video1, ...), each with its formats and controls.

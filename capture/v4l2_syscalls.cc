@@ -22,8 +22,7 @@ int LinuxV4l2Syscalls::Ioctl(int fd, unsigned long request, void* argument) {
   return result;
 }
 
-void* LinuxV4l2Syscalls::Mmap(std::size_t length, int protection, int flags, int fd,
-                              off_t offset) {
+void* LinuxV4l2Syscalls::Mmap(std::size_t length, int protection, int flags, int fd, off_t offset) {
   return ::mmap(nullptr, length, protection, flags, fd, offset);
 }
 

@@ -34,16 +34,20 @@ EmulatedV4l2Device::EmulatedV4l2Device(EmulatedCameraOptions options)
   if (options_.fourccs.empty()) options_.fourccs = {V4L2_PIX_FMT_RGB24};
   fourcc_ = options_.fourccs.front();
   // Controls as a UVC camera has them (ids in increasing order for V4L2_CTRL_FLAG_NEXT_CTRL).
-  controls_[V4L2_CID_AUTO_WHITE_BALANCE] = {V4L2_CTRL_TYPE_BOOLEAN, "White Balance, Auto", 0, 1, 1,
-                                            1, 1};
+  controls_[V4L2_CID_AUTO_WHITE_BALANCE] = {
+      V4L2_CTRL_TYPE_BOOLEAN, "White Balance, Auto", 0, 1, 1, 1, 1};
   controls_[V4L2_CID_GAIN] = {V4L2_CTRL_TYPE_INTEGER, "Gain", 0, 400, 1, 100, 100};
   controls_[V4L2_CID_AUTOGAIN] = {V4L2_CTRL_TYPE_BOOLEAN, "Gain, Automatic", 0, 1, 1, 1, 1};
-  controls_[V4L2_CID_EXPOSURE_AUTO] = {V4L2_CTRL_TYPE_MENU, "Auto Exposure", 0, 3, 1,
+  controls_[V4L2_CID_EXPOSURE_AUTO] = {V4L2_CTRL_TYPE_MENU,
+                                       "Auto Exposure",
+                                       0,
+                                       3,
+                                       1,
                                        V4L2_EXPOSURE_APERTURE_PRIORITY,
                                        V4L2_EXPOSURE_APERTURE_PRIORITY};
   if (options_.has_exposure_control) {
-    controls_[V4L2_CID_EXPOSURE_ABSOLUTE] = {V4L2_CTRL_TYPE_INTEGER, "Exposure Time, Absolute", 1,
-                                             20000, 1, 100, 100};
+    controls_[V4L2_CID_EXPOSURE_ABSOLUTE] = {
+        V4L2_CTRL_TYPE_INTEGER, "Exposure Time, Absolute", 1, 20000, 1, 100, 100};
   }
   // A fixed dark pattern: what a dark frame measures and subtraction must remove.
   dark_ = Image(options_.width, options_.height, 1);
@@ -95,8 +99,8 @@ std::size_t EmulatedV4l2Device::FrameBytes() const {
 Image EmulatedV4l2Device::SensorImage(const Image& scene) {
   double scale = controls_.at(V4L2_CID_GAIN).value / 100.0;
   if (options_.has_exposure_control) {
-    scale *= controls_.at(V4L2_CID_EXPOSURE_ABSOLUTE).value * 100.0 /
-             options_.reference_exposure_us;
+    scale *=
+        controls_.at(V4L2_CID_EXPOSURE_ABSOLUTE).value * 100.0 / options_.reference_exposure_us;
   }
   const double wobble = std::sin(0.9 * sequence_ + 0.3);
   if (controls_.at(V4L2_CID_EXPOSURE_AUTO).value != V4L2_EXPOSURE_MANUAL) {
@@ -130,6 +134,16 @@ void EmulatedV4l2Device::Expose(int index) {
     buffer.bytes_used = static_cast<std::uint32_t>(buffer.bytes.size());
   } else {
     Image scene = options_.scene ? options_.scene() : Image(options_.width, options_.height, 3);
+    if (ChannelCount(*format) == 1 && scene.channels() > 1) {
+      // A monochrome sensor integrates all colours in one photosite, which is what clips.
+      Image grey(scene.width(), scene.height(), 1);
+      for (std::size_t p = 0; p < scene.pixel_count(); ++p) {
+        float sum = 0.0f;
+        for (float v : scene.pixel(p)) sum += v;
+        grey.pixel(p)[0] = sum / static_cast<float>(scene.channels());
+      }
+      scene = std::move(grey);
+    }
     const FrameLayout layout{*format, options_.width, options_.height,
                              options_.width * BytesPerPixel(*format) + options_.row_padding};
     const std::vector<std::uint8_t> bytes =
@@ -179,9 +193,8 @@ int EmulatedV4l2Device::HandleIoctl(unsigned long request, void* argument) {
     }
     case VIDIOC_ENUM_FRAMESIZES: {
       auto* size = static_cast<v4l2_frmsizeenum*>(argument);
-      if (size->index != 0 ||
-          std::find(options_.fourccs.begin(), options_.fourccs.end(), size->pixel_format) ==
-              options_.fourccs.end()) {
+      if (size->index != 0 || std::find(options_.fourccs.begin(), options_.fourccs.end(),
+                                        size->pixel_format) == options_.fourccs.end()) {
         return Fail(EINVAL);
       }
       size->type = V4L2_FRMSIZE_TYPE_DISCRETE;
@@ -291,8 +304,8 @@ int EmulatedV4l2Device::HandleIoctl(unsigned long request, void* argument) {
       auto* query = static_cast<v4l2_queryctrl*>(argument);
       auto it = controls_.end();
       if (query->id & V4L2_CTRL_FLAG_NEXT_CTRL) {
-        it = controls_.upper_bound(query->id & ~(V4L2_CTRL_FLAG_NEXT_CTRL |
-                                                 V4L2_CTRL_FLAG_NEXT_COMPOUND));
+        it = controls_.upper_bound(query->id &
+                                   ~(V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND));
       } else {
         it = controls_.find(query->id);
       }

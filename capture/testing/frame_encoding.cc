@@ -1,10 +1,10 @@
 #include "capture/testing/frame_encoding.h"
 
+#include <fmt/format.h>
 #include <turbojpeg.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 #include "core/error.h"
 
@@ -39,7 +39,8 @@ std::vector<std::uint8_t> EncodeJpeg(const FrameLayout& layout, const Image& lin
       double v[3];
       Rgb(linear, x, y, v);
       for (int c = 0; c < 3; ++c) {
-        rgb[(static_cast<std::size_t>(y) * layout.width + x) * 3 + c] = Byte(Encode(v[c], encoding));
+        rgb[(static_cast<std::size_t>(y) * layout.width + x) * 3 + c] =
+            Byte(Encode(v[c], encoding));
       }
     }
   }
@@ -78,7 +79,9 @@ std::vector<std::uint8_t> EncodeFrame(const FrameLayout& layout, const Image& li
       double v[3];
       Rgb(linear, x, y, v);
       switch (layout.format) {
-        case PixelFormat::kGrey: row[x] = Byte(Encode(Mean(linear, x, y), encoding)); break;
+        case PixelFormat::kGrey:
+          row[x] = Byte(Encode(Mean(linear, x, y), encoding));
+          break;
         case PixelFormat::kY16: {
           const auto code = static_cast<unsigned>(
               std::lround(std::clamp(Mean(linear, x, y), 0.0, 1.0) * 65535.0));
@@ -115,7 +118,8 @@ std::vector<std::uint8_t> EncodeFrame(const FrameLayout& layout, const Image& li
           break;
         }
         case PixelFormat::kMjpeg:
-        case PixelFormat::kFloat: break;
+        case PixelFormat::kFloat:
+          break;
       }
     }
   }

@@ -1,6 +1,7 @@
 #include "capture/testing/synthetic_studio.h"
 
 #include <fmt/format.h>
+
 #include <fstream>
 
 #include "core/error.h"
