@@ -43,6 +43,18 @@ Clock::time_point FrameTime(const v4l2_buffer& buffer) {
 
 V4l2FrameSource::V4l2FrameSource(fs::path path, V4l2Syscalls& syscalls, const V4l2Options& options)
     : path_(std::move(path)), syscalls_(syscalls), options_(options) {
+  OpenDevice();
+}
+
+V4l2FrameSource::V4l2FrameSource(fs::path path, const V4l2Options& options)
+    : path_(std::move(path)),
+      owned_syscalls_(std::make_unique<LinuxV4l2Syscalls>()),
+      syscalls_(*owned_syscalls_),
+      options_(options) {
+  OpenDevice();
+}
+
+void V4l2FrameSource::OpenDevice() {
   fd_ = syscalls_.Open(path_.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
     throw Error(path_, fmt::format("cannot open the video device: {}", ErrnoText(errno)));

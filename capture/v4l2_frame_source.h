@@ -32,6 +32,8 @@ class V4l2FrameSource final : public FrameSource {
   // `syscalls` must outlive the source.
   V4l2FrameSource(std::filesystem::path path, V4l2Syscalls& syscalls,
                   const V4l2Options& options = {});
+  // The same on the real kernel interface.
+  explicit V4l2FrameSource(std::filesystem::path path, const V4l2Options& options = {});
   ~V4l2FrameSource() override;
   V4l2FrameSource(const V4l2FrameSource&) = delete;
   V4l2FrameSource& operator=(const V4l2FrameSource&) = delete;
@@ -61,8 +63,10 @@ class V4l2FrameSource final : public FrameSource {
   std::optional<std::int32_t> GetControl(std::uint32_t id);
   [[noreturn]] void FailStreaming(const std::string& what, int error);
   void ReleaseBuffers();
+  void OpenDevice();
 
   std::filesystem::path path_;
+  std::unique_ptr<V4l2Syscalls> owned_syscalls_;  // set by the constructor without `syscalls`
   V4l2Syscalls& syscalls_;
   V4l2Options options_;
   int fd_ = -1;
