@@ -53,7 +53,7 @@ TEST(PixelFormatTest, Y16IsLittleEndianAndLinear) {
 
 TEST(PixelFormatTest, YuyvDecodesBt601LimitedRange) {
   // Pairs: white, black, mid grey, saturated red (BT.601: Y 81, Cb 90, Cr 240).
-  const std::vector<std::uint8_t> bytes = {235, 128, 235, 128, 16,  128, 16, 128,
+  const std::vector<std::uint8_t> bytes = {235, 128, 235, 128, 16, 128, 16, 128,
                                            126, 128, 126, 128, 81, 90,  81, 240};
   const Image image = DecodeFrame({PixelFormat::kYuyv, 8, 1, 0}, bytes, ColourSpace::kLinear);
   ASSERT_EQ(image.channels(), 3);
@@ -73,8 +73,8 @@ TEST(PixelFormatTest, YuyvDecodesBt601LimitedRange) {
 
 TEST(PixelFormatTest, RgbAndBgrBytesInOrderWithRowPadding) {
   // 2 x 2 pixels, rows padded to 8 bytes.
-  const std::vector<std::uint8_t> rgb = {255, 0, 0, 0, 255, 0, 9, 9,  //
-                                         0,   0, 255, 10, 20, 30, 9, 9};
+  const std::vector<std::uint8_t> rgb = {255, 0, 0,   0,  255, 0,  9, 9,  //
+                                         0,   0, 255, 10, 20,  30, 9, 9};
   const Image a = DecodeFrame({PixelFormat::kRgb24, 2, 2, 8}, rgb, ColourSpace::kLinear);
   EXPECT_FLOAT_EQ(a.at(0, 0, 0), 1.0f);
   EXPECT_FLOAT_EQ(a.at(1, 0, 1), 1.0f);
@@ -122,22 +122,24 @@ class RoundTripTest : public ::testing::TestWithParam<PixelFormat> {};
 TEST_P(RoundTripTest, EncodedFramesDecodeToTheirValues) {
   const PixelFormat format = GetParam();
   const Image truth = Patches(32, 16);
-  const FrameLayout layout{format, 32, 16, format == PixelFormat::kMjpeg ? 0 : 32 * BytesPerPixel(format) + 4};
+  const FrameLayout layout{format, 32, 16,
+                           format == PixelFormat::kMjpeg ? 0 : 32 * BytesPerPixel(format) + 4};
   const auto bytes = testing::EncodeFrame(layout, truth, ColourSpace::kSrgb);
   const Image decoded = DecodeFrame(layout, bytes, ColourSpace::kSrgb);
   ASSERT_EQ(decoded.channels(), ChannelCount(format));
   // Tolerances in the encoded domain: quantisation (8-bit: half a code; YUYV's limited range and
   // chroma: about two codes; JPEG at quality 95: a few codes).
-  const double tolerance = format == PixelFormat::kY16    ? 1.0 / 65535
+  const double tolerance = format == PixelFormat::kY16     ? 1.0 / 65535
                            : format == PixelFormat::kMjpeg ? 4.0 / 255
                            : format == PixelFormat::kYuyv  ? 2.5 / 255
                                                            : 0.5 / 255 + 1e-6;
   for (int y = 0; y < 16; ++y) {
     for (int x = 0; x < 32; ++x) {
       for (int c = 0; c < decoded.channels(); ++c) {
-        const double expected = decoded.channels() == 1
-                                    ? (truth.at(x, y, 0) + truth.at(x, y, 1) + truth.at(x, y, 2)) / 3
-                                    : truth.at(x, y, c);
+        const double expected =
+            decoded.channels() == 1
+                ? (truth.at(x, y, 0) + truth.at(x, y, 1) + truth.at(x, y, 2)) / 3
+                : truth.at(x, y, c);
         const double got = decoded.at(x, y, c);
         if (format == PixelFormat::kY16) {
           ASSERT_NEAR(got, expected, tolerance) << x << "," << y;
@@ -153,7 +155,9 @@ INSTANTIATE_TEST_SUITE_P(AllFormats, RoundTripTest,
                          ::testing::Values(PixelFormat::kGrey, PixelFormat::kY16,
                                            PixelFormat::kYuyv, PixelFormat::kMjpeg,
                                            PixelFormat::kRgb24, PixelFormat::kBgr24),
-                         [](const auto& param_info) { return std::string(ToString(param_info.param)); });
+                         [](const auto& param_info) {
+                           return std::string(ToString(param_info.param));
+                         });
 
 TEST(PixelFormatTest, BadFramesAreErrors) {
   const std::vector<std::uint8_t> short_frame(10, 0);
@@ -180,8 +184,8 @@ TEST(PixelFormatTest, BadFramesAreErrors) {
   jpeg.resize(jpeg.size() / 2);
   EXPECT_THROW(DecodeFrame({PixelFormat::kMjpeg, 32, 32, 0}, jpeg, ColourSpace::kSrgb), Error);
   // A JPEG of another size than the stream's.
-  const auto small = testing::EncodeFrame({PixelFormat::kMjpeg, 32, 32, 0}, truth,
-                                          ColourSpace::kSrgb);
+  const auto small =
+      testing::EncodeFrame({PixelFormat::kMjpeg, 32, 32, 0}, truth, ColourSpace::kSrgb);
   try {
     DecodeFrame({PixelFormat::kMjpeg, 64, 32, 0}, small, ColourSpace::kSrgb);
     FAIL() << "no error";
