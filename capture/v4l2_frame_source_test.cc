@@ -148,6 +148,26 @@ TEST(V4l2FrameSourceTest, ManualControlsTurnAutoModesOffAndSetExposureAndGain) {
               HasSubstr("setting the gain 900 is out of the device's range [0, 400]"));
 }
 
+TEST(V4l2FrameSourceTest, FramesAreSteadyOnlyWithTheAutoModesOff) {
+  // The emulated camera rescales each frame while auto exposure, gain or white balance are on.
+  const auto spread = [](V4l2FrameSource& source) {
+    double low = 1e9, high = -1e9;
+    for (int i = 0; i < 6; ++i) {
+      const double v = source.Grab(std::chrono::milliseconds(500)).image.at(20, 10, 0);
+      low = std::min(low, v);
+      high = std::max(high, v);
+    }
+    return high - low;
+  };
+  EmulatedV4l2Device automatic(Camera({V4L2_PIX_FMT_Y16}));
+  V4l2FrameSource wobbly("/dev/video-emulated", automatic);
+  EXPECT_GT(spread(wobbly), 0.01);
+  EmulatedV4l2Device manual(Camera({V4L2_PIX_FMT_Y16}));
+  V4l2FrameSource steady("/dev/video-emulated", manual);
+  steady.SetManualControls({});
+  EXPECT_LT(spread(steady), 1e-6);
+}
+
 TEST(V4l2FrameSourceTest, MissingExposureControlIsAnError) {
   auto options = Camera({V4L2_PIX_FMT_GREY});
   options.has_exposure_control = false;

@@ -102,18 +102,20 @@ Image EmulatedV4l2Device::SensorImage(const Image& scene) {
     scale *=
         controls_.at(V4L2_CID_EXPOSURE_ABSOLUTE).value * 100.0 / options_.reference_exposure_us;
   }
-  const double wobble = std::sin(0.9 * sequence_ + 0.3);
+  // Each auto mode varies from frame to frame, with its own rhythm so that they never cancel.
+  const auto wobble = [&](double rate) { return std::sin(rate * sequence_ + 0.3); };
   if (controls_.at(V4L2_CID_EXPOSURE_AUTO).value != V4L2_EXPOSURE_MANUAL) {
-    scale *= 0.8 + 0.15 * wobble;
+    scale *= 0.8 + 0.15 * wobble(0.9);
   }
-  if (controls_.at(V4L2_CID_AUTOGAIN).value != 0) scale *= 1.1 - 0.1 * wobble;
+  if (controls_.at(V4L2_CID_AUTOGAIN).value != 0) scale *= 1.0 + 0.1 * wobble(1.7);
   const bool auto_white = controls_.at(V4L2_CID_AUTO_WHITE_BALANCE).value != 0;
+  const double white_wobble = wobble(2.3);
   std::normal_distribution<double> noise(0.0, options_.noise_sigma);
   Image sensor(options_.width, options_.height, scene.channels());
   for (int y = 0; y < options_.height; ++y) {
     for (int x = 0; x < options_.width; ++x) {
       for (int c = 0; c < scene.channels(); ++c) {
-        const double white = auto_white ? 1.0 + 0.1 * wobble * (c - 1) : 1.0;
+        const double white = auto_white ? 1.0 + 0.1 * white_wobble * (c - 1) : 1.0;
         double v = scene.at(x, y, c) * scale * white + dark_.at(x, y, 0);
         if (options_.noise_sigma > 0) v += noise(random_);
         sensor.at(x, y, c) = static_cast<float>(std::clamp(v, 0.0, 1.0));
