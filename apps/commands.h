@@ -11,5 +11,7 @@ void AddFitCommand(CLI::App& app);
 void AddRelightCommand(CLI::App& app);
 void AddEvaluateCommand(CLI::App& app);
 void AddDemoCommand(CLI::App& app);
+void AddCaptureCommand(CLI::App& app);
+void AddDevicesCommand(CLI::App& app);
 
 }  // namespace photomat::app
