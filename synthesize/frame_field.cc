@@ -18,8 +18,8 @@ Eigen::Matrix3f RotationAboutZ(double degrees) {
       .toRotationMatrix();
 }
 
-// Frame whose f1 is the unit tangent `t` in the xy plane, f2 = z x f1 turned inward... chosen so
-// that [f1 f2 z] is right-handed.
+// The right-handed frame [f1, z x f1, z] whose f1 is the unit tangent `tangent` in the xy plane
+// (for counter-clockwise circle tangents, f2 = z x f1 points to the centre).
 Eigen::Matrix3f PlanarFrame(const Eigen::Vector2f& tangent) {
   Eigen::Matrix3f frame;
   const Eigen::Vector3f f1(tangent.x(), tangent.y(), 0.0f);
