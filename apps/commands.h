@@ -13,5 +13,6 @@ void AddEvaluateCommand(CLI::App& app);
 void AddDemoCommand(CLI::App& app);
 void AddCaptureCommand(CLI::App& app);
 void AddDevicesCommand(CLI::App& app);
+void AddSolidCommand(CLI::App& app);
 
 }  // namespace photomat::app

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   photomat::app::AddDemoCommand(app);
   photomat::app::AddCaptureCommand(app);
   photomat::app::AddDevicesCommand(app);
+  photomat::app::AddSolidCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
