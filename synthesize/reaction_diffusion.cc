@@ -48,10 +48,12 @@ class TurkModel final : public ReactionDiffusionModel {
       c3 = -p_.s * beta_;
     }
   }
+  void Project(std::vector<Eigen::VectorXd>& fields) const override {
+    for (auto& f : fields) f = f.cwiseMax(0.0);
+  }
   // b is the slow self-activator whose spots and stripes the paper shows; a mirrors it.
   int pattern_species() const override { return 1; }
-  // tau s (max a - 1) < 1 keeps the b system positive definite (spec 3.1); a stays below ~9.
-  double suggested_time_step() const override { return 0.1 / p_.s; }
+  double suggested_time_step() const override { return 0.025 / p_.s; }
 
  private:
   TurkParameters p_;
@@ -302,6 +304,7 @@ StepRecord ReactionDiffusionSystem::Step() {
     for (int s = 0; s < species; ++s) solve(s);
   }
   StepRecord record;
+  model_->Project(next);
   for (int s = 0; s < species; ++s) {
     record.max_rate = std::max(record.max_rate, (next[s] - fields_[s]).cwiseAbs().maxCoeff() / tau);
     record.iterations.push_back(reports[s].iterations);

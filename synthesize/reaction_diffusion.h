@@ -30,6 +30,9 @@ class ReactionDiffusionModel {
   // C2 and C3 of `species` at every node from the fields at step n and time t.
   virtual void Reaction(int species, const std::vector<Eigen::VectorXd>& fields, double time,
                         Eigen::VectorXd& c2, Eigen::VectorXd& c3) const = 0;
+  // Applied to the fields after every step: keeps concentrations in the model's domain (Turk's
+  // clamp of b at 0). Default: nothing.
+  virtual void Project(std::vector<Eigen::VectorXd>& /*fields*/) const {}
   // The field that shows the pattern (for colours, height fields and stopping).
   virtual int pattern_species() const { return 0; }
   // Longest stable time step for these parameters (a suggestion; the CLI's default).
@@ -41,7 +44,12 @@ class ReactionDiffusionModel {
 //   db/dt = s (a b - b - beta) + D_b lap b C0 = D_b, C2 = s (a - 1),  C3 = -s beta
 // beta is drawn per node uniformly from [beta - beta_noise, beta + beta_noise] (the paper's
 // "12 +- 0.1", the only randomness); a = b = 4, the homogeneous equilibrium at beta = 12. The
-// Turing wavelength is 2 pi / sqrt(32 s).
+// Turing wavelength is 2 pi / sqrt(32 s). Concentrations are clamped at 0 after each step, as in
+// Turk's own simulation: the spec's equations alone let b cross zero inside a growing spot, after
+// which a b < 0 feeds a without bound (seen here within 300 time units at s = 0.05).
+// The Jacobi-ordered semi-implicit step keeps the homogeneous state stable only for
+// tau s < 1/28 (its amplification at a = b = 4 is sqrt((1 + 16 x^2) / ((1 + 4x)(1 - 3x))) with
+// x = tau s); the suggested step is tau s = 0.025 (the spec's tau = 0.5 at s = 0.05).
 struct TurkParameters {
   double s = 0.05;
   double d_a = 0.125;
