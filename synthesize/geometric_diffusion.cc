@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -16,10 +17,20 @@ namespace photomat {
 std::vector<CurvatureFrame> EstimateCurvatures(const TriangleMesh& mesh) {
   const int n = mesh.vertex_count();
   const auto normals = VertexNormals(mesh);
-  // Edge weights: the areas of the (one or two) triangles on each edge.
-  std::vector<Eigen::Matrix3d> tensors(n, Eigen::Matrix3d::Zero());
-  std::vector<double> weight_sum(n, 0.0);
+  // A tangent basis per vertex; the normal equations of the fit of the second fundamental form
+  // (a, b, c) to the normal-curvature samples: kappa = a x^2 + 2 b x y + c y^2 along (x, y).
+  std::vector<Eigen::Vector3d> t1(n), t2(n);
+  for (int v = 0; v < n; ++v) {
+    const Eigen::Vector3d& normal = normals[v];
+    const Eigen::Vector3d helper =
+        std::abs(normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    t1[v] = normal.cross(helper).normalized();
+    t2[v] = normal.cross(t1[v]);
+  }
+  std::vector<Eigen::Matrix3d> lhs(n, Eigen::Matrix3d::Zero());
+  std::vector<Eigen::Vector3d> rhs(n, Eigen::Vector3d::Zero());
   for (const auto& edge : EdgeFaceAdjacency(mesh)) {
+    // Edge weights: the areas of the (one or two) triangles on the edge.
     double weight = TriangleArea(mesh, edge.faces[0]);
     if (edge.faces[1] >= 0) weight += TriangleArea(mesh, edge.faces[1]);
     const int a = edge.vertices[0], b = edge.vertices[1];
@@ -27,45 +38,34 @@ std::vector<CurvatureFrame> EstimateCurvatures(const TriangleMesh& mesh) {
       const Eigen::Vector3d d = mesh.positions[j] - mesh.positions[i];
       const double length2 = d.squaredNorm();
       if (!(length2 > 0.0)) continue;
-      const Eigen::Vector3d& normal = normals[i];
-      const Eigen::Vector3d tangent = d - d.dot(normal) * normal;
+      const Eigen::Vector2d tangent(d.dot(t1[i]), d.dot(t2[i]));
       if (!(tangent.norm() > 0.0)) continue;
-      const Eigen::Vector3d t = tangent.normalized();
-      const double kappa = 2.0 * normal.dot(d) / length2;
-      tensors[i] += weight * kappa * t * t.transpose();
-      weight_sum[i] += weight;
+      const Eigen::Vector2d t = tangent.normalized();
+      const double kappa = 2.0 * normals[i].dot(d) / length2;
+      const Eigen::Vector3d row(t.x() * t.x(), 2.0 * t.x() * t.y(), t.y() * t.y());
+      lhs[i] += weight * row * row.transpose();
+      rhs[i] += weight * kappa * row;
     }
   }
   std::vector<CurvatureFrame> frames(n);
   for (int i = 0; i < n; ++i) {
     CurvatureFrame& frame = frames[i];
     frame.normal = normals[i];
-    // An orthonormal tangent basis, then the 2x2 tensor in it.
-    const Eigen::Vector3d helper =
-        std::abs(frame.normal.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-    const Eigen::Vector3d t1 = frame.normal.cross(helper).normalized();
-    const Eigen::Vector3d t2 = frame.normal.cross(t1);
-    if (!(weight_sum[i] > 0.0)) {
-      frame.e1 = t1;
-      frame.e2 = t2;
-      continue;
-    }
-    const Eigen::Matrix3d m = tensors[i] / weight_sum[i];
-    Eigen::Matrix2d tangent;
-    tangent << t1.dot(m * t1), t1.dot(m * t2), t2.dot(m * t1), t2.dot(m * t2);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(tangent);
-    const double m1 = eigen.eigenvalues()[0], m2 = eigen.eigenvalues()[1];
-    const Eigen::Vector2d v1 = eigen.eigenvectors().col(0), v2 = eigen.eigenvectors().col(1);
-    double k1 = 3.0 * m1 - m2, k2 = 3.0 * m2 - m1;
-    Eigen::Vector3d e1 = v1.x() * t1 + v1.y() * t2, e2 = v2.x() * t1 + v2.y() * t2;
-    if (std::abs(k2) > std::abs(k1)) {
-      std::swap(k1, k2);
-      std::swap(e1, e2);
-    }
-    frame.k1 = k1;
-    frame.k2 = k2;
-    frame.e1 = e1.normalized();
-    frame.e2 = e2.normalized();
+    frame.e1 = t1[i];
+    frame.e2 = t2[i];
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(lhs[i]);
+    if (lu.rank() < 3) continue;  // fewer than three edge directions: no estimate
+    const Eigen::Vector3d form = lu.solve(rhs[i]);
+    Eigen::Matrix2d second;
+    second << form[0], form[1], form[1], form[2];
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(second);
+    int first = std::abs(eigen.eigenvalues()[1]) >= std::abs(eigen.eigenvalues()[0]) ? 1 : 0;
+    const Eigen::Vector2d v1 = eigen.eigenvectors().col(first);
+    const Eigen::Vector2d v2 = eigen.eigenvectors().col(1 - first);
+    frame.k1 = eigen.eigenvalues()[first];
+    frame.k2 = eigen.eigenvalues()[1 - first];
+    frame.e1 = (v1.x() * t1[i] + v1.y() * t2[i]).normalized();
+    frame.e2 = (v2.x() * t1[i] + v2.y() * t2[i]).normalized();
   }
   return frames;
 }
