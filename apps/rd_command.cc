@@ -142,11 +142,11 @@ std::optional<Anisotropy> ParseDirection(const RdOptions& o) {
 
 void WriteHistory(const std::filesystem::path& path, const SimulationResult& result,
                   const std::vector<std::string>& species) {
-  std::string text = "step,time,max_rate";
+  std::string text = "step,time,max_rate,rms_rate";
   for (const auto& name : species) text += ",cg_iterations_" + name;
   text += "\n";
   for (const auto& r : result.history) {
-    text += fmt::format("{},{:.6g},{:.6g}", r.step, r.time, r.max_rate);
+    text += fmt::format("{},{:.6g},{:.6g},{:.6g}", r.step, r.time, r.max_rate, r.rms_rate);
     for (int i : r.iterations) text += fmt::format(",{}", i);
     text += "\n";
   }
@@ -293,7 +293,7 @@ void AddRdCommand(CLI::App& app) {
       ->capture_default_str();
   command
       ->add_option("--settle", o->settle,
-                   "Stop once max |du/dt| falls below this (0: run all steps)")
+                   "Stop once the RMS of du/dt falls below this (0: run all steps)")
       ->capture_default_str();
   command->add_option("--tau", o->tau, "Time step (default: the model's suggestion)");
   command->add_option("--seed", o->seed, "Seed of the random initial state")->capture_default_str();

@@ -190,6 +190,7 @@ CoupledResult SimulateCoupled(const TriangleMesh& mesh, ReactionDiffusionModel& 
   auto domain = std::make_unique<FemDomain>(FemDomain::FromMesh(result.mesh));
   auto operators = std::make_unique<FemOperators>(*domain);
   ReactionDiffusionSystem system(model, *operators, options);
+  SettlingMonitor monitor(options);
   report.Start(fmt::format("{} reaction-diffusion with geometric diffusion", model.name()),
                options.max_steps);
   for (int step = 0; step < options.max_steps; ++step) {
@@ -204,8 +205,7 @@ CoupledResult SimulateCoupled(const TriangleMesh& mesh, ReactionDiffusionModel& 
     }
     StepRecord record = system.Step();
     for (int i : record.iterations) result.pattern.total_iterations += i;
-    const bool settled = options.settle_rate > 0.0 && record.step >= options.min_steps &&
-                         record.step > geometry.steps && record.max_rate < options.settle_rate;
+    const bool settled = record.step > geometry.steps && monitor.Update(record);
     result.pattern.history.push_back(std::move(record));
     report.Advance();
     if (settled) {

@@ -305,8 +305,11 @@ StepRecord ReactionDiffusionSystem::Step() {
   }
   StepRecord record;
   model_->Project(next);
+  const Eigen::VectorXd& mass = operators_->lumped_mass_vector();
   for (int s = 0; s < species; ++s) {
-    record.max_rate = std::max(record.max_rate, (next[s] - fields_[s]).cwiseAbs().maxCoeff() / tau);
+    const Eigen::VectorXd rate = (next[s] - fields_[s]) / tau;
+    record.max_rate = std::max(record.max_rate, rate.cwiseAbs().maxCoeff());
+    record.rms_rate = std::max(record.rms_rate, std::sqrt(mass.dot(rate.cwiseAbs2()) / mass.sum()));
     record.iterations.push_back(reports[s].iterations);
   }
   fields_ = std::move(next);
@@ -316,6 +319,12 @@ StepRecord ReactionDiffusionSystem::Step() {
   return record;
 }
 
+bool SettlingMonitor::Update(const StepRecord& record) {
+  if (!(options_.settle_rate > 0.0)) return false;
+  if (record.rms_rate > 5.0 * options_.settle_rate) grown_ = true;
+  return grown_ && record.step >= options_.min_steps && record.rms_rate < options_.settle_rate;
+}
+
 SimulationResult SimulateReactionDiffusion(ReactionDiffusionModel& model, const FemDomain& domain,
                                            const SimulationOptions& options, Progress* progress) {
   NullProgress null;
@@ -323,12 +332,12 @@ SimulationResult SimulateReactionDiffusion(ReactionDiffusionModel& model, const 
   const FemOperators operators(domain);
   ReactionDiffusionSystem system(model, operators, options);
   SimulationResult result;
+  SettlingMonitor monitor(options);
   report.Start(fmt::format("{} reaction-diffusion", model.name()), options.max_steps);
   for (int step = 0; step < options.max_steps; ++step) {
     StepRecord record = system.Step();
     for (int i : record.iterations) result.total_iterations += i;
-    const bool settled = options.settle_rate > 0.0 && record.step >= options.min_steps &&
-                         record.max_rate < options.settle_rate;
+    const bool settled = monitor.Update(record);
     result.history.push_back(std::move(record));
     report.Advance();
     if (settled) {
