@@ -291,14 +291,17 @@ StepRecord ReactionDiffusionSystem::Step() {
   const double tau = options_.time_step;
   std::vector<Eigen::VectorXd> next = fields_;
   std::vector<StepReport> reports(species);
+  // Jacobi: every species' coefficients from step n. Gauss-Seidel: from the newest fields, so a
+  // later species sees the earlier ones at step n+1.
+  const bool gauss_seidel = options_.ordering == SpeciesOrdering::kGaussSeidel;
   auto solve = [&](int s) {
     GeneralEquation equation;
     equation.c0 = Eigen::VectorXd::Constant(1, model_->diffusion(s));
     if (anisotropic_stiffness_) equation.c1_stiffness = &*anisotropic_stiffness_;
-    model_->Reaction(s, fields_, time_, equation.c2, equation.c3);
+    model_->Reaction(s, gauss_seidel ? next : fields_, time_, equation.c2, equation.c3);
     reports[s] = SemiImplicitStep(*operators_, equation, tau, options_.solver, next[s]);
   };
-  if (options_.parallel_species) {
+  if (options_.parallel_species && !gauss_seidel) {
     tbb::parallel_for(0, species, solve);
   } else {
     for (int s = 0; s < species; ++s) solve(s);
