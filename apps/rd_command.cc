@@ -57,7 +57,7 @@ struct RdOptions {
   double noise = 0.0;
   std::string direction;
   double anisotropy = 4.0;
-  bool lumped = false;
+  std::string mass;
   bool gauss_seidel = false;
   // Output
   std::string colour_map = "viridis";
@@ -99,9 +99,20 @@ std::unique_ptr<ReactionDiffusionModel> MakeModel(const RdOptions& o) {
   }
   if (o.model == "grayscott") {
     GrayScottParameters p;
-    if (!o.pearson.empty()) p = ReadReadyGrayScott(o.pearson).parameters;
+    int reference_width = 256;  // Pearson's grid, which the seed fraction refers to
+    if (!o.pearson.empty()) {
+      const ReadyGrayScottPattern pattern = ReadReadyGrayScott(o.pearson);
+      p = pattern.parameters;
+      reference_width = pattern.width;
+    }
     if (o.f) p.f = *o.f;
     if (o.k) p.k = *o.k;
+    // On a grid of another size, Pearson's seed keeps its size in cells (20 x 20): a smaller
+    // seed dies out.
+    if (!o.grid.empty()) {
+      const int width = ParseSize(o.grid).first;
+      p.seed_size = std::min(0.5, p.seed_size * reference_width / width);
+    }
     return MakeGrayScottModel(p);
   }
   if (o.model == "brusselator") {
@@ -331,7 +342,10 @@ void AddRdCommand(CLI::App& app) {
       ->add_option("--anisotropy", o->anisotropy,
                    "Diffusion along the direction field over across it")
       ->capture_default_str();
-  command->add_flag("--lumped", o->lumped, "Lumped (diagonal) mass matrix");
+  command->add_option("--mass", o->mass,
+                      "consistent or lumped mass matrix (default: consistent on meshes, lumped on "
+                      "grids, where the consistent mass of the one-diagonal split bends patterns "
+                      "along the diagonal)");
   command->add_flag("--gauss-seidel", o->gauss_seidel,
                     "Solve the second species with the first one's new values (allows longer "
                     "steps: Turk tau s < 1/12 instead of 1/28)");
@@ -352,7 +366,12 @@ void AddRdCommand(CLI::App& app) {
     options.settle_rate = o->settle;
     options.min_steps = std::min(o->steps, 100);
     options.seed = o->seed;
-    options.solver.lumped_mass = o->lumped;
+    const std::string mass =
+        o->mass.empty() ? (o->grid.empty() ? "consistent" : "lumped") : o->mass;
+    if (mass != "consistent" && mass != "lumped") {
+      throw Error(fmt::format("--mass {}: expected consistent or lumped", o->mass));
+    }
+    options.solver.lumped_mass = mass == "lumped";
     if (o->gauss_seidel) options.ordering = SpeciesOrdering::kGaussSeidel;
     options.anisotropy = ParseDirection(*o);
     if (!o->grid.empty()) {

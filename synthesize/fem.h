@@ -32,8 +32,10 @@ class FemDomain {
   static FemDomain FromMesh(const TriangleMesh& mesh);
   // A width x height periodic grid of spacing `spacing`, each cell split into two right triangles
   // along the same diagonal, wrapping at the edges: the same equations produce tileable textures.
-  // (On this grid the cotangent stiffness is the 5-point Laplacian times the spacing squared and
-  // the lumped mass is spacing^2, the classic finite-difference scheme.)
+  // (On this grid the cotangent stiffness is the 5-point Laplacian and the lumped mass is
+  // spacing^2: with lumped mass, the classic finite-difference scheme. Use lumped mass here: the
+  // consistent mass couples nodes along the split diagonal only, and Gray-Scott fronts then grow
+  // along that diagonal.)
   static FemDomain PeriodicGrid(int width, int height, double spacing);
 
   int node_count() const { return static_cast<int>(node_positions_.size()); }
