@@ -71,6 +71,7 @@ class FemDomain {
 // structure. Matrices are symmetric and stored whole.
 class FemOperators {
  public:
+  // Keeps a pointer to `domain`, which must outlive the operators.
   explicit FemOperators(const FemDomain& domain);
 
   const FemDomain& domain() const { return *domain_; }
