@@ -58,6 +58,7 @@ struct RdOptions {
   std::string direction;
   double anisotropy = 4.0;
   std::string mass;
+  double cg_tolerance = 1e-6;
   bool gauss_seidel = false;
   // Output
   std::string colour_map = "viridis";
@@ -346,6 +347,10 @@ void AddRdCommand(CLI::App& app) {
                       "consistent or lumped mass matrix (default: consistent on meshes, lumped on "
                       "grids, where the consistent mass of the one-diagonal split bends patterns "
                       "along the diagonal)");
+  command
+      ->add_option("--cg-tolerance", o->cg_tolerance,
+                   "Relative residual at which conjugate gradients stop")
+      ->capture_default_str();
   command->add_flag("--gauss-seidel", o->gauss_seidel,
                     "Solve the second species with the first one's new values (allows longer "
                     "steps: Turk tau s < 1/12 instead of 1/28)");
@@ -372,6 +377,7 @@ void AddRdCommand(CLI::App& app) {
       throw Error(fmt::format("--mass {}: expected consistent or lumped", o->mass));
     }
     options.solver.lumped_mass = mass == "lumped";
+    options.solver.tolerance = o->cg_tolerance;
     if (o->gauss_seidel) options.ordering = SpeciesOrdering::kGaussSeidel;
     options.anisotropy = ParseDirection(*o);
     if (!o->grid.empty()) {
