@@ -14,5 +14,6 @@ void AddDemoCommand(CLI::App& app);
 void AddCaptureCommand(CLI::App& app);
 void AddDevicesCommand(CLI::App& app);
 void AddSolidCommand(CLI::App& app);
+void AddRdCommand(CLI::App& app);
 
 }  // namespace photomat::app

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   photomat::app::AddCaptureCommand(app);
   photomat::app::AddDevicesCommand(app);
   photomat::app::AddSolidCommand(app);
+  photomat::app::AddRdCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
