@@ -41,7 +41,10 @@ Eigen::VectorXd Monomials(double u, double v, int degree) {
 double NormalisedX(int x, int width) { return (x + 0.5) / (0.5 * width) - 1.0; }
 double NormalisedY(int y, int height) { return (y + 0.5) / (0.5 * height) - 1.0; }
 
-// Least-squares polynomial of `values` over the set pixels of `mask`, evaluated everywhere.
+// Least-squares polynomial of log(values) over the set pixels of `mask`, evaluated everywhere and
+// exponentiated: lamp fall-off and vignetting are multiplicative and span a large range, which a
+// polynomial in log space follows with few terms, and the gains stay positive. Values at or below
+// 0 (noise on a dark target) are left out; if none is left the result is 0.
 cv::Mat PolynomialFit(const cv::Mat& values, const cv::Mat& mask, int degree) {
   const int width = values.cols, height = values.rows;
   const std::size_t count = static_cast<std::size_t>(cv::countNonZero(mask));
@@ -51,14 +54,18 @@ cv::Mat PolynomialFit(const cv::Mat& values, const cv::Mat& mask, int degree) {
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(terms);
   for (int y = 0; y < height; y += stride) {
     for (int x = 0; x < width; x += stride) {
-      if (mask.at<float>(y, x) <= 0.5f) continue;
+      if (mask.at<float>(y, x) <= 0.5f || values.at<float>(y, x) <= 0.0f) continue;
       const Eigen::VectorXd m = Monomials(NormalisedX(x, width), NormalisedY(y, height), degree);
       normal.selfadjointView<Eigen::Lower>().rankUpdate(m);
-      rhs += values.at<float>(y, x) * m;
+      rhs += std::log(values.at<float>(y, x)) * m;
     }
   }
   normal = normal.selfadjointView<Eigen::Lower>();
-  const Eigen::VectorXd coefficients = normal.ldlt().solve(rhs);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(normal);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
+    return cv::Mat::zeros(height, width, CV_32F);  // reported as a dark target
+  }
+  const Eigen::VectorXd coefficients = ldlt.solve(rhs);
   // Evaluation from tables of powers (pow per pixel and term would dominate the run time).
   Eigen::MatrixXd u_powers(width, degree + 1), v_powers(height, degree + 1);
   for (int x = 0; x < width; ++x) {
@@ -76,7 +83,7 @@ cv::Mat PolynomialFit(const cv::Mat& values, const cv::Mat& mask, int degree) {
       for (int a = total; a >= 0; --a) along_row[a] += coefficients[t++] * v_powers(y, total - a);
     }
     for (int x = 0; x < width; ++x) {
-      fitted.at<float>(y, x) = static_cast<float>(u_powers.row(x).dot(along_row));
+      fitted.at<float>(y, x) = static_cast<float>(std::exp(u_powers.row(x).dot(along_row)));
     }
   }
   return fitted;

@@ -28,8 +28,9 @@ enum class FlatFieldModel {
   // Gaussian-smoothed target images (normalised convolution inside the target's mask): keeps
   // vignetting and lamp patterns, for clean targets.
   kSmoothed,
-  // A least-squares polynomial in x and y of low degree per light and channel: for noisy or
-  // textured targets, and to extend the gains beyond the target's mask.
+  // exp of a least-squares polynomial in x and y of low degree fitted to the log of the target,
+  // per light and channel (fall-off and vignetting are multiplicative and span a large range):
+  // for noisy or textured targets, and to extend the gains beyond the target's mask.
   kPolynomial,
 };
 std::string_view ToString(FlatFieldModel model);
