@@ -123,12 +123,14 @@ std::string LightCalibrationReport::ToSvg() const {
         s.mean, s.median, s.max);
   }
   // The hemisphere: slant rings and tilt spokes.
+  // Slant labels along the 315-degree spoke, clear of the tilt labels.
   for (int slant : {30, 60, 90}) {
+    const double r = kRadius * slant / 90.0;
     svg += fmt::format(
         "<circle cx=\"{}\" cy=\"{}\" r=\"{:.1f}\" fill=\"none\" stroke=\"#bbb\"/>\n"
         "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\">{}&#176;</text>\n",
-        kCentreX, kCentreY, kRadius * slant / 90.0, kCentreX + 3,
-        kCentreY - kRadius * slant / 90.0 - 3, slant);
+        kCentreX, kCentreY, r, kCentreX + r * std::sqrt(0.5) + 3, kCentreY + r * std::sqrt(0.5) - 3,
+        slant);
   }
   for (int tilt = 0; tilt < 360; tilt += 30) {
     const double a = tilt * kPi / 180.0;
@@ -141,7 +143,7 @@ std::string LightCalibrationReport::ToSvg() const {
   svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+x</text>\n", kCentreX + kRadius + 30,
                      kCentreY + 16);
   svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+y</text>\n", kCentreX + 6,
-                     kCentreY - kRadius - 26);
+                     kCentreY - kRadius + 14);
   // Pairs, then the given lights (red rings), then the recovered ones (blue dots, numbered).
   for (std::size_t i = 0; has_reference && i < recovered.size(); ++i) {
     const auto [x1, y1] = PlotPoint(recovered[i]);
@@ -179,8 +181,10 @@ std::string LightCalibrationReport::ToSvg() const {
   }
   // The table.
   double y = 90.0;
-  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-weight=\"bold\">#   slant   tilt{}</text>\n",
-                     table_x, y, has_reference ? "   given slant  tilt   angle" : "");
+  svg += fmt::format(
+      "<text x=\"{}\" y=\"{}\" font-family=\"monospace\" font-weight=\"bold\" "
+      "xml:space=\"preserve\"> #   slant    tilt{}</text>\n",
+      table_x, y, has_reference ? "   given:  slant    tilt  angle" : "");
   for (std::size_t i = 0; i < recovered.size(); ++i) {
     y += row_height;
     std::string row = fmt::format("{:>2}  {:6.2f} {:7.2f}", i, recovered[i].SlantDegrees(),

@@ -59,4 +59,40 @@ std::vector<LightDirection> ReadLightList(const fs::path& path) {
   return lights;
 }
 
+std::vector<std::vector<float>> ReadLightIntensities(const fs::path& path) {
+  std::vector<std::vector<float>> rows;
+  int line_number = 0;
+  for (const std::string& line : SplitLines(ReadTextFile(path))) {
+    ++line_number;
+    if (IsBlankOrComment(line)) continue;
+    std::vector<float> row;
+    for (std::string_view token : SplitWhitespace(line)) {
+      const auto value = ParseNumber(token);
+      if (!value || !(*value > 0.0)) {
+        throw Error(path,
+                    fmt::format("line {}: '{}' is not a positive number", line_number, token));
+      }
+      row.push_back(static_cast<float>(*value));
+    }
+    if (!rows.empty() && row.size() != rows.front().size()) {
+      throw Error(path, fmt::format("line {}: {} values, but the first line has {}", line_number,
+                                    row.size(), rows.front().size()));
+    }
+    rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw Error(path, "no intensities");
+  return rows;
+}
+
+void WriteLightIntensities(const fs::path& path,
+                           const std::vector<std::vector<float>>& intensities) {
+  std::string text;
+  for (const auto& row : intensities) {
+    for (std::size_t c = 0; c < row.size(); ++c)
+      text += fmt::format("{}{:.9g}", c ? " " : "", row[c]);
+    text += "\n";
+  }
+  WriteTextFileAtomically(path, text);
+}
+
 }  // namespace photomat
