@@ -69,7 +69,9 @@ void AddEvaluateCommand(CLI::App& app) {
     evaluation.prediction = !options->no_prediction;
     evaluation.literal_thesis_rms = options->literal_rms;
     evaluation.progress = &bar;
-    if (options->robust) evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
+    if (options->robust) {
+      evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
+    }
     std::vector<MethodEvaluation> results;
     for (const Method& method : methods) {
       results.push_back(EvaluateMethod(loaded.set, observations, method,
