@@ -60,10 +60,10 @@ bool SolveWeightedLambertian(const Eigen::Matrix3Xd& l, std::span<const double> 
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
   for (Eigen::Index i = 0; i < l.cols(); ++i) {
     if (w[i] <= 0.0) continue;
-    a.selfadjointView<Eigen::Lower>().rankUpdate(l.col(i), w[i]);
-    rhs += w[i] * y[i] * l.col(i);
+    const Eigen::Vector3d weighted = w[i] * l.col(i);
+    a.noalias() += weighted * l.col(i).transpose();
+    rhs += y[i] * weighted;
   }
-  a = a.selfadjointView<Eigen::Lower>();
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(a);
   // The weighted Gram matrix of unit vectors: reject when its smallest pivot is tiny next to the
   // largest (lights nearly coplanar after rejection).
@@ -154,7 +154,8 @@ class PixelSolver {
     for (Eigen::Index i = 0; i < n_; ++i) {
       const double shading = b.dot(l_.col(i));
       active_[i] = window[i] > 0.0 && shading >= options_.attached_shadow_cosine * albedo;
-      if (active_[i]) residuals_.push_back(std::abs(y[i] - shading));
+      w_[i] = y[i] - shading;  // the residual until the weights are known
+      if (active_[i]) residuals_.push_back(std::abs(w_[i]));
     }
     if (residuals_.size() < 3) {
       for (Eigen::Index i = 0; i < n_; ++i) w_[i] = active_[i] ? 1.0 : 0.0;
@@ -164,7 +165,7 @@ class PixelSolver {
         std::max(1.4826 * Median(residuals_), options_.minimum_relative_scale * albedo);
     const double c = scale_ * std::max(sigma, 1e-30);
     for (Eigen::Index i = 0; i < n_; ++i) {
-      w_[i] = active_[i] ? RobustWeight(options_.loss, (y[i] - b.dot(l_.col(i))) / c) : 0.0;
+      w_[i] = active_[i] ? RobustWeight(options_.loss, w_[i] / c) : 0.0;
     }
   }
 
