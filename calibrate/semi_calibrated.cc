@@ -110,11 +110,14 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
         const double scale = kShareScale * kShareScale * median_share[c];
         const double weight = scale > 0.0 ? 1.0 / (1.0 + share / scale) : 1.0;
         accumulator.shares[c].push_back(share);
-        const Eigen::MatrixXd block =
-            weight * values.asDiagonal() * projector * values.asDiagonal();
-        for (Eigen::Index a = 0; a < k; ++a) {
-          for (Eigen::Index b = 0; b < k; ++b) {
-            accumulator.sums[c](window[a], window[b]) += block(a, b);
+        // w diag(v) P diag(v), scattered into the images' rows and columns (lower triangle;
+        // the matrix is symmetric).
+        Eigen::MatrixXd& sum = accumulator.sums[c];
+        for (Eigen::Index b = 0; b < k; ++b) {
+          const double vb = weight * values[b];
+          for (Eigen::Index a = 0; a < k; ++a) {
+            const int row = window[a], column = window[b];
+            if (row >= column) sum(row, column) += values[a] * projector(a, b) * vb;
           }
         }
       }
@@ -123,7 +126,7 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
     std::vector<std::vector<double>> shares(channels);
     for (const Accumulator& accumulator : accumulators) {
       for (int c = 0; c < channels; ++c) {
-        total[c] += accumulator.sums[c];
+        total[c] += accumulator.sums[c].selfadjointView<Eigen::Lower>().toDenseMatrix();
         shares[c].insert(shares[c].end(), accumulator.shares[c].begin(),
                          accumulator.shares[c].end());
       }
