@@ -26,6 +26,10 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kRadialProfiles = 360;
 // Too few edge points cannot pin down a circle (three would, but not robustly).
 constexpr int kMinimumEdgePoints = 12;
+// A detected outline whose points lie further than this from the fitted circle (pixels, or
+// fraction of the radius, whichever is larger) is not a sphere's outline.
+constexpr double kMaximumDetectedRms = 1.0;
+constexpr double kMaximumDetectedRelativeRms = 0.01;
 
 // The mean of an image's channels at every pixel, as an OpenCV float matrix.
 cv::Mat GreyMat(const Image& image) {
@@ -351,6 +355,15 @@ SphereCircle DetectSphere(const std::vector<Image>& images, const fs::path& sour
   // Once more around the refined circle (the profiles are then centred on the outline).
   points = RadialEdgePoints(body, circle);
   if (static_cast<int>(points.size()) >= kMinimumEdgePoints) circle = RefineCircle(circle, points);
+  // A faint or cluttered outline gives a circle that is wrong without failing: refuse it.
+  const double rms = EdgeRms(circle, points);
+  if (static_cast<int>(points.size()) < kRadialProfiles / 2 ||
+      rms > std::max(kMaximumDetectedRms, kMaximumDetectedRelativeRms * circle.radius)) {
+    throw Error(source, fmt::format("sphere not found reliably: its outline is too faint or "
+                                    "cluttered ({} of {} radial profiles, {:.2f} px RMS from the "
+                                    "best circle); give the sphere's mask",
+                                    points.size(), kRadialProfiles, rms));
+  }
   if (edge_points) *edge_points = std::move(points);
   return circle;
 }

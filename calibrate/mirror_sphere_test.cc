@@ -101,6 +101,7 @@ TEST(MirrorSphereTest, SyntheticSphereWithoutMaskIsDetectedAndCalibrated) {
   EXPECT_NEAR(result.sphere.centre.x(), 110.2, 0.3);
   EXPECT_NEAR(result.sphere.centre.y(), 72.6, 0.3);
   EXPECT_NEAR(result.sphere.radius, 55.0, 0.3);
+  EXPECT_LT(result.edge_rms_pixels, 0.3);
   EXPECT_LT(CompareLights(result.lights, lights).mean, 0.5);
 }
 
@@ -223,6 +224,30 @@ TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
   // highlights by 1 to 8 degrees (data README), and this calibration measures 3.09 mean, 8.55 max
   // (per-light highlights checked by eye). The bound guards against regressions.
   EXPECT_LT(stats.mean, 3.5);
+}
+
+}  // namespace
+}  // namespace photomat
+
+namespace photomat {
+namespace {
+
+// Without its mask, the chrome sphere's dark body gives Hough a faint outline: the calibration
+// must refuse it rather than return lights from a wrong circle.
+TEST(MirrorSphereRealTest, UwChromeWithoutMaskIsRefusedNotWrong) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+  std::vector<Image> images;
+  for (int i = 0; i < 12; ++i) {
+    images.push_back(ReadImage(folder / "chrome" / fmt::format("chrome.{}.png", i)).image);
+  }
+  try {
+    CalibrateLightsFromMirrorSphere(images, Names(12), std::nullopt, {}, "chrome");
+    FAIL() << "expected an error";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("chrome: sphere not found reliably"),
+              std::string::npos)
+        << error.what();
+  }
 }
 
 }  // namespace
