@@ -15,5 +15,6 @@ void AddCaptureCommand(CLI::App& app);
 void AddDevicesCommand(CLI::App& app);
 void AddSolidCommand(CLI::App& app);
 void AddRdCommand(CLI::App& app);
+void AddCalibrateCommand(CLI::App& app);
 
 }  // namespace photomat::app

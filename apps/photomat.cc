@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   photomat::app::AddDevicesCommand(app);
   photomat::app::AddSolidCommand(app);
   photomat::app::AddRdCommand(app);
+  photomat::app::AddCalibrateCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
