@@ -151,9 +151,14 @@ std::vector<std::uint8_t> DecodeJpegPlane(std::span<const std::uint8_t> stream, 
     return fail(fmt::format("{}x{} with {} channel(s), expected {}x{} greyscale", spec.width,
                             spec.height, spec.nchannels, ptm.width, ptm.height));
   }
+  // Row by row: read_image allocates a large staging buffer per call, which dominates the time
+  // of small planes.
   std::vector<std::uint8_t> pixels(static_cast<std::size_t>(ptm.width) * ptm.height);
-  if (!input->read_image(0, 0, 0, 1, OIIO::TypeDesc::UINT8, pixels.data())) {
-    return fail(fmt::format("cannot decode: {}", input->geterror()));
+  for (int y = 0; y < ptm.height; ++y) {
+    if (!input->read_scanline(y, 0, OIIO::TypeDesc::UINT8,
+                              pixels.data() + static_cast<std::size_t>(y) * ptm.width)) {
+      return fail(fmt::format("cannot decode: {}", input->geterror()));
+    }
   }
   return pixels;
 }
