@@ -1,5 +1,7 @@
 #include <fmt/format.h>
 
+#include <functional>
+
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "core/colour.h"

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
+
 #include "core/error.h"
 #include "relight/ptm_file.h"
 #include "relight/rti_file.h"

@@ -6,9 +6,11 @@
 
 #include <cmath>
 
+#include "capture/synthetic_capture.h"
 #include "core/error.h"
 #include "core/json_file.h"
 #include "core/photometric_set.h"
+#include "represent/evaluation.h"
 #include "represent/fit.h"
 #include "represent/light_basis.h"
 
@@ -126,6 +128,33 @@ TEST(HshTest, SixteenTermsNeedFourSlants) {
               ThrowsMessage<Error>(HasSubstr("grid.lp: hsh16: the 36 lights do not determine the "
                                              "16 hemispherical-harmonic coefficients")));
   EXPECT_NO_THROW(Fit(set, Method::Parse("hsh9")));
+}
+
+TEST(HshTest, EvaluateScoresEveryOrder) {
+  // A shadowed, glossy sample under the five-ring dome: more terms fit the captured images better,
+  // and leave-one-out prediction works for every order.
+  SyntheticMaterialOptions material;
+  material.width = material.height = 24;
+  material.max_slope_degrees = 45;
+  SyntheticRenderOptions render;
+  render.shadows = true;
+  render.specular = 0.3;
+  const PhotometricSet set =
+      RenderSyntheticCapture(MakeSyntheticMaterial(material), FiveRingDome(), render);
+  const Observations observations(set);
+  double previous = INFINITY;
+  for (const char* name : {"hsh4", "hsh9", "hsh16"}) {
+    const MethodEvaluation evaluation =
+        EvaluateMethod(set, observations, Method::Parse(name), nullptr);
+    EXPECT_LT(evaluation.eta_reconstruction, previous) << name;
+    ASSERT_TRUE(evaluation.eta_prediction) << name;
+    EXPECT_GT(*evaluation.eta_prediction, evaluation.eta_reconstruction) << name;
+    EXPECT_LT(*evaluation.eta_prediction, 1.0) << name;
+    previous = evaluation.eta_reconstruction;
+    ::testing::Test::RecordProperty(
+        std::string(name) + "_eta",
+        fmt::format("{:.4f} / {:.4f}", evaluation.eta_reconstruction, *evaluation.eta_prediction));
+  }
 }
 
 }  // namespace
