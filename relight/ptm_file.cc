@@ -428,6 +428,9 @@ PtmFile PtmFromRepresentation(const Representation& representation) {
   for (std::size_t p = 0; p < pixels; ++p) {
     const auto maps = representation.maps().pixel(p);
     double* v = &values[p * planes];
+    if (!std::all_of(maps.begin(), maps.end(), [](float m) { return std::isfinite(m); })) {
+      throw Error(fmt::format("{}: a coefficient is not finite", method));
+    }
     if (!lrgb) {
       for (int k = 0; k < planes; ++k) v[k] = 255.0 * maps[k];
       continue;

@@ -179,8 +179,12 @@ RtiFile RtiFromRepresentation(const Representation& representation) {
     float low = INFINITY, high = -INFINITY;
     for (std::size_t p = 0; p < pixels; ++p) {
       for (int c = 0; c < rti.colours; ++c) {
-        low = std::min(low, maps.pixel(p)[j * rti.colours + c]);
-        high = std::max(high, maps.pixel(p)[j * rti.colours + c]);
+        const float value = maps.pixel(p)[j * rti.colours + c];
+        if (!std::isfinite(value)) {
+          throw Error(fmt::format("{}: term {} is not finite", representation.method(), j));
+        }
+        low = std::min(low, value);
+        high = std::max(high, value);
       }
     }
     if (!std::isfinite(low) || !std::isfinite(high)) {
