@@ -16,5 +16,6 @@ void AddDevicesCommand(CLI::App& app);
 void AddSolidCommand(CLI::App& app);
 void AddRdCommand(CLI::App& app);
 void AddCalibrateCommand(CLI::App& app);
+void AddExportCommand(CLI::App& app);
 
 }  // namespace photomat::app

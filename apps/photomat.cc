@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   photomat::app::AddSolidCommand(app);
   photomat::app::AddRdCommand(app);
   photomat::app::AddCalibrateCommand(app);
+  photomat::app::AddExportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
