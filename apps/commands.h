@@ -11,5 +11,11 @@ void AddFitCommand(CLI::App& app);
 void AddRelightCommand(CLI::App& app);
 void AddEvaluateCommand(CLI::App& app);
 void AddDemoCommand(CLI::App& app);
+void AddCaptureCommand(CLI::App& app);
+void AddDevicesCommand(CLI::App& app);
+void AddSolidCommand(CLI::App& app);
+void AddRdCommand(CLI::App& app);
+void AddCalibrateCommand(CLI::App& app);
+void AddExportCommand(CLI::App& app);
 
 }  // namespace photomat::app

@@ -4,6 +4,7 @@
 
 #include "apps/cli_support.h"
 #include "apps/commands.h"
+#include "apps/robust_support.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -44,6 +45,8 @@ void AddEvaluateCommand(CLI::App& app) {
     bool no_prediction = false;
     bool literal_rms = false;
     bool raw_intensities = false;
+    bool robust = false;
+    std::string loss = "cauchy";
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -71,11 +74,18 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "Do not divide the images by the light intensities the input gives");
+  command->add_flag("--robust", options->robust,
+                    "Evaluate the robust fits (fit --robust) instead of the least-squares ones");
+  command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
+      ->capture_default_str();
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
-    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    const RobustInput input = options->robust
+                                  ? LoadSetForRobustFit(options->input, load)
+                                  : RobustInput{LoadSetForCommand(options->input, load), {}};
+    const LoadedSet& loaded = input.loaded;
     std::optional<Image> truth;
     const auto truth_path = options->gt_normals.empty() ? loaded.ground_truth_normals
                                                         : std::optional(options->gt_normals);
@@ -99,6 +109,9 @@ void AddEvaluateCommand(CLI::App& app) {
     evaluation.prediction = !options->no_prediction;
     evaluation.literal_thesis_rms = options->literal_rms;
     evaluation.progress = &bar;
+    if (options->robust) {
+      evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
+    }
     std::vector<MethodEvaluation> results;
     for (const Method& method : methods) {
       results.push_back(EvaluateMethod(loaded.set, observations, method,

@@ -1,7 +1,11 @@
 #include <fmt/format.h>
 
+#include <numeric>
+#include <optional>
+
 #include "apps/cli_support.h"
 #include "apps/commands.h"
+#include "apps/robust_support.h"
 #include "core/colour.h"
 #include "core/error.h"
 #include "represent/fit.h"
@@ -16,6 +20,8 @@ void AddFitCommand(CLI::App& app) {
     std::filesystem::path out;
     bool raw_intensities = false;
     std::string colour_space;
+    bool robust = false;
+    std::string loss = "cauchy";
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -35,6 +41,11 @@ void AddFitCommand(CLI::App& app) {
   command->add_option("--colour-space", options->colour_space,
                       "How integer images encode light: linear or srgb (default: 8-bit sRGB, "
                       "16-bit linear, or what the manifest says)");
+  command->add_flag("--robust", options->robust,
+                    "Robust fits: clipped samples, shadows and highlights get low or zero weight "
+                    "(robust photometric stereo; PTM and Eigen-k share its outlier weights)");
+  command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
+      ->capture_default_str();
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
     LoadOptions load;
@@ -43,12 +54,27 @@ void AddFitCommand(CLI::App& app) {
       load.colour_space = ParseColourSpace(options->colour_space);
       if (!load.colour_space) throw Error("--colour-space: expected linear or srgb");
     }
-    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    RobustInput input = options->robust ? LoadSetForRobustFit(options->input, load)
+                                        : RobustInput{LoadSetForCommand(options->input, load), {}};
+    const LoadedSet& loaded = input.loaded;
+    // Robust: one robust fit, whose weights every method shares.
+    std::optional<Observations> observations;
+    std::optional<RobustFit> robust;
+    if (options->robust) {
+      observations.emplace(loaded.set);
+      std::vector<int> all(loaded.set.size());
+      std::iota(all.begin(), all.end(), 0);
+      RobustFitOptions robust_options = RobustOptionsFromCommandLine(options->loss, input.measured);
+      TerminalProgressBar bar;
+      robust_options.progress = &bar;
+      robust.emplace(*observations, loaded.set.lights(), all, robust_options, loaded.set.source());
+      fmt::print("{}\n", DescribeRobustFit(robust->summary()));
+    }
     CreateFolder(options->out);
     std::map<std::string, std::string> stacks;
     const StackProvenance provenance{loaded.set.lights(), "linear", options->input.string()};
     for (const Method& method : methods) {
-      const Representation representation = Fit(loaded.set, method);
+      const Representation representation = robust ? robust->Fit(method) : Fit(loaded.set, method);
       const std::string file = method.Name() + ".exr";
       SaveRepresentation(options->out / file, representation, provenance);
       stacks[method.Name()] = file;

@@ -21,6 +21,12 @@ int main(int argc, char** argv) {
   photomat::app::AddRelightCommand(app);
   photomat::app::AddEvaluateCommand(app);
   photomat::app::AddDemoCommand(app);
+  photomat::app::AddCaptureCommand(app);
+  photomat::app::AddDevicesCommand(app);
+  photomat::app::AddSolidCommand(app);
+  photomat::app::AddRdCommand(app);
+  photomat::app::AddCalibrateCommand(app);
+  photomat::app::AddExportCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -4,6 +4,7 @@
 #include "apps/commands.h"
 #include "core/error.h"
 #include "relight/relight.h"
+#include "relight/stack_file.h"
 #include "represent/map_stack.h"
 
 namespace photomat::app {
@@ -24,8 +25,10 @@ void AddRelightCommand(CLI::App& app) {
       "relight",
       "Render a map stack under new lights. One light (--light) writes one image to --out; "
       "several (--lights, --sweep) write a folder of images with a manifest.json.");
-  command->add_option("stack", options->stack,
-                      "A map stack (.exr) or a folder written by `photomat fit`")
+  command
+      ->add_option("stack", options->stack,
+                   "A map stack (.exr), a folder written by `photomat fit`, or a .ptm or .rti "
+                   "file")
       ->required();
   command->add_option("--method", options->method, "Which stack of a fit folder");
   auto* light = command->add_option("--light", options->light, "One light: SLANT,TILT in degrees");
@@ -45,8 +48,9 @@ void AddRelightCommand(CLI::App& app) {
     }
     const std::optional<std::string> method =
         options->method.empty() ? std::nullopt : std::optional(options->method);
-    const LoadedStack stack = LoadRepresentation(ResolveStack(options->stack, method));
+    const LoadedStack stack = LoadStackFile(options->stack, method);
     RelitOutputOptions output;
+    output.values = StackValueEncoding(stack.provenance);
     output.relight.clamp_negative = options->clamp;
     if (!options->format.empty()) {
       output.format = ParseRelitFormat(options->format);

@@ -1,5 +1,6 @@
 #include "capture/lp_file.h"
 
+#include <cmath>
 #include <fmt/format.h>
 #include <span>
 
@@ -82,7 +83,9 @@ std::vector<LightFileEntry> ParseLpText(const std::string& text, const fs::path&
     const auto tokens = SplitWhitespace(line);
     if (entries.empty() && declared_count < 0 && tokens.size() == 1) {
       const auto count = ParseNumber(tokens[0]);
-      if (!count || *count != static_cast<long>(*count) || *count < 1 || *count > kMaxLights) {
+      // Range first: converting a number beyond long's range to long is undefined (found by
+      // tests/fuzz).
+      if (!count || *count < 1 || *count > kMaxLights || *count != std::floor(*count)) {
         FailAt(path, number,
                fmt::format("expected the image count (1 to {}) or \"filename x y z\", found \"{}\"",
                            kMaxLights, line));

@@ -76,6 +76,10 @@ TEST(LpFileTest, CountMismatch) {
 
 TEST(LpFileTest, BadCountLine) {
   EXPECT_THAT(ErrorOf("-2\na.png 0 0 1\n"), HasSubstr("line 1: expected the image count"));
+  // Beyond the range of an integer (found by tests/fuzz: the conversion was undefined).
+  EXPECT_THAT(ErrorOf("33333333333333333333333333\na.png 0 0 1\n"),
+              HasSubstr("line 1: expected the image count"));
+  EXPECT_THAT(ErrorOf("2.5\na.png 0 0 1\n"), HasSubstr("line 1: expected the image count"));
 }
 
 TEST(LpFileTest, EmptyFile) {

@@ -28,6 +28,16 @@ ImageWriteOptions WriteOptions(RelitFormat format) {
   return options;
 }
 
+// The relit image in linear values.
+Image RelightLinear(const Representation& representation, const LightDirection& light,
+                    const RelitOutputOptions& options) {
+  Image image = representation.Relight(light, options.relight);
+  if (options.values == ColourSpace::kSrgb) {
+    for (float& v : image.values()) v = static_cast<float>(SrgbToLinear(v));
+  }
+  return image;
+}
+
 }  // namespace
 
 std::vector<LightDirection> LightSweep(int count, double slant_degrees) {
@@ -67,7 +77,7 @@ std::string_view Extension(RelitFormat format) {
 
 void WriteRelitImage(const std::filesystem::path& path, const Representation& representation,
                      const LightDirection& light, const RelitOutputOptions& options) {
-  WriteImage(path, representation.Relight(light, options.relight), WriteOptions(options.format));
+  WriteImage(path, RelightLinear(representation, light, options), WriteOptions(options.format));
 }
 
 void WriteRelitSet(const std::filesystem::path& folder, const Representation& representation,
@@ -75,7 +85,7 @@ void WriteRelitSet(const std::filesystem::path& folder, const Representation& re
                    Progress* progress) {
   std::vector<Image> images(lights.size());
   tbb::parallel_for(std::size_t{0}, lights.size(), [&](std::size_t i) {
-    images[i] = representation.Relight(lights[i], options.relight);
+    images[i] = RelightLinear(representation, lights[i], options);
   });
   SaveSetOptions save;
   const ImageWriteOptions write = WriteOptions(options.format);

@@ -4,6 +4,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/colour.h"
 #include "core/light_direction.h"
 #include "core/progress.h"
 #include "represent/representation.h"
@@ -29,6 +30,10 @@ std::string_view Extension(RelitFormat format);
 struct RelitOutputOptions {
   RelitFormat format = RelitFormat::kPng8;
   RelightOptions relight;
+  // How the representation's relit values encode light: kSrgb for .ptm/.rti files (display codes
+  // / 255), decoded to linear before writing, so png8 output shows exactly what PTM and RTI
+  // viewers show.
+  ColourSpace values = ColourSpace::kLinear;
 };
 
 // One image; throws Error naming `path`.

@@ -102,7 +102,16 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
 
-  const Representation full = FitObservations(observations, set.lights(), method, all, set.source());
+  // The least-squares fit, or the robust one (without a progress bar inside the parallel folds).
+  const auto fit = [&](std::span<const int> selected, Progress* robust_progress) {
+    if (!options.robust) {
+      return FitObservations(observations, set.lights(), method, selected, set.source());
+    }
+    RobustFitOptions robust = *options.robust;
+    robust.progress = robust_progress;
+    return RobustFit(observations, set.lights(), selected, robust, set.source()).Fit(method);
+  };
+  const Representation full = fit(all, options.progress);
   result.reconstruction_per_image.resize(n);
   tbb::parallel_for(0, n, [&](int k) {
     result.reconstruction_per_image[k] =
@@ -124,8 +133,7 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
     for (int i = 0; i < n; ++i) {
       if (i != k) others.push_back(i);
     }
-    const Representation fold =
-        FitObservations(observations, set.lights(), method, others, set.source());
+    const Representation fold = fit(others, nullptr);
     result.prediction_per_image[k] =
         NormalisedRmsError(observations, k, RelightObservedPixels(fold, observations, set.light(k)),
                            options.literal_thesis_rms);

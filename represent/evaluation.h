@@ -11,6 +11,7 @@
 #include "represent/method.h"
 #include "represent/observations.h"
 #include "represent/representation.h"
+#include "represent/robust_fit.h"
 
 namespace photomat {
 
@@ -36,6 +37,9 @@ struct EvaluationOptions {
   // sqrt((1/NM) sum (r - i)^2) that the reading in the spec reconstructs.
   bool literal_thesis_rms = false;
   Progress* progress = nullptr;
+  // Set: every fit (the full one and each leave-one-out fold) is the robust fit with these
+  // options (represent/robust_fit.h); the errors are still measured against every observation.
+  std::optional<RobustFitOptions> robust;
 };
 
 struct MethodEvaluation {

@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "represent/hsh.h"
 
 namespace photomat {
 namespace {
@@ -21,6 +22,7 @@ namespace fs = std::filesystem;
 // treated as rank deficient. For Gradient: lights within about 1 degree of one plane.
 constexpr double kGradientConditionLimit = 0.02;
 constexpr double kPtmConditionLimit = 1e-6;
+constexpr double kHshConditionLimit = 1e-6;
 // |det [l1 l2 l3]| of unit vectors; 0.05 rejects triples within about 3 degrees of a plane.
 constexpr double kThreeImageDeterminantLimit = 0.05;
 
@@ -180,6 +182,27 @@ Representation FitPtmLrgb(const FitContext& fit) {
                         std::make_shared<PtmLightBasis>());
 }
 
+// Hemispherical harmonics per channel, fitted like PTM: least squares through the SVD
+// pseudo-inverse of the lights' HSH terms.
+Representation FitHsh(const FitContext& fit, int terms) {
+  const auto svd = CheckedSvd(HshTerms(fit.SelectedLights(), terms));
+  const Eigen::VectorXd s = svd.singularValues();
+  if (s[terms - 1] < kHshConditionLimit * s[0]) {
+    const int slants = static_cast<int>(std::sqrt(terms));  // the order: 2, 3 or 4
+    fit.Fail(fmt::format(
+        "hsh{}: the {} lights do not determine the {} hemispherical-harmonic coefficients (too "
+        "few distinct slants or tilts: {} terms need lights at {} or more slants); add lights",
+        terms, fit.selected.size(), terms, terms, slants));
+  }
+  const Eigen::MatrixXf coefficients =
+      ParallelProduct(fit.observations.matrix(), fit.Scatter(PseudoInverseTransposed(svd)));
+  Image maps = fit.NewMaps(TermNames("hsh.h", terms, OutputChannelNames(fit.channels())));
+  StorePerChannelTerms(fit, coefficients, maps);
+  return Representation(fmt::format("hsh{}", terms), std::move(maps),
+                        {terms, true, false, fit.channels()},
+                        std::make_shared<HshLightBasis>(terms));
+}
+
 Representation FitThreeImage(const FitContext& fit) {
   const std::array<int, 3> chosen = SelectThreeImageLights(fit.lights, fit.selected, fit.source);
   Eigen::Matrix3d l;
@@ -312,6 +335,8 @@ Representation FitObservations(const Observations& observations,
       return FitPtm(fit);
     case Method::Kind::kPtmLrgb:
       return FitPtmLrgb(fit);
+    case Method::Kind::kHsh:
+      return FitHsh(fit, method.hsh_terms);
     case Method::Kind::kEigen:
       break;
   }

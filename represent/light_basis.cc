@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "represent/hsh.h"
 
 namespace photomat {
 namespace {
@@ -90,6 +91,7 @@ std::shared_ptr<const LightBasis> LightBasisFromJson(const JsonReader& json) {
       return std::make_shared<LinearLightBasis>(MatrixFromJson(json["matrix"], 3));
     }
     if (kind == "ptm") return std::make_shared<PtmLightBasis>();
+    if (kind == "hsh") return std::make_shared<HshLightBasis>(json["terms"].Integer());
     if (kind == "interpolated") {
       const Eigen::MatrixXd lights = MatrixFromJson(json["lights"], 3);
       std::vector<LightDirection> nodes;

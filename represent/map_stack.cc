@@ -1,5 +1,6 @@
 #include "represent/map_stack.h"
 
+#include <algorithm>
 #include <fmt/format.h>
 
 #include "core/error.h"
@@ -28,13 +29,18 @@ MapLayout LayoutFromJson(const JsonReader& json) {
 
 void SaveRepresentation(const fs::path& path, const Representation& representation,
                         const StackProvenance& provenance) {
+  SaveRepresentation(path, representation, provenance, Image());
+}
+
+void SaveRepresentation(const fs::path& path, const Representation& representation,
+                        const StackProvenance& provenance, const Image& extra_layers) {
   const Image& maps = representation.maps();
   if (static_cast<int>(maps.channel_names().size()) != maps.channels()) {
     throw Error(path, "the maps have no channel names");
   }
   nlohmann::json lights = nlohmann::json::array();
   for (const auto& l : provenance.capture_lights) lights.push_back({l.x(), l.y(), l.z()});
-  const nlohmann::json description = {
+  nlohmann::json description = {
       {"format", kStackFormat},
       {"version", 1},
       {"method", representation.method()},
@@ -48,9 +54,55 @@ void SaveRepresentation(const fs::path& path, const Representation& representati
         {"source", provenance.source}}},
   };
   ImageWriteOptions options;
+  if (extra_layers.empty()) {
+    options.attributes[kStackAttribute] = description.dump();
+    WriteImage(path, maps, options);
+    return;
+  }
+  if (extra_layers.width() != maps.width() || extra_layers.height() != maps.height() ||
+      static_cast<int>(extra_layers.channel_names().size()) != extra_layers.channels()) {
+    throw Error(path, "extra layers need names and the maps' size");
+  }
+  std::vector<std::string> names = maps.channel_names();
+  for (const std::string& name : extra_layers.channel_names()) {
+    if (maps.FindChannel(name) >= 0) {
+      throw Error(path, fmt::format("extra layer \"{}\" repeats a map", name));
+    }
+    names.push_back(name);
+  }
+  description["extra_layers"] = extra_layers.channel_names();
+  Image all(maps.width(), maps.height(), names);
+  for (std::size_t p = 0; p < all.pixel_count(); ++p) {
+    const auto out = std::copy(maps.pixel(p).begin(), maps.pixel(p).end(), all.pixel(p).begin());
+    std::copy(extra_layers.pixel(p).begin(), extra_layers.pixel(p).end(), out);
+  }
   options.attributes[kStackAttribute] = description.dump();
-  WriteImage(path, maps, options);
+  WriteImage(path, all, options);
 }
+
+namespace {
+
+// The channels of `stored` named by the description's array `list`, in that order.
+Image SelectChannels(const Image& stored, const JsonReader& list) {
+  std::vector<std::string> names;
+  std::vector<int> source_channel;
+  for (std::size_t i = 0; i < list.ArraySize(); ++i) {
+    names.push_back(list[i].String());
+    source_channel.push_back(stored.FindChannel(names.back()));
+    if (source_channel.back() < 0) {
+      list[i].Fail(fmt::format("map \"{}\" is not in the file", names.back()));
+    }
+  }
+  Image selected(stored.width(), stored.height(), names);
+  for (std::size_t p = 0; p < selected.pixel_count(); ++p) {
+    const auto in = stored.pixel(p);
+    const auto out = selected.pixel(p);
+    for (std::size_t c = 0; c < names.size(); ++c) out[c] = in[source_channel[c]];
+  }
+  return selected;
+}
+
+}  // namespace
 
 LoadedStack LoadRepresentation(const fs::path& path) {
   ImageReadOptions read;
@@ -61,9 +113,14 @@ LoadedStack LoadRepresentation(const fs::path& path) {
     throw Error(path, fmt::format("not a photomat map stack (no \"{}\" header attribute)",
                                   kStackAttribute));
   }
+  return StackFromDescription(attribute->second, loaded.image, path);
+}
+
+LoadedStack StackFromDescription(const std::string& text, const Image& stored,
+                                 const fs::path& path) {
   nlohmann::json description;
   try {
-    description = nlohmann::json::parse(attribute->second);
+    description = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception&) {
     throw Error(path, fmt::format("the \"{}\" header attribute is not valid JSON", kStackAttribute));
   }
@@ -79,21 +136,10 @@ LoadedStack LoadRepresentation(const fs::path& path) {
                               layout.MapCount()));
   }
   // OpenEXR keeps channels sorted by name: put them back in layout order.
-  const Image& stored = loaded.image;
-  std::vector<std::string> names;
-  std::vector<int> source_channel;
-  for (std::size_t i = 0; i < channels.ArraySize(); ++i) {
-    names.push_back(channels[i].String());
-    source_channel.push_back(stored.FindChannel(names.back()));
-    if (source_channel.back() < 0) {
-      channels[i].Fail(fmt::format("map \"{}\" is not in the file", names.back()));
-    }
-  }
-  Image maps(stored.width(), stored.height(), names);
-  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
-    const auto in = stored.pixel(p);
-    const auto out = maps.pixel(p);
-    for (std::size_t c = 0; c < names.size(); ++c) out[c] = in[source_channel[c]];
+  Image maps = SelectChannels(stored, channels);
+  Image extra_layers;
+  if (json.Has("extra_layers") && json["extra_layers"].ArraySize() > 0) {
+    extra_layers = SelectChannels(stored, json["extra_layers"]);
   }
   StackProvenance provenance;
   if (json.Has("capture")) {
@@ -103,7 +149,11 @@ LoadedStack LoadRepresentation(const fs::path& path) {
       for (std::size_t i = 0; i < lights.ArraySize(); ++i) {
         const auto v = lights[i].Numbers();
         if (v.size() != 3) lights[i].Fail("expected 3 numbers");
-        provenance.capture_lights.push_back(LightDirection::FromVector(v[0], v[1], v[2]));
+        try {
+          provenance.capture_lights.push_back(LightDirection::FromVector(v[0], v[1], v[2]));
+        } catch (const Error& error) {
+          lights[i].Fail(error.fault());
+        }
       }
     }
     if (capture.Has("colour_space")) provenance.colour_space = capture["colour_space"].String();
@@ -113,7 +163,7 @@ LoadedStack LoadRepresentation(const fs::path& path) {
     return {Representation(json["method"].String(), std::move(maps), layout,
                            LightBasisFromJson(json["basis"]),
                            description.value("details", nlohmann::json::object())),
-            std::move(provenance)};
+            std::move(provenance), std::move(extra_layers)};
   } catch (const Error& error) {
     throw error.InFile(path);
   }

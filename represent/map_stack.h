@@ -32,13 +32,23 @@ struct StackProvenance {
 // Atomic write; throws Error naming `path`.
 void SaveRepresentation(const std::filesystem::path& path, const Representation& representation,
                         const StackProvenance& provenance = {});
+// The same with extra layers beside the maps (named channels of the maps' size that relighting
+// does not read, e.g. "height" and derived "normal.X/Y/Z" from `photomat export`), listed in the
+// description as "extra_layers". Throws Error if a name repeats a map's.
+void SaveRepresentation(const std::filesystem::path& path, const Representation& representation,
+                        const StackProvenance& provenance, const Image& extra_layers);
 
 struct LoadedStack {
   Representation representation;
   StackProvenance provenance;
+  Image extra_layers = {};  // empty when the stack has none
 };
 // Throws Error naming `path` when it is not a photomat map stack or its description is damaged.
 LoadedStack LoadRepresentation(const std::filesystem::path& path);
+// The part of LoadRepresentation after the EXR is read: the "photomat:stack" `description` (JSON
+// text) applied to the file's channels. Throws Error naming `path` (fuzzed: tests/fuzz).
+LoadedStack StackFromDescription(const std::string& description, const Image& stored,
+                                 const std::filesystem::path& path);
 
 // The folder `photomat fit --out DIR` writes: one stack per method and a "stacks.json":
 //   {"format": "photomat-fit", "version": 1, "input": "...", "stacks": {"gradient": "gradient.exr"}}

@@ -37,6 +37,26 @@ TEST(MapStackTest, EveryMethodRoundTripsExactly) {
   }
 }
 
+TEST(MapStackTest, ExtraLayersTravelBesideTheMaps) {
+  testing::TempDir dir;
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  const Representation ptm = Fit(synthetic.set, Method::Parse("ptm"));
+  Image extra(16, 16, std::vector<std::string>{"height"});
+  for (std::size_t p = 0; p < extra.pixel_count(); ++p) extra.pixel(p)[0] = 0.25f * p;
+  SaveRepresentation(dir / "s.exr", ptm, {}, extra);
+  const LoadedStack loaded = LoadRepresentation(dir / "s.exr");
+  EXPECT_EQ(loaded.extra_layers.channel_names(), std::vector<std::string>{"height"});
+  EXPECT_EQ(loaded.extra_layers.values()[37], 0.25f * 37);
+  EXPECT_EQ(loaded.representation.maps().channel_names(), ptm.maps().channel_names());
+  EXPECT_TRUE(LoadRepresentation([&] {
+                SaveRepresentation(dir / "plain.exr", ptm);
+                return dir / "plain.exr";
+              }()).extra_layers.empty());
+  Image clash(16, 16, std::vector<std::string>{"ptm.a0.R"});
+  EXPECT_THAT([&] { SaveRepresentation(dir / "bad.exr", ptm, {}, clash); },
+              ThrowsMessage<Error>(HasSubstr("extra layer \"ptm.a0.R\" repeats a map")));
+}
+
 TEST(MapStackTest, PlainExrIsNotAStack) {
   testing::TempDir dir;
   WriteImage(dir / "plain.exr", Image(2, 2, 3));

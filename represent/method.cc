@@ -17,6 +17,8 @@ std::string Method::Name() const {
       return "ptm";
     case Kind::kPtmLrgb:
       return "ptm-lrgb";
+    case Kind::kHsh:
+      return fmt::format("hsh{}", hsh_terms);
     case Kind::kEigen:
       break;
   }
@@ -31,6 +33,8 @@ int Method::MinimumImages() const {
     case Kind::kPtm:
     case Kind::kPtmLrgb:
       return 6;
+    case Kind::kHsh:
+      return hsh_terms;
     case Kind::kEigen:
       break;
   }
@@ -49,9 +53,14 @@ Method Method::Parse(std::string_view name) {
       return {Kind::kEigen, k};
     }
   }
+  if (name == "hsh4" || name == "hsh9" || name == "hsh16") {
+    Method hsh{Kind::kHsh};
+    hsh.hsh_terms = name == "hsh4" ? 4 : name == "hsh9" ? 9 : 16;
+    return hsh;
+  }
   throw Error(fmt::format(
-      "unknown method \"{}\": expected 3i, gradient, ptm, ptm-lrgb or eigenK (K = 1..64, e.g. "
-      "eigen3, eigen6), or all",
+      "unknown method \"{}\": expected 3i, gradient, ptm, ptm-lrgb, eigenK (K = 1..64, e.g. "
+      "eigen3, eigen6), hsh4, hsh9 or hsh16, or all",
       name));
 }
 

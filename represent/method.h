@@ -14,9 +14,11 @@ struct Method {
     kPtm,         // "ptm": polynomial texture map per colour channel (4.4.4)
     kPtmLrgb,     // "ptm-lrgb": one luminance polynomial times an RGB chroma (PTM files' LRGB)
     kEigen,       // "eigenK": the first K SVD basis images, "eigen3" and "eigen6" (4.4.5)
+    kHsh,         // "hsh4", "hsh9", "hsh16": hemispherical harmonics per colour channel (.rti)
   };
   Kind kind = Kind::kGradient;
-  int eigen_k = 0;  // for kEigen
+  int eigen_k = 0;    // for kEigen
+  int hsh_terms = 0;  // for kHsh: 4, 9 or 16
 
   std::string Name() const;
   // Fewest images a fit needs.

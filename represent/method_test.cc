@@ -12,6 +12,12 @@ TEST(MethodTest, NamesRoundTrip) {
   for (const Method& method : AllMethods()) EXPECT_EQ(Method::Parse(method.Name()), method);
   EXPECT_EQ(Method::Parse("eigen12").eigen_k, 12);
   EXPECT_EQ(Method::Parse("eigen12").MinimumImages(), 12);
+  for (const char* name : {"hsh4", "hsh9", "hsh16"}) {
+    EXPECT_EQ(Method::Parse(name).Name(), name);
+    EXPECT_EQ(Method::Parse(name).kind, Method::Kind::kHsh);
+  }
+  EXPECT_EQ(Method::Parse("hsh16").MinimumImages(), 16);
+  EXPECT_THROW(Method::Parse("hsh"), Error);
 }
 
 TEST(MethodTest, AllIsTheThesisFiveAndLrgb) {
@@ -23,7 +29,7 @@ TEST(MethodTest, AllIsTheThesisFiveAndLrgb) {
 }
 
 TEST(MethodTest, UnknownNamesListTheValidOnes) {
-  EXPECT_THAT([] { Method::Parse("hsh9"); },
+  EXPECT_THAT([] { Method::Parse("hsh5"); },
               ::testing::ThrowsMessage<Error>(::testing::HasSubstr("expected 3i, gradient")));
   EXPECT_THROW(Method::Parse("eigen0"), Error);
   EXPECT_THROW(Method::Parse("eigenx"), Error);

@@ -1,0 +1,544 @@
+// photomat calibrate: light directions from a mirror sphere, flat-fields, light intensities,
+// camera response, and applying them to a capture (issue 5).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+
+#include "apps/cli_support.h"
+#include "apps/commands.h"
+#include "calibrate/calibration_report.h"
+#include "calibrate/exposure.h"
+#include "calibrate/flat_field.h"
+#include "calibrate/light_list.h"
+#include "calibrate/mirror_sphere.h"
+#include "calibrate/near_light.h"
+#include "calibrate/response_curve.h"
+#include "calibrate/semi_calibrated.h"
+#include "capture/capture_manifest.h"
+#include "capture/lp_file.h"
+#include "capture/text_parsing.h"
+#include "core/colour.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "core/progress.h"
+
+namespace photomat::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool IsImageFile(const fs::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (const char* known : {".png", ".tif", ".tiff", ".exr", ".jpg", ".jpeg", ".pgm", ".ppm"}) {
+    if (extension == known) return true;
+  }
+  return false;
+}
+
+bool IsMaskName(const fs::path& path) {
+  std::string stem = path.stem().string();
+  for (char& c : stem) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return stem.find("mask") != std::string::npos;
+}
+
+// "img.2.png" before "img.10.png": digit runs compare as numbers.
+bool NaturalLess(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) &&
+        std::isdigit(static_cast<unsigned char>(b[j]))) {
+      std::size_t i_end = i, j_end = j;
+      while (i_end < a.size() && std::isdigit(static_cast<unsigned char>(a[i_end]))) ++i_end;
+      while (j_end < b.size() && std::isdigit(static_cast<unsigned char>(b[j_end]))) ++j_end;
+      const std::string x = a.substr(i, i_end - i), y = b.substr(j, j_end - j);
+      const std::string xs = x.substr(std::min(x.find_first_not_of('0'), x.size()));
+      const std::string ys = y.substr(std::min(y.find_first_not_of('0'), y.size()));
+      if (xs.size() != ys.size()) return xs.size() < ys.size();
+      if (xs != ys) return xs < ys;
+      i = i_end, j = j_end;
+      continue;
+    }
+    if (a[i] != b[j]) return a[i] < b[j];
+    ++i, ++j;
+  }
+  return a.size() - i < b.size() - j;
+}
+
+// The image files of a folder in natural order, and the mask among them (a name with "mask").
+struct ImageFolder {
+  std::vector<fs::path> images;
+  std::optional<fs::path> mask;
+};
+
+ImageFolder ListImageFolder(const fs::path& folder) {
+  ImageFolder listing;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (!entry.is_regular_file() || !IsImageFile(entry.path())) continue;
+    if (IsMaskName(entry.path())) {
+      if (listing.mask) {
+        throw Error(folder, fmt::format("two masks ({} and {}); give one with --mask",
+                                        listing.mask->filename().string(),
+                                        entry.path().filename().string()));
+      }
+      listing.mask = entry.path();
+    } else {
+      listing.images.push_back(entry.path());
+    }
+  }
+  std::sort(listing.images.begin(), listing.images.end(), [](const fs::path& a, const fs::path& b) {
+    return NaturalLess(a.filename().string(), b.filename().string());
+  });
+  if (listing.images.empty()) throw Error(folder, "no images in the folder");
+  return listing;
+}
+
+// `path` relative to `base` (so that the light file and its images move together), or absolute
+// when there is no relative path.
+std::string RelativeName(const fs::path& path, const fs::path& base) {
+  const fs::path absolute = fs::absolute(path).lexically_normal();
+  const fs::path relative = absolute.lexically_relative(fs::absolute(base).lexically_normal());
+  return relative.empty() ? absolute.generic_string() : relative.generic_string();
+}
+
+std::optional<ColourSpace> ParseColourSpaceOption(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const auto space = ParseColourSpace(text);
+  if (!space) throw Error("--colour-space: expected linear or srgb");
+  return space;
+}
+
+// The sphere images: a plain folder of images (natural order, a "mask" file as the sphere's mask)
+// or any photometric set photomat reads (its lights then serve as the reference).
+struct SphereCapture {
+  std::vector<Image> images;
+  std::vector<fs::path> files;
+  std::vector<std::string> names;
+  std::optional<Image> mask;           // coverage in [0, 1]
+  std::vector<LightDirection> lights;  // of a photometric set; empty for a plain folder
+};
+
+SphereCapture ReadSphereCapture(const fs::path& input, const std::optional<ColourSpace>& space) {
+  SphereCapture capture;
+  bool plain_folder = false;
+  if (fs::is_directory(input)) {
+    try {
+      DetectInput(input);
+    } catch (const Error&) {
+      plain_folder = true;
+    }
+  }
+  ImageReadOptions coverage;
+  coverage.colour_space = ColourSpace::kLinear;
+  if (plain_folder) {
+    const ImageFolder folder = ListImageFolder(input);
+    ImageReadOptions read;
+    read.colour_space = space;
+    TerminalProgressBar bar;
+    bar.Start("load", folder.images.size());
+    for (const fs::path& file : folder.images) {
+      capture.images.push_back(ReadImage(file, read).image);
+      capture.files.push_back(file);
+      capture.names.push_back(file.filename().string());
+      bar.Advance();
+    }
+    bar.Finish();
+    if (folder.mask) capture.mask = ReadImage(*folder.mask, coverage).image;
+    return capture;
+  }
+  LoadOptions load;
+  load.colour_space = space;
+  const LoadedSet loaded = LoadSetForCommand(input, load);
+  const fs::path base = DetectInput(input).file;
+  const fs::path folder = fs::is_directory(base) ? base : base.parent_path();
+  for (int i = 0; i < loaded.set.size(); ++i) {
+    capture.images.push_back(loaded.set.image(i));
+    capture.names.push_back(loaded.set.image_name(i));
+    capture.files.push_back(ResolveImagePath(folder, loaded.set.image_name(i)));
+  }
+  if (loaded.set.mask()) {
+    Image mask(loaded.set.width(), loaded.set.height(), 1);
+    for (std::size_t p = 0; p < mask.pixel_count(); ++p) {
+      mask.pixel(p)[0] = (*loaded.set.mask())[p] ? 1.0f : 0.0f;
+    }
+    capture.mask = std::move(mask);
+  }
+  capture.lights = loaded.set.lights();
+  return capture;
+}
+
+void AddLightsCommand(CLI::App& calibrate) {
+  struct Options {
+    fs::path input;
+    fs::path out;
+    fs::path mask;
+    fs::path reference;
+    fs::path report;
+    fs::path camera;
+    fs::path images_for;
+    std::string colour_space;
+    bool no_refine = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = calibrate.add_subcommand(
+      "lights",
+      "Light directions from a mirror (chrome) sphere photographed under each light: writes a "
+      ".lp file, the same lights as a manifest (.json beside it) and a report (hemisphere plot "
+      "SVG, JSON, and a table on standard output).");
+  command
+      ->add_option("sphere", options->input,
+                   "The sphere images: a folder of images (natural order; a file named *mask* "
+                   "is the sphere's mask) or a photometric set (.lp, manifest, DiLiGenT)")
+      ->required();
+  command->add_option("--out", options->out, "The .lp file to write")->required();
+  command->add_option("--mask", options->mask,
+                      "The sphere's mask (anti-aliased or binary); default: the folder's *mask* "
+                      "file or the set's mask; without one the sphere is detected (Hough)");
+  command->add_option("--reference", options->reference,
+                      "Lights to compare with (.lp, manifest, DiLiGenT, or a list of \"x y z\" "
+                      "lines with an optional count line); default: the set's own lights");
+  command->add_option("--report", options->report,
+                      "The report's SVG (default: <out stem>_report.svg; JSON beside it)");
+  command->add_option("--camera", options->camera,
+                      "3x3 intrinsics (K.txt) of a perspective camera; default orthographic");
+  command->add_option("--images-for", options->images_for,
+                      "Name the lights after the images of this folder (natural order, same "
+                      "count): the sample captured under the same lights");
+  command->add_option("--colour-space", options->colour_space,
+                      "How integer images encode light: linear or srgb (default: 8-bit sRGB)");
+  command->add_flag("--no-refine", options->no_refine, "Skip the Ceres refinement");
+  command->callback([options] {
+    const std::optional<ColourSpace> space = ParseColourSpaceOption(options->colour_space);
+    SphereCapture capture = ReadSphereCapture(options->input, space);
+    if (!options->mask.empty()) {
+      ImageReadOptions coverage;
+      coverage.colour_space = ColourSpace::kLinear;
+      capture.mask = ReadImage(options->mask, coverage).image;
+    }
+    MirrorSphereOptions sphere_options;
+    sphere_options.refine = !options->no_refine;
+    if (!options->camera.empty()) sphere_options.camera = ReadCameraIntrinsics(options->camera);
+    TerminalProgressBar bar;
+    sphere_options.progress = &bar;
+    const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
+        capture.images, capture.names, capture.mask, sphere_options, options->input);
+
+    // The images the lights belong to.
+    std::vector<fs::path> files = capture.files;
+    if (!options->images_for.empty()) {
+      files = ListImageFolder(options->images_for).images;
+      if (files.size() != result.lights.size()) {
+        throw Error(options->images_for, fmt::format("{} images, but the sphere gave {} lights",
+                                                     files.size(), result.lights.size()));
+      }
+    }
+    const fs::path out_folder =
+        options->out.parent_path().empty() ? fs::path(".") : options->out.parent_path();
+    CreateFolder(out_folder);
+    std::vector<std::string> names;
+    for (const fs::path& file : files) names.push_back(RelativeName(file, out_folder));
+    WriteLpFile(options->out, names, result.lights);
+    fs::path manifest_path = options->out;
+    manifest_path.replace_extension(".json");
+    CaptureManifest manifest;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      manifest.images.push_back({names[i], result.lights[i], {}});
+    }
+    manifest.provenance = {{"calibration", "mirror sphere"},
+                           {"sphere_images", fs::absolute(options->input).generic_string()},
+                           {"sphere",
+                            {{"centre", {result.sphere.centre.x(), result.sphere.centre.y()}},
+                             {"radius", result.sphere.radius},
+                             {"edge_rms_px", result.edge_rms_pixels},
+                             {"camera", result.perspective ? "perspective" : "orthographic"}}}};
+    WriteCaptureManifest(manifest_path, manifest);
+
+    LightCalibrationReport report;
+    report.title = fmt::format("mirror-sphere lights: {}", options->input.filename().string());
+    report.names = capture.names;
+    report.recovered = result.lights;
+    report.reference =
+        options->reference.empty() ? capture.lights : ReadLightList(options->reference);
+    if (!report.reference.empty() && report.reference.size() != report.recovered.size()) {
+      throw Error(options->reference.empty() ? options->input : options->reference,
+                  fmt::format("{} reference lights for {} sphere images", report.reference.size(),
+                              report.recovered.size()));
+    }
+    fs::path svg = options->report;
+    if (svg.empty()) {
+      svg = options->out;
+      svg.replace_filename(options->out.stem().string() + "_report.svg");
+    }
+    WriteLightCalibrationSvg(svg, report);
+    fs::path json = svg;
+    json.replace_extension(".json");
+    nlohmann::json details = report.ToJson();
+    details["sphere"] = manifest.provenance["sphere"];
+    WriteJsonFile(json, details);
+    fmt::print(
+        "sphere: centre ({:.2f}, {:.2f}) px, radius {:.2f} px, outline RMS {:.3f} px from "
+        "{} edge points ({})\n{}",
+        result.sphere.centre.x(), result.sphere.centre.y(), result.sphere.radius,
+        result.edge_rms_pixels, result.edge_points,
+        result.perspective ? "perspective" : "orthographic", report.ToTable());
+    fmt::print("wrote {}, {}, {}, {}\n", options->out.string(), manifest_path.string(),
+               svg.string(), json.string());
+  });
+}
+
+void AddFlatFieldCommand(CLI::App& calibrate) {
+  struct Options {
+    fs::path input;
+    fs::path out;
+    std::string model = "polynomial";
+    int degree = 4;
+    double sigma = 3.0;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = calibrate.add_subcommand(
+      "flatfield",
+      "Per-light gain maps from a flat uniform matte target captured under the sample's lights "
+      "(its mask selects the target); `calibrate apply --flat-field` divides a capture by them.");
+  command->add_option("target", options->input, "The target's photometric set")->required();
+  command->add_option("--out", options->out, "Output folder (flatfield.json, gain_NNN.exr)")
+      ->required();
+  command
+      ->add_option("--model", options->model,
+                   "polynomial (low-order fit of the log: noisy targets) or smoothed "
+                   "(Gaussian: keeps fine lamp patterns)")
+      ->capture_default_str();
+  command->add_option("--degree", options->degree, "Polynomial degree")->capture_default_str();
+  command->add_option("--sigma", options->sigma, "Smoothing sigma in pixels")
+      ->capture_default_str();
+  command->callback([options] {
+    FlatFieldOptions flat;
+    const auto model = ParseFlatFieldModel(options->model);
+    if (!model) throw Error("--model: expected polynomial or smoothed");
+    flat.model = *model;
+    flat.polynomial_degree = options->degree;
+    flat.smoothing_sigma = options->sigma;
+    TerminalProgressBar bar;
+    flat.progress = &bar;
+    LoadOptions load;
+    load.apply_intensities = false;  // the gains take the lamps' brightness in
+    const LoadedSet target = LoadSetForCommand(options->input, load);
+    const FlatField flat_field = EstimateFlatField(target.set, flat);
+    SaveFlatField(options->out, flat_field);
+    fmt::print("{} gain maps ({} model) -> {}\n", flat_field.size(), ToString(flat.model),
+               options->out.string());
+  });
+}
+
+void AddIntensitiesCommand(CLI::App& calibrate) {
+  struct Options {
+    fs::path input;
+    fs::path out;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = calibrate.add_subcommand(
+      "intensities",
+      "Semi-calibrated photometric stereo: estimate each light's RGB intensity from the capture "
+      "itself (known directions), written as light_intensities.txt (\"r g b\" a line).");
+  command->add_option("input", options->input, "Photometric set")->required();
+  command->add_option("--out", options->out, "Intensities file to write")->required();
+  command->callback([options] {
+    LoadOptions load;
+    load.apply_intensities = false;
+    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    SemiCalibratedOptions semi;
+    TerminalProgressBar bar;
+    semi.progress = &bar;
+    const SemiCalibratedResult result = EstimateLightIntensities(loaded.set, semi);
+    WriteLightIntensities(options->out, result.intensities);
+    fmt::print("{} intensities ({} iterations) -> {}\n", result.intensities.size(),
+               result.iterations, options->out.string());
+    const auto& given = loaded.set.intensities();
+    if (given.size() == result.intensities.size() &&
+        given.front().size() == result.intensities.front().size()) {
+      double worst = 0.0;
+      for (std::size_t c = 0; c < given.front().size(); ++c) {
+        double mean = 0.0;
+        for (const auto& row : given) mean += row[c] / static_cast<double>(given.size());
+        for (std::size_t i = 0; i < given.size(); ++i) {
+          worst = std::max(worst, std::abs(result.intensities[i][c] / (given[i][c] / mean) - 1.0));
+        }
+      }
+      fmt::print("the input's own intensities (normalised alike) differ by at most {:.2f} %\n",
+                 100 * worst);
+    }
+  });
+}
+
+void AddResponseCommand(CLI::App& calibrate) {
+  struct Options {
+    std::vector<fs::path> images;
+    std::string times;
+    fs::path out;
+    double smoothness = 10.0;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = calibrate.add_subcommand(
+      "response",
+      "Recover an 8-bit camera's response curve from an exposure series of a static scene "
+      "(Debevec and Malik, OpenCV); `calibrate apply --response` linearises with it.");
+  command->add_option("images", options->images, "The exposures (8-bit images)")->required();
+  command
+      ->add_option("--times", options->times,
+                   "Exposure times, comma-separated, one per image (e.g. 1/30 as 0.0333)")
+      ->required();
+  command->add_option("--out", options->out, "Response curve JSON to write")->required();
+  command->add_option("--smoothness", options->smoothness, "Debevec's lambda")
+      ->capture_default_str();
+  command->callback([options] {
+    std::vector<double> times;
+    std::string rest = options->times;
+    while (!rest.empty()) {
+      const auto comma = rest.find(',');
+      const std::string token = rest.substr(0, comma);
+      const auto value = ParseNumber(token);
+      if (!value) throw Error(fmt::format("--times: '{}' is not a number", token));
+      times.push_back(*value);
+      rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+    }
+    if (times.size() != options->images.size()) {
+      throw Error(
+          fmt::format("--times: {} times for {} images", times.size(), options->images.size()));
+    }
+    ImageReadOptions codes;
+    codes.colour_space = ColourSpace::kLinear;
+    std::vector<Image> exposures;
+    for (const fs::path& file : options->images) {
+      LoadedImage loaded = ReadImage(file, codes);
+      if (loaded.info.bits_per_sample != 8 || loaded.info.floating_point) {
+        throw Error(file, "response recovery needs 8-bit images");
+      }
+      exposures.push_back(std::move(loaded.image));
+    }
+    const ResponseCurve curve = RecoverResponseDebevec(exposures, times, options->smoothness);
+    WriteResponseCurve(options->out, curve);
+    fmt::print("response curve ({}) -> {}\ncode:   ", curve.source(), options->out.string());
+    for (int code : {32, 64, 128, 192, 255}) fmt::print("{:>8}", code);
+    fmt::print("\nlinear: ");
+    for (int code : {32, 64, 128, 192, 255}) fmt::print("{:>8.4f}", curve.table(0)[code]);
+    fmt::print("\nsRGB:   ");
+    for (int code : {32, 64, 128, 192, 255}) fmt::print("{:>8.4f}", SrgbToLinear(code / 255.0));
+    fmt::print("\n");
+  });
+}
+
+void AddApplyCommand(CLI::App& calibrate) {
+  struct Options {
+    fs::path input;
+    fs::path out;
+    fs::path response;
+    fs::path dark;
+    fs::path flat_field;
+    fs::path near_lights;
+    fs::path intensities;
+    bool semi_calibrated = false;
+    bool ignore_intensities = false;
+    bool png16 = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = calibrate.add_subcommand(
+      "apply",
+      "Write a corrected copy of a capture: linearise (--response), subtract a dark frame, "
+      "divide by a flat-field (a target's or near lamps'), and by light intensities (a file, "
+      "semi-calibrated estimates, or the input's own); the result is a manifest set.");
+  command->add_option("input", options->input, "Photometric set")->required();
+  command->add_option("--out", options->out, "Output folder")->required();
+  command->add_option("--response", options->response,
+                      "Response curve JSON (calibrate response): images are read as codes and "
+                      "linearised with it instead of the default decoding");
+  command->add_option("--dark", options->dark, "Dark frame: an image or a folder of them (mean)");
+  command->add_option("--flat-field", options->flat_field,
+                      "Flat-field folder (calibrate flatfield)");
+  command->add_option("--near-lights", options->near_lights,
+                      "Lamp positions, \"x y z [intensity]\" a line in pixel units (origin at the "
+                      "image centre, y up): divide by their inverse-square fall-off");
+  command->add_option("--intensities", options->intensities,
+                      "Light intensities file (\"r g b\" a line) to divide by");
+  command->add_flag("--semi-calibrated", options->semi_calibrated,
+                    "Estimate the intensities from the capture (calibrate intensities)");
+  command->add_flag("--ignore-intensities", options->ignore_intensities,
+                    "Do not divide by the intensities the input gives");
+  command->add_flag("--png16", options->png16,
+                    "16-bit linear PNG (clips at 1) instead of float EXR");
+  command->callback([options] {
+    const int sources = !options->intensities.empty() + options->semi_calibrated;
+    if (sources > 1) throw Error("give at most one of --intensities and --semi-calibrated");
+    if (!options->flat_field.empty() && !options->near_lights.empty()) {
+      throw Error("give at most one of --flat-field and --near-lights");
+    }
+    LoadOptions load;
+    load.apply_intensities = false;
+    if (!options->response.empty()) load.colour_space = ColourSpace::kLinear;
+    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    PhotometricSet set = loaded.set;
+    nlohmann::json steps = nlohmann::json::array();
+    if (!options->response.empty()) {
+      set = LineariseSet(set, ReadResponseCurve(options->response));
+      steps.push_back({{"response", fs::absolute(options->response).generic_string()}});
+    }
+    if (!options->dark.empty()) {
+      set = SubtractDarkFrame(set, ReadDarkFrame(options->dark));
+      steps.push_back({{"dark", fs::absolute(options->dark).generic_string()}});
+    }
+    if (!options->flat_field.empty()) {
+      set = ApplyFlatField(set, LoadFlatField(options->flat_field));
+      steps.push_back({{"flat_field", fs::absolute(options->flat_field).generic_string()}});
+    }
+    if (!options->near_lights.empty()) {
+      const auto lamps = ReadNearLights(options->near_lights);
+      if (static_cast<int>(lamps.size()) != set.size()) {
+        throw Error(options->near_lights,
+                    fmt::format("{} lamps for {} images", lamps.size(), set.size()));
+      }
+      set = ApplyFlatField(
+          set, FlatFieldFromNearLights(lamps, set.width(), set.height(), set.channels()));
+      steps.push_back({{"near_lights", fs::absolute(options->near_lights).generic_string()}});
+    }
+    if (!options->intensities.empty()) {
+      set.set_intensities(ReadLightIntensities(options->intensities));
+      steps.push_back({{"intensities", fs::absolute(options->intensities).generic_string()}});
+    } else if (options->semi_calibrated) {
+      set.set_intensities(EstimateLightIntensities(set).intensities);
+      steps.push_back({{"intensities", "semi-calibrated"}});
+    } else if (options->ignore_intensities) {
+      set.set_intensities({});
+    } else if (!set.intensities().empty()) {
+      steps.push_back({{"intensities", "the input's"}});
+    }
+    set.ApplyIntensities();
+    SaveSetOptions save;
+    save.sample_type = options->png16 ? SampleType::kUint16 : SampleType::kFloat;
+    save.provenance = {{"source", fs::absolute(options->input).generic_string()},
+                       {"calibration", steps}};
+    TerminalProgressBar bar;
+    CaptureManifest manifest = SavePhotometricSet(options->out, set, save, &bar);
+    if (loaded.ground_truth_normals) {
+      manifest.ground_truth_normals = fs::absolute(*loaded.ground_truth_normals).generic_string();
+      WriteCaptureManifest(options->out / kCaptureManifestName, manifest);
+    }
+    fmt::print("{} images, {} step(s) -> {}\n", set.size(), steps.size(), options->out.string());
+  });
+}
+
+}  // namespace
+
+void AddCalibrateCommand(CLI::App& app) {
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate",
+      "Calibrate a capture: light directions from a mirror sphere, flat-fields from a matte "
+      "target, light intensities, camera response; and apply them.");
+  calibrate->require_subcommand(1);
+  AddLightsCommand(*calibrate);
+  AddFlatFieldCommand(*calibrate);
+  AddIntensitiesCommand(*calibrate);
+  AddResponseCommand(*calibrate);
+  AddApplyCommand(*calibrate);
+}
+
+}  // namespace photomat::app

@@ -1,0 +1,165 @@
+// End-to-end tests of `photomat export` and of `photomat relight` on .ptm, .rti and saved stacks.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+#include "capture/load_photometric_set.h"
+#include "core/colour.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "relight/ptm_file.h"
+#include "relight/rti_file.h"
+#include "represent/map_stack.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using testing::TempDir;
+
+struct RunResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunPhotomat(const std::string& arguments) {
+  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
+    output.append(buffer.data(), n);
+  }
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string Generate(const TempDir& dir) {
+  const std::string capture = (dir / "capture").string();
+  const RunResult generate =
+      RunPhotomat("generate --out " + capture + " --size 32x24 --pattern bumps --seed 3");
+  EXPECT_EQ(generate.exit_code, 0) << generate.output;
+  return capture;
+}
+
+TEST(ExportCliTest, SavedStacksRelightAsInMemoryAndExportMaps) {
+  TempDir dir;
+  const std::string capture = Generate(dir);
+  const std::string stacks = (dir / "stacks").string();
+  ASSERT_EQ(
+      RunPhotomat("fit " + capture + " --method gradient,eigen6,hsh9 --out " + stacks).exit_code,
+      0);
+  // relight on a saved stack gives the pixels of relighting in memory.
+  const RunResult relit =
+      RunPhotomat("relight " + stacks + " --method eigen6 --light 35,200 --format exr --out " +
+                  (dir / "e.exr").string());
+  ASSERT_EQ(relit.exit_code, 0) << relit.output;
+  const LoadedStack eigen = LoadRepresentation(dir / "stacks" / "eigen6.exr");
+  const Image expected = eigen.representation.Relight(LightDirection::FromSlantTilt(35, 200));
+  const Image written = ReadImage(dir / "e.exr").image;
+  ASSERT_TRUE(written.SameShape(expected));
+  EXPECT_TRUE(
+      std::equal(expected.values().begin(), expected.values().end(), written.values().begin()));
+
+  const RunResult exported = RunPhotomat("export " + stacks + " --method gradient --out " +
+                                         (dir / "maps").string() + " --normal-convention directx");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  for (const char* file : {"normal.png", "normal_gltf.png", "albedo.png", "height.exr",
+                           "height.png", "tile.gltf", "tile.bin", "stack.exr", "export.json"}) {
+    EXPECT_TRUE(fs::exists(dir / "maps" / file)) << file;
+  }
+  EXPECT_EQ(ReadJsonFile(dir / "maps" / "export.json")["normals"]["convention"], "directx");
+  // An HSH stack exports its maps (normals by a Lambertian fit) and an .rti.
+  const RunResult hsh = RunPhotomat("export " + stacks + " --method hsh9 --out " +
+                                    (dir / "hsh").string() + " --rti " + (dir / "s.rti").string());
+  ASSERT_EQ(hsh.exit_code, 0) << hsh.output;
+  EXPECT_THAT(hsh.output, HasSubstr("Lambertian fit"));
+  EXPECT_EQ(ReadRtiFile(dir / "s.rti").terms, 9);
+}
+
+TEST(ExportCliTest, PtmAndRtiFilesFromASetRelightDirectly) {
+  TempDir dir;
+  const std::string capture = Generate(dir);
+  const std::string ptm = (dir / "s.ptm").string(), rti = (dir / "s.rti").string();
+  const RunResult exported =
+      RunPhotomat("export " + capture + " --ptm " + ptm + " --rti " + rti + " --hsh-terms 4");
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  EXPECT_EQ(ReadPtmFile(ptm).format, PtmFormat::kLrgb);
+  EXPECT_EQ(ReadRtiFile(rti).terms, 4);
+  // `photomat relight FILE.ptm --light SLANT,TILT --out X.png`: the 8-bit PNG shows the PTM's
+  // own display codes.
+  const RunResult relit =
+      RunPhotomat("relight " + ptm + " --light 40,30 --out " + (dir / "p.png").string());
+  ASSERT_EQ(relit.exit_code, 0) << relit.output;
+  const Image expected =
+      RepresentationFromPtm(ReadPtmFile(ptm)).Relight(LightDirection::FromSlantTilt(40, 30));
+  ImageReadOptions codes;
+  codes.colour_space = ColourSpace::kLinear;
+  const Image png = ReadImage(dir / "p.png", codes).image;
+  ASSERT_TRUE(png.SameShape(expected));
+  for (std::size_t v = 0; v < png.values().size(); ++v) {
+    ASSERT_NEAR(png.values()[v], std::clamp(expected.values()[v], 0.0f, 1.0f), 0.5 / 255 + 1e-6);
+  }
+  const RunResult sweep =
+      RunPhotomat("relight " + rti + " --sweep 3 --out " + (dir / "sweep").string());
+  ASSERT_EQ(sweep.exit_code, 0) << sweep.output;
+  EXPECT_TRUE(fs::exists(dir / "sweep" / "manifest.json"));
+  // And export reads them as stacks.
+  const RunResult maps = RunPhotomat("export " + ptm + " --out " + (dir / "maps").string());
+  ASSERT_EQ(maps.exit_code, 0) << maps.output;
+  EXPECT_THAT(maps.output, HasSubstr("PTM luminance maximum"));
+}
+
+TEST(ExportCliTest, MatchesPtmFitterOnItsFixture) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "ptmfitter");
+  TempDir dir;
+  const RunResult exported = RunPhotomat("export " + (folder / "reference_8x5.lp").string() +
+                                         " --ptm " + (dir / "mine.ptm").string());
+  ASSERT_EQ(exported.exit_code, 0) << exported.output;
+  const PtmFile mine = ReadPtmFile(dir / "mine.ptm");
+  EXPECT_EQ(mine.format, PtmFormat::kLrgb);
+  EXPECT_EQ(mine.width, 8);
+  EXPECT_EQ(mine.height, 5);
+  // The command's file reproduces the photographs' codes at least as well as PTMfitter's.
+  LoadOptions codes;
+  codes.colour_space = ColourSpace::kLinear;
+  const PhotometricSet photos = LoadPhotometricSet(folder / "reference_8x5.lp", codes).set;
+  const auto rms = [&](const Representation& r) {
+    double squared = 0.0, n = 0.0;
+    for (int i = 0; i < photos.size(); ++i) {
+      const Image relit = r.Relight(photos.light(i));
+      for (std::size_t v = 0; v < relit.values().size(); ++v) {
+        squared += std::pow(relit.values()[v] - photos.image(i).values()[v], 2);
+        n += 1;
+      }
+    }
+    return 255.0 * std::sqrt(squared / n);
+  };
+  EXPECT_LE(rms(RepresentationFromPtm(mine)),
+            rms(RepresentationFromPtm(ReadPtmFile(folder / "reference_8x5.ptm"))));
+}
+
+TEST(ExportCliTest, ErrorsAreOneLine) {
+  TempDir dir;
+  const RunResult nothing = RunPhotomat("export " + dir.path().string());
+  EXPECT_EQ(nothing.exit_code, 1);
+  EXPECT_THAT(nothing.output, HasSubstr("nothing to write"));
+  testing::WriteFile(dir / "bad.ptm", "PTM_1.2\nPTM_FORMAT_RGB\n4 4\n");
+  const RunResult bad = RunPhotomat("relight " + (dir / "bad.ptm").string() +
+                                    " --light 30,0 --out " + (dir / "x.png").string());
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_THAT(bad.output, HasSubstr("bad.ptm: truncated"));
+  EXPECT_FALSE(fs::exists(dir / "x.png"));
+  const RunResult help = RunPhotomat("export --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_THAT(help.output, HasSubstr("Usage: photomat export"));
+}
+
+}  // namespace
+}  // namespace photomat

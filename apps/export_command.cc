@@ -1,0 +1,154 @@
+#include <fmt/format.h>
+
+#include <functional>
+
+#include "apps/cli_support.h"
+#include "apps/commands.h"
+#include "core/colour.h"
+#include "core/error.h"
+#include "relight/export.h"
+#include "relight/interchange.h"
+#include "relight/ptm_file.h"
+#include "relight/rti_file.h"
+#include "relight/stack_file.h"
+#include "represent/fit.h"
+
+namespace photomat::app {
+namespace {
+
+struct ExportCommandOptions {
+  std::filesystem::path input;
+  std::string method;
+  std::filesystem::path out;
+  std::string normal_convention = "opengl";
+  std::string height = "poisson";
+  bool no_gltf = false;
+  std::filesystem::path ptm;
+  std::string ptm_format;
+  std::filesystem::path rti;
+  int hsh_terms = 0;
+  std::string colour_space;
+  bool raw_intensities = false;
+};
+
+// The .ptm method: what --ptm-format asks, else the input's own PTM form, else LRGB (PTMfitter's).
+Method PtmMethod(const ExportCommandOptions& options, const std::string& input_method,
+                 int channels) {
+  if (options.ptm_format == "rgb") return Method::Parse("ptm");
+  if (options.ptm_format == "lrgb") {
+    if (channels != 3) throw Error("--ptm-format lrgb needs colour (3-channel) data");
+    return Method::Parse("ptm-lrgb");
+  }
+  if (!options.ptm_format.empty()) throw Error("--ptm-format: expected rgb or lrgb");
+  if (input_method == "ptm" || channels != 3) return Method::Parse("ptm");
+  return Method::Parse("ptm-lrgb");
+}
+
+Method HshMethod(const ExportCommandOptions& options, const std::string& input_method) {
+  if (options.hsh_terms != 0) return Method::Parse(fmt::format("hsh{}", options.hsh_terms));
+  return Method::Parse(input_method.starts_with("hsh") ? input_method : "hsh9");
+}
+
+void WriteInterchangeFiles(const ExportCommandOptions& options, const std::string& input_method,
+                           int channels, const std::function<Representation(const Method&)>& make) {
+  if (!options.ptm.empty()) {
+    const Method method = PtmMethod(options, input_method, channels);
+    const PtmFile ptm = PtmFromRepresentation(make(method));
+    WritePtmFile(options.ptm, ptm);
+    fmt::print("wrote {} ({}, {}x{})\n", options.ptm.string(), ToString(ptm.format), ptm.width,
+               ptm.height);
+  }
+  if (!options.rti.empty()) {
+    const Method method = HshMethod(options, input_method);
+    const RtiFile rti = RtiFromRepresentation(make(method));
+    WriteRtiFile(options.rti, rti);
+    fmt::print("wrote {} (HSH, {} terms, {}x{})\n", options.rti.string(), rti.terms, rti.width,
+               rti.height);
+  }
+}
+
+void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
+  if (options.out.empty()) return;
+  CreateFolder(options.out);
+  ExportOptions export_options;
+  export_options.normal_convention = ParseNormalConvention(options.normal_convention);
+  export_options.height = ParseHeightIntegrator(options.height);
+  export_options.gltf = !options.no_gltf;
+  TerminalProgressBar bar;
+  const nlohmann::json description = ExportMaps(stack, options.out, export_options, &bar);
+  fmt::print("wrote the {} maps of {} to {} (normals from {})\n", stack.representation.method(),
+             stack.provenance.source, options.out.string(),
+             description["normals"]["source"].get<std::string>());
+}
+
+void RunExport(const ExportCommandOptions& options) {
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty()) {
+    throw Error("nothing to write: give --out DIR (maps), --ptm FILE and/or --rti FILE");
+  }
+  const std::optional<std::string> method =
+      options.method.empty() ? std::nullopt : std::optional(options.method);
+  if (IsStackInput(options.input)) {
+    const LoadedStack stack = LoadStackFile(options.input, method);
+    const Representation& r = stack.representation;
+    WriteInterchangeFiles(options, r.method(), r.output_channels(),
+                          [&](const Method& target) { return ConvertToEncoded(stack, target); });
+    WriteMaps(options, stack);
+    return;
+  }
+  // A photometric set: .ptm/.rti fitted to its encoded values (as PTMfitter and RTIBuilder do),
+  // maps from a linear fit (Gradient unless --method says otherwise).
+  LoadOptions load;
+  load.apply_intensities = !options.raw_intensities;
+  if (!options.colour_space.empty()) {
+    load.colour_space = ParseColourSpace(options.colour_space);
+    if (!load.colour_space) throw Error("--colour-space: expected linear or srgb");
+  }
+  const LoadedSet loaded = LoadSetForCommand(options.input, load);
+  WriteInterchangeFiles(options, "", loaded.set.channels(),
+                        [&](const Method& target) { return FitEncoded(loaded.set, target); });
+  if (options.out.empty()) return;
+  const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string()};
+  WriteMaps(options, {Fit(loaded.set, Method::Parse(method.value_or("gradient"))), provenance});
+}
+
+}  // namespace
+
+void AddExportCommand(CLI::App& app) {
+  auto options = std::make_shared<ExportCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "export",
+      "Write a representation for other tools: with --out, a 16-bit tangent-space normal map, an "
+      "sRGB albedo, a height map (EXR and 16-bit PNG), a glTF 2.0 tile and the stack with its "
+      "height layer; with --ptm / --rti, a PTM (PTM_1.2) or HSH RTI file.");
+  command
+      ->add_option("input", options->input,
+                   "A map stack (.exr or fit folder), a .ptm or .rti file, or a photometric set "
+                   "(folder, .lp, manifest, DiLiGenT)")
+      ->required();
+  command->add_option("--method", options->method,
+                      "Which stack of a fit folder; for a photometric set, the method the maps "
+                      "come from (default gradient)");
+  command->add_option("--out", options->out, "Folder for the maps and the glTF tile");
+  command
+      ->add_option("--normal-convention", options->normal_convention,
+                   "opengl (+Y up: glTF, Blender) or directx (+Y down)")
+      ->capture_default_str();
+  command
+      ->add_option("--height", options->height,
+                   "Height integrator: poisson (masked least squares, non-periodic samples) or "
+                   "fc (Frankot-Chellappa, periodic samples)")
+      ->capture_default_str();
+  command->add_flag("--no-gltf", options->no_gltf, "Do not write the glTF tile");
+  command->add_option("--ptm", options->ptm, "Also write a .ptm file (sRGB-encoded coefficients)");
+  command->add_option("--ptm-format", options->ptm_format,
+                      "rgb or lrgb (default: lrgb for colour data, as PTMfitter)");
+  command->add_option("--rti", options->rti, "Also write an HSH .rti file");
+  command->add_option("--hsh-terms", options->hsh_terms, "4, 9 or 16 (default 9)");
+  command->add_option("--colour-space", options->colour_space,
+                      "For a photometric set: how integer images encode light (linear or srgb)");
+  command->add_flag("--ignore-intensities", options->raw_intensities,
+                    "For a photometric set: do not divide by the light intensities it gives");
+  command->callback([options] { RunExport(*options); });
+}
+
+}  // namespace photomat::app

@@ -1,0 +1,119 @@
+// End-to-end tests of `photomat solid`: each runs the built executable.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <cstring>
+
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "synthesize/volume_io.h"
+#include "synthesize/voxel_hash.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::TempDir;
+
+struct RunResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunPhotomat(const std::string& arguments) {
+  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
+    output.append(buffer.data(), n);
+  }
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+bool SameBytes(const Volume& a, const Volume& b) {
+  return a.SameShape(b) &&
+         std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
+}
+
+TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
+  TempDir dir;
+  const std::string exemplar = (dir / "cells.vdb").string();
+  const RunResult made = RunPhotomat("solid exemplar --pattern cells --size 12 --out " + exemplar);
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_EQ(ReadVolume(exemplar).size(), VolumeSize::Cube(12));
+
+  const std::string grow = "solid grow " + exemplar + " --size 16 --field circular --cache " +
+                           (dir / "cache").string() + " --report " + (dir / "r.json").string() +
+                           " --slices " + (dir / "slices").string();
+  const RunResult first = RunPhotomat(grow + " --threads 1 --out " + (dir / "a.vdb").string());
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_THAT(first.output, HasSubstr("similarity set built"));
+  const RunResult second = RunPhotomat(grow + " --threads 2 --out " + (dir / "b.vdb").string());
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_THAT(second.output, HasSubstr("read from"));
+  const Volume a = ReadVolume(dir / "a.vdb");
+  EXPECT_EQ(a.size(), VolumeSize::Cube(16));
+  EXPECT_TRUE(SameBytes(a, ReadVolume(dir / "b.vdb")));
+  EXPECT_TRUE(std::filesystem::exists(dir / "slices" / "xz.png"));
+  const nlohmann::json report = ReadJsonFile(dir / "r.json");
+  EXPECT_TRUE(report["similarity_from_cache"].get<bool>());
+  EXPECT_GT(report["passes"].size(), 0u);
+}
+
+TEST(SolidCommandTest, GrowsAProceduralExemplarIntoASliceStack) {
+  TempDir dir;
+  const RunResult run = RunPhotomat(
+      "solid grow procedural:marble --exemplar-size 12 --size 8x12x16 "
+      "--no-cache --field slant --angle 20 --out " +
+      (dir / "stack").string() + " --coordinates " + (dir / "coords.vdb").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(ReadVolume(dir / "stack").size(), (VolumeSize{8, 12, 16}));
+  EXPECT_EQ(ReadVolume(dir / "coords.vdb").channels(), 3);
+}
+
+TEST(SolidCommandTest, FromViews) {
+  TempDir dir;
+  Image view(32, 32, 3);
+  for (std::size_t i = 0; i < view.values().size(); ++i) {
+    view.values()[i] =
+        0.5f + 0.4f * HashToSigned(HashVoxel(1, 0, static_cast<std::int64_t>(i / 3 / 4), 0, 0));
+  }
+  WriteImage(dir / "view.png", view,
+             {.sample_type = SampleType::kUint8, .encoding = ColourSpace::kSrgb, .attributes = {}});
+  const RunResult run =
+      RunPhotomat("solid from-views --view " + (dir / "view.png").string() +
+                  " --size 16 --iterations 2 --out " + (dir / "solid.vdb").string() + " --report " +
+                  (dir / "report.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("iteration 2"));
+  EXPECT_EQ(ReadVolume(dir / "solid.vdb").size(), VolumeSize::Cube(16));
+  EXPECT_EQ(ReadJsonFile(dir / "report.json")["iterations"].size(), 2u);
+}
+
+TEST(SolidCommandTest, BadInputIsOneErrorLine) {
+  TempDir dir;
+  const RunResult missing = RunPhotomat("solid from-views --xy " + (dir / "none.png").string() +
+                                        " --out " + (dir / "x.vdb").string());
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_THAT(missing.output, HasSubstr("none.png"));
+  const RunResult field = RunPhotomat(
+      "solid grow procedural:noise --exemplar-size 8 --size 8 "
+      "--no-cache --field spiral --out " +
+      (dir / "x.vdb").string());
+  EXPECT_EQ(field.exit_code, 1);
+  EXPECT_THAT(field.output, HasSubstr("spiral"));
+  const RunResult pattern =
+      RunPhotomat("solid grow procedural:plaid --out " + (dir / "x.vdb").string());
+  EXPECT_EQ(pattern.exit_code, 1);
+  EXPECT_THAT(pattern.output, HasSubstr("plaid"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.vdb"));
+}
+
+}  // namespace
+}  // namespace photomat

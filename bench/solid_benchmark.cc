@@ -1,0 +1,117 @@
+// Solid texture timings on this machine, for bench/solid_table (issue 8's targets):
+//   - a 64^3 exemplar grown to 128^3 (appearance space and similarity set built, not cached),
+//   - a 128^3 block from three 128 x 128 views (Exemplar_20 of the solid exemplars when
+//     $PHOTOMAT_TEST_DATA is set, otherwise slices of a procedural wood volume).
+// Each case reports its phases as counters (seconds) and the process's peak resident memory.
+#include <benchmark/benchmark.h>
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "core/image_io.h"
+#include "synthesize/exemplar_solid.h"
+#include "synthesize/procedural_exemplars.h"
+#include "synthesize/solid_quality.h"
+#include "synthesize/spectral_solid.h"
+
+namespace photomat {
+namespace {
+
+double Since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void ReportPeakMemory(benchmark::State& state) {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  state.counters["peak_rss_mb"] = static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+void BM_GrowExemplar(benchmark::State& state, ProceduralPattern pattern) {
+  const int exemplar_size = static_cast<int>(state.range(0));
+  const int output_size = static_cast<int>(state.range(1));
+  const Volume exemplar = MakeProceduralExemplar(pattern, exemplar_size, 1);
+  double prepare = 0, synthesis = 0, match_error = 0, jitter_error = 0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
+    prepare = Since(start);
+    ExemplarSolidOptions options;
+    options.size = VolumeSize::Cube(output_size);
+    const auto synthesis_start = std::chrono::steady_clock::now();
+    const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
+    synthesis = Since(synthesis_start);
+    state.PauseTiming();
+    match_error = NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance);
+    options.correction_passes = 0;
+    jitter_error = NeighbourhoodMatchError(
+        SynthesizeExemplarSolid(exemplar, prepared, options).volume, exemplar,
+        prepared.appearance);
+    state.ResumeTiming();
+  }
+  state.counters["prepare_s"] = prepare;
+  state.counters["synthesis_s"] = synthesis;
+  state.counters["match_error"] = match_error;
+  state.counters["jitter_only_match_error"] = jitter_error;
+  ReportPeakMemory(state);
+}
+
+std::vector<SolidView> Views(int size) {
+  std::vector<SolidView> views;
+  if (const char* data = std::getenv("PHOTOMAT_TEST_DATA")) {
+    const std::filesystem::path folder =
+        std::filesystem::path(data) / "textures" / "solid-exemplars";
+    for (SlicePlane plane : kAllSlicePlanes) {
+      const auto file = folder / ("Exemplar_20_" + std::string(ToString(plane)) + ".jpg");
+      if (std::filesystem::exists(file)) views.push_back({plane, ReadImage(file).image});
+    }
+    if (views.size() == 3) return views;
+    views.clear();
+  }
+  const Volume wood = MakeProceduralExemplar(ProceduralPattern::kWood, size, 1);
+  for (SlicePlane plane : kAllSlicePlanes) {
+    views.push_back({plane, ExtractSlice(wood, plane, size / 3)});
+  }
+  return views;
+}
+
+void BM_FromThreeViews(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  const std::vector<SolidView> views = Views(size);
+  SpectralSolidOptions options;
+  options.size = size;
+  options.iterations = static_cast<int>(state.range(1));
+  double inside = 0, histogram = 0;
+  for (auto _ : state) {
+    const SpectralSolidResult result = SynthesizeSpectralSolid(views, options);
+    inside = histogram = 1e9;
+    for (const PlaneFit& fit : result.iterations.back().fits) {
+      inside = std::min(inside, fit.inside_bounds_average);
+      histogram = std::min(histogram, -fit.histogram_l1_mean);
+    }
+    benchmark::DoNotOptimize(result.volume.values().data());
+  }
+  state.counters["worst_inside_bounds"] = inside;
+  state.counters["worst_histogram_l1"] = -histogram;
+  ReportPeakMemory(state);
+}
+
+BENCHMARK_CAPTURE(BM_GrowExemplar, marble, ProceduralPattern::kMarble)
+    ->Args({64, 128})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_GrowExemplar, cells, ProceduralPattern::kCells)
+    ->Args({64, 128})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+BENCHMARK(BM_FromThreeViews)->Args({128, 4})->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+}  // namespace
+}  // namespace photomat
+
+BENCHMARK_MAIN();

@@ -1,0 +1,240 @@
+#include "calibrate/calibration_report.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace photomat {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// Plot geometry (SVG user units): the hemisphere's centre and the radius of slant 90.
+constexpr double kCentreX = 300.0, kCentreY = 330.0, kRadius = 250.0;
+
+std::string Escape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+// Plot position of a light: radius proportional to slant (capped at the rim), y up.
+std::pair<double, double> PlotPoint(const LightDirection& light) {
+  const double slant = std::min(light.SlantDegrees(), 90.0);
+  const double tilt = light.TiltDegrees() * kPi / 180.0;
+  const double r = kRadius * slant / 90.0;
+  return {kCentreX + r * std::cos(tilt), kCentreY - r * std::sin(tilt)};
+}
+
+void CheckSizes(const LightCalibrationReport& report) {
+  if (!report.reference.empty() && report.reference.size() != report.recovered.size()) {
+    throw Error(fmt::format("{} recovered lights but {} reference lights", report.recovered.size(),
+                            report.reference.size()));
+  }
+}
+
+}  // namespace
+
+std::vector<double> LightCalibrationReport::AngularDifferences() const {
+  CheckSizes(*this);
+  std::vector<double> differences;
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    differences.push_back(recovered[i].AngleToDegrees(reference[i]));
+  }
+  return differences;
+}
+
+LightCalibrationReport::Summary LightCalibrationReport::DifferenceSummary() const {
+  std::vector<double> d = AngularDifferences();
+  Summary summary;
+  if (d.empty()) return summary;
+  summary.mean = std::accumulate(d.begin(), d.end(), 0.0) / static_cast<double>(d.size());
+  summary.max = *std::max_element(d.begin(), d.end());
+  std::sort(d.begin(), d.end());
+  const std::size_t n = d.size();
+  summary.median = n % 2 ? d[n / 2] : 0.5 * (d[n / 2 - 1] + d[n / 2]);
+  return summary;
+}
+
+std::string LightCalibrationReport::ToTable() const {
+  const std::vector<double> differences = AngularDifferences();
+  std::string table = fmt::format("{:>4}  {:<24} {:>8} {:>8}", "#", "image", "slant", "tilt");
+  if (!differences.empty())
+    table += fmt::format(" {:>10} {:>9} {:>10}", "ref slant", "ref tilt", "angle (deg)");
+  table += "\n";
+  for (std::size_t i = 0; i < recovered.size(); ++i) {
+    const std::string name = i < names.size() ? names[i] : fmt::format("light {}", i);
+    table += fmt::format("{:>4}  {:<24} {:>8.2f} {:>8.2f}", i, name, recovered[i].SlantDegrees(),
+                         recovered[i].TiltDegrees());
+    if (!differences.empty()) {
+      table += fmt::format(" {:>10.2f} {:>9.2f} {:>10.2f}", reference[i].SlantDegrees(),
+                           reference[i].TiltDegrees(), differences[i]);
+    }
+    table += "\n";
+  }
+  if (!differences.empty()) {
+    const Summary s = DifferenceSummary();
+    table += fmt::format(
+        "angular difference to the reference: mean {:.2f}, median {:.2f}, max "
+        "{:.2f} degrees\n",
+        s.mean, s.median, s.max);
+  }
+  return table;
+}
+
+std::string LightCalibrationReport::ToSvg() const {
+  const std::vector<double> differences = AngularDifferences();
+  const bool has_reference = !differences.empty();
+  const double table_x = 600.0;
+  const double row_height = 16.0;
+  const double height = std::max(680.0, 110.0 + row_height * static_cast<double>(recovered.size()));
+  std::string svg = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"1000\" height=\"{0:.0f}\" "
+      "viewBox=\"0 0 1000 {0:.0f}\" font-family=\"sans-serif\" font-size=\"12\">\n"
+      "<rect width=\"1000\" height=\"{0:.0f}\" fill=\"white\"/>\n",
+      height);
+  svg += fmt::format("<text x=\"20\" y=\"30\" font-size=\"18\">{}</text>\n", Escape(title));
+  if (has_reference) {
+    const Summary s = DifferenceSummary();
+    svg += fmt::format(
+        "<text x=\"20\" y=\"52\">angular difference to the reference: mean {:.2f}, median "
+        "{:.2f}, max {:.2f} degrees</text>\n",
+        s.mean, s.median, s.max);
+  }
+  // The hemisphere: slant rings and tilt spokes.
+  // Slant labels along the 315-degree spoke, clear of the tilt labels.
+  for (int slant : {30, 60, 90}) {
+    const double r = kRadius * slant / 90.0;
+    svg += fmt::format(
+        "<circle cx=\"{}\" cy=\"{}\" r=\"{:.1f}\" fill=\"none\" stroke=\"#bbb\"/>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\">{}&#176;</text>\n",
+        kCentreX, kCentreY, r, kCentreX + r * std::sqrt(0.5) + 3, kCentreY + r * std::sqrt(0.5) - 3,
+        slant);
+  }
+  for (int tilt = 0; tilt < 360; tilt += 30) {
+    const double a = tilt * kPi / 180.0;
+    svg += fmt::format(
+        "<line x1=\"{}\" y1=\"{}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\" text-anchor=\"middle\">{}&#176;</text>\n",
+        kCentreX, kCentreY, kCentreX + kRadius * std::cos(a), kCentreY - kRadius * std::sin(a),
+        kCentreX + (kRadius + 18) * std::cos(a), kCentreY - (kRadius + 18) * std::sin(a) + 4, tilt);
+  }
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+x</text>\n", kCentreX + kRadius + 30,
+                     kCentreY + 16);
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+y</text>\n", kCentreX + 6,
+                     kCentreY - kRadius + 14);
+  // Pairs, then the given lights (red rings), then the recovered ones (blue dots, numbered).
+  for (std::size_t i = 0; has_reference && i < recovered.size(); ++i) {
+    const auto [x1, y1] = PlotPoint(recovered[i]);
+    const auto [x2, y2] = PlotPoint(reference[i]);
+    svg += fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" "
+        "stroke=\"#999\"/>\n",
+        x1, y1, x2, y2);
+  }
+  for (std::size_t i = 0; has_reference && i < reference.size(); ++i) {
+    const auto [x, y] = PlotPoint(reference[i]);
+    svg += fmt::format(
+        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"6\" fill=\"none\" "
+        "stroke=\"#d22\" stroke-width=\"1.5\"/>\n",
+        x, y);
+  }
+  for (std::size_t i = 0; i < recovered.size(); ++i) {
+    const auto [x, y] = PlotPoint(recovered[i]);
+    svg += fmt::format(
+        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"#1559c4\"/>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"10\" fill=\"#1559c4\">{}</text>\n",
+        x, y, x + 5, y - 5, i);
+  }
+  // Legend.
+  const double legend_y = kCentreY + kRadius + 50;
+  svg += fmt::format(
+      "<circle cx=\"40\" cy=\"{0:.0f}\" r=\"3.5\" fill=\"#1559c4\"/>"
+      "<text x=\"50\" y=\"{1:.0f}\">recovered</text>\n",
+      legend_y, legend_y + 4);
+  if (has_reference) {
+    svg += fmt::format(
+        "<circle cx=\"150\" cy=\"{0:.0f}\" r=\"6\" fill=\"none\" stroke=\"#d22\" "
+        "stroke-width=\"1.5\"/><text x=\"162\" y=\"{1:.0f}\">given</text>\n",
+        legend_y, legend_y + 4);
+  }
+  // The table.
+  double y = 90.0;
+  svg += fmt::format(
+      "<text x=\"{}\" y=\"{}\" font-family=\"monospace\" font-weight=\"bold\" "
+      "xml:space=\"preserve\"> #   slant    tilt{}</text>\n",
+      table_x, y, has_reference ? "   given:  slant    tilt  angle" : "");
+  for (std::size_t i = 0; i < recovered.size(); ++i) {
+    y += row_height;
+    std::string row = fmt::format("{:>2}  {:6.2f} {:7.2f}", i, recovered[i].SlantDegrees(),
+                                  recovered[i].TiltDegrees());
+    if (has_reference) {
+      row += fmt::format("   {:6.2f} {:7.2f}  {:5.2f}&#176;", reference[i].SlantDegrees(),
+                         reference[i].TiltDegrees(), differences[i]);
+    }
+    svg += fmt::format(
+        "<text x=\"{}\" y=\"{:.0f}\" font-family=\"monospace\" "
+        "xml:space=\"preserve\">{}</text>\n",
+        table_x, y, row);
+  }
+  svg += "</svg>\n";
+  return svg;
+}
+
+nlohmann::json LightCalibrationReport::ToJson() const {
+  const std::vector<double> differences = AngularDifferences();
+  nlohmann::json lights = nlohmann::json::array();
+  for (std::size_t i = 0; i < recovered.size(); ++i) {
+    const Eigen::Vector3d& v = recovered[i].vector();
+    nlohmann::json entry = {{"name", i < names.size() ? names[i] : ""},
+                            {"light", {v.x(), v.y(), v.z()}},
+                            {"slant_deg", recovered[i].SlantDegrees()},
+                            {"tilt_deg", recovered[i].TiltDegrees()}};
+    if (!differences.empty()) {
+      const Eigen::Vector3d& r = reference[i].vector();
+      entry["reference"] = {r.x(), r.y(), r.z()};
+      entry["angle_deg"] = differences[i];
+    }
+    lights.push_back(entry);
+  }
+  nlohmann::json json = {{"title", title}, {"lights", lights}};
+  if (!differences.empty()) {
+    const Summary s = DifferenceSummary();
+    json["angle_deg"] = {{"mean", s.mean}, {"median", s.median}, {"max", s.max}};
+  }
+  return json;
+}
+
+void WriteLightCalibrationSvg(const std::filesystem::path& path,
+                              const LightCalibrationReport& report) {
+  std::string svg;
+  try {
+    svg = report.ToSvg();
+  } catch (const Error& error) {
+    throw error.InFile(path);
+  }
+  WriteTextFileAtomically(path, svg);
+}
+
+}  // namespace photomat

@@ -1,0 +1,42 @@
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/light_direction.h"
+
+namespace photomat {
+
+// The light calibration report: recovered light directions drawn on a hemisphere plot beside the
+// given ones (if any), with the angular difference of each pair, as an SVG drawing, a text table
+// and JSON.
+//
+// The plot is the azimuthal-equidistant view from the camera (as photomat's light interpolation
+// uses): a light at slant s and tilt t is drawn at radius proportional to s in direction t, with
+// +x to the right and +y up; rings mark slants 30, 60 and 90 degrees.
+struct LightCalibrationReport {
+  std::string title;
+  std::vector<std::string> names;  // one per recovered light
+  std::vector<LightDirection> recovered;
+  std::vector<LightDirection> reference;  // empty, or one per recovered light
+
+  // Angle between recovered and reference light, degrees (empty without a reference).
+  std::vector<double> AngularDifferences() const;
+  struct Summary {
+    double mean = 0.0, median = 0.0, max = 0.0;
+  };
+  Summary DifferenceSummary() const;
+
+  std::string ToTable() const;
+  std::string ToSvg() const;
+  nlohmann::json ToJson() const;
+};
+
+// Writes the SVG (atomically). Throws Error naming the file on failure or for a reference list of
+// another length.
+void WriteLightCalibrationSvg(const std::filesystem::path& path,
+                              const LightCalibrationReport& report);
+
+}  // namespace photomat

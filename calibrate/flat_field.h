@@ -1,0 +1,83 @@
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "calibrate/near_light.h"
+#include "core/image.h"
+#include "core/light_direction.h"
+#include "core/photometric_set.h"
+#include "core/progress.h"
+
+namespace photomat {
+
+// Per-light gain maps that turn a capture with uneven lighting (near lamps with fall-off,
+// vignetting, lamps of unequal brightness or colour) into what equal distant lights would give.
+//
+// Gain of light i at pixel p, channel c: what a flat matte target of uniform albedo shows there,
+// divided by what a distant light of unit intensity from the nominal direction l_i would show
+// (l_i.z). Dividing the sample's image i by it removes the light's fall-off, its brightness and
+// colour. The gains are normalised to a mean of 1 per channel over all lights and pixels: the
+// target's own colour and absolute brightness drop out, relative differences between lights stay.
+// (Exact for a flat sample; for relief the remaining error is the change of light direction over
+// the sample, which a flat-field cannot correct.)
+
+enum class FlatFieldModel {
+  // Gaussian-smoothed target images (normalised convolution inside the target's mask): keeps
+  // vignetting and lamp patterns, for clean targets.
+  kSmoothed,
+  // exp of a least-squares polynomial in x and y of low degree fitted to the log of the target,
+  // per light and channel (fall-off and vignetting are multiplicative and span a large range):
+  // for noisy or textured targets, and to extend the gains beyond the target's mask.
+  kPolynomial,
+};
+std::string_view ToString(FlatFieldModel model);
+std::optional<FlatFieldModel> ParseFlatFieldModel(std::string_view name);
+
+struct FlatFieldOptions {
+  FlatFieldModel model = FlatFieldModel::kPolynomial;
+  double smoothing_sigma = 3.0;  // pixels, kSmoothed
+  int polynomial_degree = 4;     // kPolynomial (and kSmoothed outside the target's mask)
+  Progress* progress = nullptr;
+};
+
+class FlatField {
+ public:
+  FlatField(std::vector<Image> gains, std::vector<LightDirection> lights);
+
+  int size() const { return static_cast<int>(gains_.size()); }
+  const Image& gain(int i) const { return gains_[i]; }
+  const std::vector<Image>& gains() const { return gains_; }
+  // The nominal light of each gain map (for checking a sample set against it).
+  const std::vector<LightDirection>& lights() const { return lights_; }
+
+ private:
+  std::vector<Image> gains_;
+  std::vector<LightDirection> lights_;
+};
+
+// From captures of a flat uniform matte target under the sample's lights (its mask, if any,
+// selects the target). Throws Error naming the set's source for a target that is dark
+// somewhere under some light (non-positive gains) or a light at or below the horizon.
+FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions& options = {});
+
+// The gains near lights at known positions would give on a flat target (no target needed):
+// intensity * P.z / |P - p|^3 / l.z, for `channels` channels.
+FlatField FlatFieldFromNearLights(const std::vector<NearLight>& lights, int width, int height,
+                                  int channels);
+
+// Divides each image of `set` by its light's gains. Throws Error naming the set's source when the
+// counts or sizes differ, or a light differs by more than `max_light_difference_degrees` from the
+// flat-field's (the flat-field belongs to another light set).
+PhotometricSet ApplyFlatField(const PhotometricSet& set, const FlatField& flat_field,
+                              double max_light_difference_degrees = 2.0);
+
+// A folder with flatfield.json and one half-float EXR per light (gain_000.exr, ...), written
+// atomically file by file.
+void SaveFlatField(const std::filesystem::path& folder, const FlatField& flat_field);
+// Reads a folder (or its flatfield.json). Throws Error naming the file at fault.
+FlatField LoadFlatField(const std::filesystem::path& path);
+
+}  // namespace photomat

@@ -1,0 +1,68 @@
+#include "calibrate/near_light.h"
+
+#include <fmt/format.h>
+
+#include "capture/text_parsing.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+namespace photomat {
+
+Eigen::Vector3d SamplePoint(int width, int height, int column, int row, double surface_height) {
+  return {column + 0.5 - width / 2.0, height / 2.0 - row - 0.5, surface_height};
+}
+
+LightDirection NominalDirection(const NearLight& light) {
+  return LightDirection::FromVector(light.position);
+}
+
+std::vector<LightDirection> NominalDirections(const std::vector<NearLight>& lights) {
+  std::vector<LightDirection> directions;
+  for (const NearLight& light : lights) directions.push_back(NominalDirection(light));
+  return directions;
+}
+
+std::vector<NearLight> ReadNearLights(const std::filesystem::path& path) {
+  std::vector<NearLight> lights;
+  std::optional<std::size_t> count;
+  int line_number = 0;
+  for (const std::string& line : SplitLines(ReadTextFile(path))) {
+    ++line_number;
+    if (IsBlankOrComment(line)) continue;
+    std::vector<double> numbers;
+    for (std::string_view token : SplitWhitespace(line)) {
+      const auto value = ParseNumber(token);
+      if (!value) {
+        throw Error(path, fmt::format("line {}: '{}' is not a number", line_number, token));
+      }
+      numbers.push_back(*value);
+    }
+    if (numbers.size() == 1 && lights.empty() && !count && numbers[0] >= 1) {
+      count = static_cast<std::size_t>(numbers[0]);
+      continue;
+    }
+    if (numbers.size() != 3 && numbers.size() != 4) {
+      throw Error(path, fmt::format("line {}: expected \"x y z [intensity]\", found {} numbers",
+                                    line_number, numbers.size()));
+    }
+    NearLight light;
+    light.position = Eigen::Vector3d(numbers[0], numbers[1], numbers[2]);
+    if (numbers.size() == 4) light.intensity = numbers[3];
+    if (!(light.position.z() > 0.0)) {
+      throw Error(path, fmt::format("line {}: the light must be above the sample plane (z > 0)",
+                                    line_number));
+    }
+    if (!(light.intensity > 0.0)) {
+      throw Error(path, fmt::format("line {}: the intensity must be positive", line_number));
+    }
+    lights.push_back(light);
+  }
+  if (lights.empty()) throw Error(path, "no near lights");
+  if (count && *count != lights.size()) {
+    throw Error(path,
+                fmt::format("the first line says {} lights but {} follow", *count, lights.size()));
+  }
+  return lights;
+}
+
+}  // namespace photomat

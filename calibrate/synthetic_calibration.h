@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "calibrate/mirror_sphere.h"
+#include "calibrate/near_light.h"
+#include "capture/synthetic_capture.h"
+#include "core/image.h"
+#include "core/light_direction.h"
+#include "core/photometric_set.h"
+
+namespace photomat {
+
+// Synthetic captures with known truth for the calibration stages: a mirror sphere under distant
+// lights, and a sample or a flat matte target under near point lights.
+
+struct MirrorSphereRenderOptions {
+  int width = 320;
+  int height = 240;
+  SphereCircle sphere{Eigen::Vector2d(160.0, 120.0), 90.0};
+  // The lamp seen in the mirror: a Gaussian lobe of this angular standard deviation around the
+  // light direction (a lamp of finite size), with this peak value.
+  double lamp_sigma_degrees = 3.0;
+  double lamp_peak = 0.9;
+  // A dim reflection of the room (brighter toward +y) so that the outline shows without a mask.
+  double environment = 0.06;
+  double background = 0.01;
+  int supersampling = 4;  // per axis, for anti-aliased outlines and highlights
+  double noise_sigma = 0.0;
+  std::uint64_t noise_seed = 1;
+  // Perspective camera: set, the sphere (radius 1) is centred at `sphere_centre_camera` in the
+  // camera frame (OpenCV: x right, y down, z forward) and `sphere` is ignored.
+  std::optional<CameraIntrinsics> camera;
+  Eigen::Vector3d sphere_centre_camera = Eigen::Vector3d(0.0, 0.0, 10.0);
+};
+
+struct MirrorSphereRender {
+  std::vector<Image> images;  // RGB, linear
+  Image coverage;             // 1 channel: the sphere's anti-aliased mask (coverage in [0, 1])
+};
+
+MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
+                                      const MirrorSphereRenderOptions& options = {});
+
+// `material` under near point lights with inverse-square fall-off (Lambertian, attached shadows
+// clamped to 0), in the sample frame of near_light.h (surface height included). The set's lights
+// are the nominal directions from the sample's centre.
+PhotometricSet RenderNearLightCapture(const SyntheticMaterial& material,
+                                      const std::vector<NearLight>& lights);
+
+// A flat matte target of uniform `albedo` under the same lights (what EstimateFlatField reads),
+// with optional Gaussian noise.
+PhotometricSet RenderNearLightTarget(int width, int height, const std::vector<NearLight>& lights,
+                                     double albedo = 0.5, double noise_sigma = 0.0,
+                                     std::uint64_t noise_seed = 1);
+
+}  // namespace photomat

@@ -1,0 +1,40 @@
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <vector>
+
+#include "capture/synthetic_capture.h"
+#include "capture/testing/emulated_v4l2_device.h"
+#include "core/image.h"
+#include "core/light_direction.h"
+
+namespace photomat::testing {
+
+// A synthetic sample under a dome of known lights, for the emulated camera to look at: the
+// generator's Lambertian rendering of the light that is on (scaled by `brightness`), black with
+// every light off.
+class SyntheticStudio {
+ public:
+  SyntheticStudio(SyntheticMaterial material, std::vector<LightDirection> lights,
+                  double brightness = 0.85);
+
+  const SyntheticMaterial& material() const { return material_; }
+  const std::vector<LightDirection>& lights() const { return lights_; }
+  // The radiance with light `number` (1-based) on, or 0 for all off.
+  const Image& Render(int number);
+
+  // The light number a command light controller last wrote to `state_file` (e.g. with the
+  // template "echo {n} > FILE"); 0 while the file is missing or empty.
+  static int ReadLightNumber(const std::filesystem::path& state_file);
+  // A scene for EmulatedCameraOptions: the light named in `state_file` at each frame.
+  SceneRenderer SceneFromStateFile(std::filesystem::path state_file);
+
+ private:
+  SyntheticMaterial material_;
+  std::vector<LightDirection> lights_;
+  double brightness_;
+  std::map<int, Image> cache_;
+};
+
+}  // namespace photomat::testing

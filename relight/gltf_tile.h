@@ -1,0 +1,37 @@
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace photomat {
+
+// A glTF 2.0 asset (.gltf JSON + .bin buffer + the textures beside it) of one flat rectangular
+// tile carrying the exported maps, for Blender, three.js and other glTF tools.
+//
+// Geometry: a quad in the glTF x-z plane facing +Y (up), centred at the origin, `width` wide
+// (x) and `width * aspect` deep, image row 0 at -z (so Blender, which turns glTF's +Y up into +Z
+// and -Z into +Y, shows the tile lying on the ground the right way up). Texture coordinates put
+// the image's top-left at u = v = 0 (glTF's convention). Each vertex carries NORMAL (0, 1, 0) and
+// TANGENT (1, 0, 0, 1): tangent = image right, bitangent = normal x tangent = -z = image up, the
+// frame of an OpenGL-convention (+Y up) normal map, which is what glTF requires.
+//
+// glTF has no displacement slot: the height texture is attached to the material as
+// extras.displacement {"texture": <index>, "scale": s, "offset": o}, displacement in scene units
+// = o + s * texel (texel in [0, 1]), i.e. the height map in the tile's units (one pixel is
+// width / image width); Blender imports it as a custom property of the material.
+struct GltfTile {
+  std::string name = "photomat tile";
+  double width = 1.0;          // scene units (metres in Blender)
+  double aspect = 1.0;         // depth / width: the image's height / width
+  std::string base_color_uri;  // sRGB texture, relative to the .gltf
+  std::string normal_uri;      // OpenGL-convention normal map
+  std::string height_uri;      // normalised height texture; empty: none
+  double displacement_scale = 0.0;
+  double displacement_offset = 0.0;
+};
+
+// Writes `path` (.gltf) and the buffer beside it (same stem, .bin), each atomically. The textures
+// must be written by the caller. Throws Error naming the file.
+void WriteGltfTile(const std::filesystem::path& path, const GltfTile& tile);
+
+}  // namespace photomat

@@ -1,0 +1,77 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "represent/representation.h"
+
+namespace photomat {
+
+// Polynomial texture map files (.ptm, HP Labs' PTM_1.2, Malzbender & Gelb 2001; layout in
+// README "Interchange formats"): a text header (version, format, width, height, 6 scales,
+// 6 biases) and 8-bit coefficient bytes, a_i = (byte_i - bias_i) * scale_i, rows bottom to top.
+//
+// Values (IMPLEMENTER CHOICE): a PTM's polynomial evaluates to the 8-bit display code of the
+// sRGB-encoded images it was fitted from, which is what PTMfitter fits and what PTM viewers show.
+// photomat reads a file as a representation whose relit values are those codes / 255 (sRGB-encoded
+// values in [0, 1]; the stack's colour space says "srgb"), and writes a file from such a
+// representation. A linear stack is first refitted in the sRGB-encoded domain
+// (relight/interchange.h), never stored as if it were encoded.
+
+enum class PtmFormat {
+  kRgb,       // PTM_FORMAT_RGB: per channel, 6 coefficients
+  kLum,       // PTM_FORMAT_LUM: one channel, 6 coefficients
+  kLrgb,      // PTM_FORMAT_LRGB: 6 luminance coefficients + 8-bit RGB per pixel
+  kJpegRgb,   // PTM_FORMAT_JPEG_RGB: the RGB planes as JPEG streams (read only)
+  kJpegLrgb,  // PTM_FORMAT_JPEG_LRGB: the LRGB planes as JPEG streams (read only)
+};
+std::string_view ToString(PtmFormat format);  // "PTM_FORMAT_RGB", ...
+
+// What a .ptm holds, decoded to coefficient bytes (JPEG planes decompressed) but not dequantised.
+struct PtmFile {
+  std::string version = "PTM_1.2";
+  PtmFormat format = PtmFormat::kRgb;
+  int width = 0;
+  int height = 0;
+  std::array<double, 6> scale{};
+  std::array<int, 6> bias{};
+  // Coefficient planes of width * height bytes each, row 0 at the TOP (photomat's image order;
+  // readers and writers flip the file's bottom-to-top rows). RGB: 18 planes, plane 3 j + c is
+  // a_j of channel c; LUM: 6 planes a0..a5; LRGB: 9 planes, a0..a5 of the luminance then R, G, B.
+  std::vector<std::vector<std::uint8_t>> planes;
+
+  int PlaneCount() const;
+  // Dequantised a_j of `plane` (its coefficient is j = plane / 3 for RGB, plane for LUM/LRGB).
+  double Coefficient(int plane, std::size_t pixel) const;
+};
+
+// Parses a whole .ptm file image; `file` names it in errors. Throws Error for anything malformed
+// or truncated, and for the formats photomat does not read (lookup-table and JPEG-LS variants).
+PtmFile ParsePtm(std::span<const std::uint8_t> data, const std::filesystem::path& file);
+PtmFile ReadPtmFile(const std::filesystem::path& path);
+
+// The bytes of a PTM_1.2 file (RGB, LUM or LRGB; the JPEG variants are read only).
+std::string SerializePtm(const PtmFile& ptm);
+// Atomic write; throws Error naming `path`.
+void WritePtmFile(const std::filesystem::path& path, const PtmFile& ptm);
+
+// The file as a representation: "ptm" (RGB; LUM as one channel "Y") or "ptm-lrgb" with maps in
+// photomat's layout (README, "Representations"), values scaled by 1/255 as described above.
+// LRGB: colour_c = (RGB_c / 255) * (L / 255), pinned by the PTMfitter fixture.
+Representation RepresentationFromPtm(const PtmFile& ptm);
+
+enum class PtmLayout { kRgb, kLrgb };
+// Quantises a "ptm" (RGB or one channel) or "ptm-lrgb" representation of sRGB-encoded values:
+// per coefficient, the scale is the smallest 6-decimal value >= (max - min) / 254 over all pixels
+// and channels and the bias the integer ceil(-min / scale), so every value is representable and
+// quantised within scale / 2. LRGB: each pixel's chroma is normalised so that its largest channel
+// is 255 (the luminance carries the rest), and the luminance is quantised; the chroma bytes are
+// within 1/2 of exact. Throws Error for other methods.
+PtmFile PtmFromRepresentation(const Representation& representation);
+
+}  // namespace photomat

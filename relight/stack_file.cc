@@ -1,0 +1,59 @@
+#include "relight/stack_file.h"
+
+#include <fmt/format.h>
+
+#include <cctype>
+
+#include "core/error.h"
+#include "relight/ptm_file.h"
+#include "relight/rti_file.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string LowerExtension(const fs::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
+}  // namespace
+
+bool IsInterchangeFile(const fs::path& path) {
+  const std::string extension = LowerExtension(path);
+  return extension == ".ptm" || extension == ".rti";
+}
+
+bool IsStackInput(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return fs::exists(path / kFitManifestName, ec);
+  return IsInterchangeFile(path) || LowerExtension(path) == ".exr";
+}
+
+LoadedStack LoadStackFile(const fs::path& path, const std::optional<std::string>& method) {
+  if (!IsInterchangeFile(path)) return LoadRepresentation(ResolveStack(path, method));
+  const bool ptm = LowerExtension(path) == ".ptm";
+  Representation representation =
+      ptm ? RepresentationFromPtm(ReadPtmFile(path)) : RepresentationFromRti(ReadRtiFile(path));
+  if (method && *method != representation.method()) {
+    throw Error(path,
+                fmt::format("holds a {} representation, not {}", representation.method(), *method));
+  }
+  StackProvenance provenance;
+  provenance.colour_space = std::string(ToString(ColourSpace::kSrgb));
+  provenance.source = path.string();
+  return {std::move(representation), std::move(provenance)};
+}
+
+ColourSpace StackValueEncoding(const StackProvenance& provenance) {
+  const auto space = ParseColourSpace(provenance.colour_space);
+  if (!space) {
+    throw Error(fmt::format("unknown stack colour space \"{}\" (expected linear or srgb)",
+                            provenance.colour_space));
+  }
+  return *space;
+}
+
+}  // namespace photomat

@@ -1,0 +1,231 @@
+#include "synthesize/appearance_space.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+
+#include "core/error.h"
+
+namespace photomat {
+namespace {
+
+// Voxels per block of the covariance and projection products. Fixed, so that every product has
+// the same shape whatever the thread count and the results are the same bits.
+constexpr std::size_t kBlock = 256;
+// Groups of blocks whose covariances are summed separately, then in group order.
+constexpr std::size_t kGroups = 8;
+
+using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+int Wrap(int value, int length) {
+  const int r = value % length;
+  return r < 0 ? r + length : r;
+}
+
+// The exemplar's channels reduced to at most `max_channels` by PCA (identity when already few).
+void FitChannelReduction(const Volume& exemplar, int max_channels, AppearanceSpace& space) {
+  const int channels = exemplar.channels();
+  if (channels <= max_channels) {
+    space.channel_mean = Eigen::VectorXf::Zero(channels);
+    space.channel_basis = Eigen::MatrixXf::Identity(channels, channels);
+    return;
+  }
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(channels);
+  Eigen::MatrixXd outer = Eigen::MatrixXd::Zero(channels, channels);
+  for (std::size_t i = 0; i < exemplar.voxel_count(); ++i) {
+    const Eigen::Map<const Eigen::VectorXf> v(exemplar.voxel(i).data(), channels);
+    const Eigen::VectorXd x = v.cast<double>();
+    sum += x;
+    outer.noalias() += x * x.transpose();
+  }
+  const double count = static_cast<double>(exemplar.voxel_count());
+  const Eigen::VectorXd mean = sum / count;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(outer / count -
+                                                              mean * mean.transpose());
+  space.channel_mean = mean.cast<float>();
+  space.channel_basis =
+      solver.eigenvectors().rightCols(max_channels).rowwise().reverse().cast<float>();
+}
+
+// voxel_count x reduced channels.
+RowMatrixXf ReducedChannels(const Volume& volume, const AppearanceSpace& space) {
+  const int channels = volume.channels();
+  const Eigen::Map<const RowMatrixXf> values(
+      volume.values().data(), static_cast<Eigen::Index>(volume.voxel_count()), channels);
+  if (space.channel_basis.isIdentity(0.0f)) return values;
+  return (values.rowwise() - space.channel_mean.transpose()) * space.channel_basis;
+}
+
+// Writes the neighbourhood of (x, y, z) of `reduced` (a volume of `size`, wrapping) into `out`,
+// z outermost, then y, then x, channels innermost.
+void Gather(const RowMatrixXf& reduced, const VolumeSize& size, int x, int y, int z, int side,
+            float* out) {
+  const int half = side / 2;
+  const int channels = static_cast<int>(reduced.cols());
+  for (int dz = -half; dz <= half; ++dz) {
+    const int zz = Wrap(z + dz, size.z);
+    for (int dy = -half; dy <= half; ++dy) {
+      const int yy = Wrap(y + dy, size.y);
+      for (int dx = -half; dx <= half; ++dx) {
+        const int xx = Wrap(x + dx, size.x);
+        const std::size_t index = (static_cast<std::size_t>(zz) * size.y + yy) * size.x + xx;
+        const float* source = reduced.data() + index * static_cast<std::size_t>(channels);
+        out = std::copy(source, source + channels, out);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<std::size_t> ExemplarDomain::ValidIndices() const {
+  std::vector<std::size_t> indices;
+  for (int z = 0; z < size.z; ++z) {
+    for (int y = 0; y < size.y; ++y) {
+      for (int x = 0; x < size.x; ++x) {
+        if (Contains(x, y, z)) indices.push_back(Index(x, y, z));
+      }
+    }
+  }
+  return indices;
+}
+
+void AppearanceSpace::Project(const Volume& volume, int x, int y, int z,
+                              std::span<float> out) const {
+  const int channels = volume.channels();
+  const int side = neighbourhood;
+  const int half = side / 2;
+  const VolumeSize& size = volume.size();
+  Eigen::VectorXf feature(feature_mean.size());
+  Eigen::Index k = 0;
+  Eigen::VectorXf reduced(reduced_channels());
+  for (int dz = -half; dz <= half; ++dz) {
+    for (int dy = -half; dy <= half; ++dy) {
+      for (int dx = -half; dx <= half; ++dx) {
+        const auto voxel =
+            volume.voxel(Wrap(x + dx, size.x), Wrap(y + dy, size.y), Wrap(z + dz, size.z));
+        const Eigen::Map<const Eigen::VectorXf> v(voxel.data(), channels);
+        reduced = channel_basis.transpose() * (v - channel_mean);
+        feature.segment(k, reduced.size()) = reduced;
+        k += reduced.size();
+      }
+    }
+  }
+  const Eigen::VectorXf projected = feature_basis.transpose() * (feature - feature_mean);
+  std::copy(projected.data(), projected.data() + dimensions, out.begin());
+}
+
+AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceOptions& options,
+                                       Progress* progress) {
+  NullProgress null_progress;
+  Progress& report = OrNull(progress, null_progress);
+  if (options.neighbourhood < 1 || options.neighbourhood % 2 == 0) {
+    throw Error(fmt::format("neighbourhood {} must be odd and positive", options.neighbourhood));
+  }
+  if (options.max_channels < 1 || options.covariance_samples < 16) {
+    throw Error("max_channels must be positive and covariance_samples at least 16");
+  }
+  if (exemplar.empty()) throw Error("the exemplar is empty");
+  AppearanceSpace space;
+  space.neighbourhood = options.neighbourhood;
+  space.domain.size = exemplar.size();
+  space.domain.periodic = options.boundary == ExemplarBoundary::kPeriodic;
+  space.domain.border = space.domain.periodic ? 0 : options.neighbourhood / 2;
+  const auto extent = space.domain.extent();
+  if (std::min({exemplar.size().x, exemplar.size().y, exemplar.size().z}) < options.neighbourhood ||
+      std::min({extent[0], extent[1], extent[2]}) < 1) {
+    throw Error(fmt::format("a {} exemplar is too small for {}^3 neighbourhoods{}",
+                            ToString(exemplar.size()), options.neighbourhood,
+                            space.domain.periodic ? "" : " inside its border"));
+  }
+  FitChannelReduction(exemplar, options.max_channels, space);
+  const RowMatrixXf reduced = ReducedChannels(exemplar, space);
+  const int side = options.neighbourhood;
+  const Eigen::Index features = static_cast<Eigen::Index>(side) * side * side * reduced.cols();
+  space.dimensions = static_cast<int>(std::min<Eigen::Index>(options.dimensions, features));
+  if (space.dimensions < 1) throw Error("the appearance space needs at least one dimension");
+
+  const std::vector<std::size_t> valid = space.domain.ValidIndices();
+  const std::size_t stride =
+      (valid.size() + static_cast<std::size_t>(options.covariance_samples) - 1) /
+      static_cast<std::size_t>(options.covariance_samples);
+  std::vector<std::size_t> samples;
+  for (std::size_t i = 0; i < valid.size(); i += stride) samples.push_back(valid[i]);
+  const Eigen::RowVectorXf centre = reduced.colwise().mean();  // keeps the sums well conditioned
+
+  // Covariance of the neighbourhood vectors.
+  const std::size_t blocks = (samples.size() + kBlock - 1) / kBlock;
+  report.Start("appearance space", blocks + (valid.size() + kBlock - 1) / kBlock);
+  std::vector<Eigen::MatrixXd> outer(kGroups, Eigen::MatrixXd::Zero(features, features));
+  std::vector<Eigen::VectorXd> sums(kGroups, Eigen::VectorXd::Zero(features));
+  tbb::parallel_for(std::size_t{0}, kGroups, [&](std::size_t group) {
+    RowMatrixXf block(static_cast<Eigen::Index>(kBlock), features);
+    for (std::size_t b = group; b < blocks; b += kGroups) {
+      const std::size_t begin = b * kBlock, end = std::min(samples.size(), begin + kBlock);
+      block.setZero();
+      for (std::size_t i = begin; i < end; ++i) {
+        const auto [x, y, z] = space.domain.Coordinates(samples[i]);
+        float* row = block.row(static_cast<Eigen::Index>(i - begin)).data();
+        Gather(reduced, exemplar.size(), x, y, z, side, row);
+        for (Eigen::Index f = 0; f < features; ++f) row[f] -= centre[f % reduced.cols()];
+      }
+      const Eigen::MatrixXf product = block.transpose() * block;
+      outer[group] += product.cast<double>();
+      sums[group] += block.colwise().sum().transpose().cast<double>();
+      report.Advance();
+    }
+  });
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(features, features);
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(features);
+  for (std::size_t g = 0; g < kGroups; ++g) {
+    covariance += outer[g];
+    sum += sums[g];
+  }
+  const double count = static_cast<double>(samples.size());
+  const Eigen::VectorXd mean = sum / count;
+  covariance = covariance / count - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
+  const Eigen::VectorXd eigenvalues = solver.eigenvalues().cwiseMax(0.0);
+  const double total = eigenvalues.sum();
+  space.retained_variance = total > 0 ? eigenvalues.tail(space.dimensions).sum() / total : 1.0;
+  Eigen::MatrixXd basis = solver.eigenvectors().rightCols(space.dimensions).rowwise().reverse();
+  for (int c = 0; c < space.dimensions; ++c) {  // a fixed sign per component
+    Eigen::Index largest = 0;
+    basis.col(c).cwiseAbs().maxCoeff(&largest);
+    if (basis(largest, c) < 0) basis.col(c) *= -1.0;
+  }
+  space.feature_basis = basis.cast<float>();
+  Eigen::VectorXf feature_mean(features);
+  for (Eigen::Index f = 0; f < features; ++f) {
+    feature_mean[f] = static_cast<float>(mean[f]) + centre[f % reduced.cols()];
+  }
+  space.feature_mean = feature_mean;
+
+  // Projection of every valid voxel.
+  const std::size_t d = static_cast<std::size_t>(space.dimensions);
+  space.values.assign(exemplar.voxel_count() * d, 0.0f);
+  const std::size_t projection_blocks = (valid.size() + kBlock - 1) / kBlock;
+  tbb::parallel_for(std::size_t{0}, projection_blocks, [&](std::size_t b) {
+    const std::size_t begin = b * kBlock, end = std::min(valid.size(), begin + kBlock);
+    RowMatrixXf block(static_cast<Eigen::Index>(kBlock), features);
+    block.setZero();
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto [x, y, z] = space.domain.Coordinates(valid[i]);
+      Gather(reduced, exemplar.size(), x, y, z, side,
+             block.row(static_cast<Eigen::Index>(i - begin)).data());
+    }
+    const RowMatrixXf projected =
+        (block.rowwise() - space.feature_mean.transpose()) * space.feature_basis;
+    for (std::size_t i = begin; i < end; ++i) {
+      const float* row = projected.row(static_cast<Eigen::Index>(i - begin)).data();
+      std::copy(row, row + d, space.values.begin() + static_cast<std::ptrdiff_t>(valid[i] * d));
+    }
+    report.Advance();
+  });
+  report.Finish();
+  return space;
+}
+
+}  // namespace photomat

@@ -1,0 +1,412 @@
+#include "synthesize/exemplar_solid.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+#include "synthesize/voxel_hash.h"
+
+namespace photomat {
+namespace {
+
+using Int3 = std::array<int, 3>;
+constexpr int kDiagonals = 8;
+
+// The 8 diagonal directions {-1, 1}^3; bit a of the index gives the sign along axis a.
+constexpr std::array<Int3, kDiagonals> kDiagonal = {{{-1, -1, -1},
+                                                     {1, -1, -1},
+                                                     {-1, 1, -1},
+                                                     {1, 1, -1},
+                                                     {-1, -1, 1},
+                                                     {1, -1, 1},
+                                                     {-1, 1, 1},
+                                                     {1, 1, 1}}};
+
+int Round(float value) { return static_cast<int>(std::floor(value + 0.5f)); }
+
+int WrapInt(int value, int length) {
+  const int r = value % length;
+  return r < 0 ? r + length : r;
+}
+
+// The warped neighbourhood of one voxel (spec sections 4.4 and 5.3). Output-space offsets:
+// neighbour[i] = round(phi(D_i)) and predictor[i][m] = round(phi(D_i) + phi(M_m D_i)), m = 0 the
+// neighbour itself (phi(0) = 0), m = 1..3 one step further along x, y, z (phi(D) = F D / |F D|).
+//
+// Exemplar-space corrections, in units of the level spacing h: a voxel at output offset o
+// predicts the exemplar coordinate of diagonal D as S[p + o] + h (D - A o), and its similarity
+// candidates for p itself as C_j(S[p + o]) - h A o (A = F^T). With the identity frame these are
+// the isometric S[p + D + M D] - h M D and C_j(S[p + D]) - h D of Eq. 4. With a rotated frame,
+// the thesis subtracts h M D (and h D) as if the rounded offset o were exactly A^-1 of the
+// exemplar offset; o lies on the voxel grid, so every frame then snaps to the nearest of the
+// few neighbourhood shapes a 3x3x3 grid has (a slant of 30 degrees came out at 45 in our tests).
+// Correcting by the offset actually taken, A o, removes that bias (IMPLEMENTER CHOICE).
+struct Neighbourhood {
+  std::array<Int3, kDiagonals> neighbour;
+  std::array<Eigen::Vector3f, kDiagonals> candidate_shift;  // -A o
+  std::array<std::array<Int3, 4>, kDiagonals> predictor;
+  std::array<std::array<Eigen::Vector3f, 4>, kDiagonals> prediction_shift;  // D - A o
+};
+
+Neighbourhood WarpedNeighbourhood(const Eigen::Matrix3f& frame) {
+  Neighbourhood result;
+  const auto rounded = [](const Eigen::Vector3f& v) -> Int3 {
+    return {Round(v.x()), Round(v.y()), Round(v.z())};
+  };
+  const auto exemplar_offset = [&frame](const Int3& o) -> Eigen::Vector3f {
+    return frame.transpose() * Eigen::Vector3f(static_cast<float>(o[0]), static_cast<float>(o[1]),
+                                               static_cast<float>(o[2]));
+  };
+  for (int i = 0; i < kDiagonals; ++i) {
+    const Eigen::Vector3f delta(static_cast<float>(kDiagonal[i][0]),
+                                static_cast<float>(kDiagonal[i][1]),
+                                static_cast<float>(kDiagonal[i][2]));
+    Eigen::Vector3f phi = frame * delta;  // A^-1 = F
+    phi /= phi.norm();
+    result.neighbour[i] = rounded(phi);
+    result.candidate_shift[i] = -exemplar_offset(result.neighbour[i]);
+    result.predictor[i][0] = result.neighbour[i];
+    for (int axis = 0; axis < 3; ++axis) {
+      Eigen::Vector3f step = frame.col(axis) * delta[axis];
+      step /= step.norm();
+      result.predictor[i][static_cast<std::size_t>(axis + 1)] = rounded(phi + step);
+    }
+    for (std::size_t m = 0; m < 4; ++m) {
+      result.prediction_shift[i][m] = delta - exemplar_offset(result.predictor[i][m]);
+    }
+  }
+  return result;
+}
+
+// Per-task buffers of the correction.
+struct Scratch {
+  std::vector<float> synthesized;
+  std::vector<std::size_t> candidates;
+};
+
+class Synthesizer {
+ public:
+  Synthesizer(const Volume& exemplar, const PreparedExemplar& prepared,
+              const ExemplarSolidOptions& options)
+      : exemplar_(exemplar),
+        appearance_(prepared.appearance),
+        similarity_(prepared.similarity),
+        domain_(prepared.appearance.domain),
+        options_(options),
+        d_(static_cast<std::size_t>(prepared.appearance.dimensions)) {
+    const auto extent = domain_.extent();
+    smallest_extent_ = std::min({extent[0], extent[1], extent[2]});
+  }
+
+  ExemplarSolidResult Run(Progress& report) {
+    const VolumeSize& size = options_.size;
+    int levels = 0;
+    while ((1 << levels) < std::max({size.x, size.y, size.z})) ++levels;
+    std::vector<FrameField> fields;
+    if (options_.field) fields = FieldPyramid(levels);
+
+    ExemplarSolidResult result;
+    std::vector<float> coordinates(3, static_cast<float>(domain_.origin()));
+    report.Start("solid synthesis", static_cast<std::size_t>(levels));
+    for (int level = 1; level <= levels; ++level) {
+      const int side = 1 << level;
+      const int spacing = 1 << (levels - level);
+      const FrameField* field = options_.field ? &fields[static_cast<std::size_t>(level)] : nullptr;
+      coordinates = Upsample(coordinates, side / 2, spacing, field);
+      Jitter(coordinates, side, spacing, level);
+      // Offsets of h_l >= n / 2 wrap around the exemplar: those levels are jitter only.
+      if (2 * spacing < smallest_extent_ && options_.correction_passes > 0) {
+        const std::vector<float> exemplar_neighbourhoods = ExemplarNeighbourhoods(spacing);
+        for (int pass = 0; pass < options_.correction_passes; ++pass) {
+          const double objective =
+              Correct(coordinates, side, spacing, field, exemplar_neighbourhoods);
+          result.passes.push_back({level, spacing, pass, objective});
+        }
+      }
+      report.Advance();
+    }
+    report.Finish();
+    Output(coordinates, 1 << levels, result);
+    return result;
+  }
+
+ private:
+  std::vector<FrameField> FieldPyramid(int levels) const {
+    std::vector<FrameField> fields(static_cast<std::size_t>(levels) + 1);
+    fields[static_cast<std::size_t>(levels)] =
+        options_.field->Resampled(VolumeSize::Cube(1 << levels));
+    for (int level = levels - 1; level >= 0; --level) {
+      fields[static_cast<std::size_t>(level)] =
+          fields[static_cast<std::size_t>(level) + 1].Downsampled();
+    }
+    return fields;
+  }
+
+  static std::size_t Index(int side, int x, int y, int z) {
+    return (static_cast<std::size_t>(z) * side + y) * side + x;
+  }
+
+  float WrapFloat(float value, int axis) const {
+    const float origin = static_cast<float>(domain_.origin());
+    const float length = static_cast<float>(domain_.extent()[static_cast<std::size_t>(axis)]);
+    float offset = std::fmod(value - origin, length);
+    if (offset < 0) offset += length;
+    return origin + offset;
+  }
+
+  // The exemplar voxel a (float) coordinate points to.
+  std::size_t Lookup(const float* coordinate) const {
+    return domain_.Index(domain_.Wrap(Round(coordinate[0]), 0),
+                         domain_.Wrap(Round(coordinate[1]), 1),
+                         domain_.Wrap(Round(coordinate[2]), 2));
+  }
+
+  // Eq. 1 (isometric) or Eq. 5 (anisometric, A = F^T) of the spec.
+  std::vector<float> Upsample(const std::vector<float>& parent, int parent_side, int spacing,
+                              const FrameField* field) const {
+    const int side = 2 * parent_side;
+    std::vector<float> child(static_cast<std::size_t>(side) * side * side * 3);
+    tbb::parallel_for(0, side, [&](int z) {
+      for (int y = 0; y < side; ++y) {
+        for (int x = 0; x < side; ++x) {
+          const float* from = &parent[3 * Index(parent_side, x / 2, y / 2, z / 2)];
+          float* to = &child[3 * Index(side, x, y, z)];
+          Eigen::Vector3f offset(static_cast<float>(x & 1), static_cast<float>(y & 1),
+                                 static_cast<float>(z & 1));
+          if (field) {
+            offset = field->at(x, y, z).transpose() * (offset - Eigen::Vector3f::Constant(0.5f));
+          }
+          for (int axis = 0; axis < 3; ++axis) {
+            to[axis] = WrapFloat(from[axis] + static_cast<float>(spacing) * offset[axis], axis);
+          }
+        }
+      }
+    });
+    return child;
+  }
+
+  // Eq. 2: S += floor(h r H(p) + 1/2), H a hash of (seed, level, p) in [-1, 1]^3.
+  void Jitter(std::vector<float>& coordinates, int side, int spacing, int level) const {
+    if (options_.jitter == 0.0) return;
+    const float amplitude = static_cast<float>(spacing * options_.jitter);
+    tbb::parallel_for(0, side, [&](int z) {
+      for (int y = 0; y < side; ++y) {
+        for (int x = 0; x < side; ++x) {
+          float* s = &coordinates[3 * Index(side, x, y, z)];
+          for (int axis = 0; axis < 3; ++axis) {
+            const float h = HashToSigned(
+                HashVoxel(options_.seed, static_cast<std::uint64_t>(3 * level + axis), x, y, z));
+            s[axis] = WrapFloat(s[axis] + std::floor(amplitude * h + 0.5f), axis);
+          }
+        }
+      }
+    });
+  }
+
+  // N_E(u) = concat over the diagonals D of V~[u + h D], for every valid voxel u.
+  std::vector<float> ExemplarNeighbourhoods(int spacing) const {
+    std::vector<float> result(domain_.size.voxel_count() * kDiagonals * d_, 0.0f);
+    const std::vector<std::size_t> valid = domain_.ValidIndices();
+    tbb::parallel_for(std::size_t{0}, valid.size(), [&](std::size_t i) {
+      const auto u = domain_.Coordinates(valid[i]);
+      float* out = &result[valid[i] * kDiagonals * d_];
+      for (int k = 0; k < kDiagonals; ++k) {
+        const std::size_t v = domain_.Index(domain_.Wrap(u[0] + spacing * kDiagonal[k][0], 0),
+                                            domain_.Wrap(u[1] + spacing * kDiagonal[k][1], 1),
+                                            domain_.Wrap(u[2] + spacing * kDiagonal[k][2], 2));
+        const auto value = appearance_.at(v);
+        std::copy(value.begin(), value.end(), out + static_cast<std::size_t>(k) * d_);
+      }
+    });
+    return result;
+  }
+
+  // One correction pass: 8 subpasses over the parity classes of voxels. Each subpass reads a
+  // snapshot of the coordinates taken at its start, so no voxel ever reads one being written
+  // (warped neighbourhoods can reach a voxel of the same class). Returns the mean objective.
+  double Correct(std::vector<float>& coordinates, int side, int spacing, const FrameField* field,
+                 const std::vector<float>& exemplar_neighbourhoods) const {
+    std::vector<float> error(static_cast<std::size_t>(side) * side * side, 0.0f);
+    const Neighbourhood isometric = WarpedNeighbourhood(Eigen::Matrix3f::Identity());
+    for (int parity = 0; parity < 8; ++parity) {
+      const std::vector<float> snapshot = coordinates;
+      const int px = parity & 1, py = (parity >> 1) & 1, pz = (parity >> 2) & 1;
+      if (px >= side || py >= side || pz >= side) continue;
+      const int slabs = (side - pz + 1) / 2;
+      tbb::parallel_for(0, slabs, [&](int slab) {
+        const int z = pz + 2 * slab;
+        Scratch scratch;
+        scratch.synthesized.resize(kDiagonals * d_);
+        scratch.candidates.reserve(1 + kDiagonals * static_cast<std::size_t>(similarity_.k));
+        for (int y = py; y < side; y += 2) {
+          for (int x = px; x < side; x += 2) {
+            const Neighbourhood local = field ? WarpedNeighbourhood(field->at(x, y, z)) : isometric;
+            const std::size_t p = Index(side, x, y, z);
+            error[p] = CorrectVoxel({x, y, z}, side, spacing, local, snapshot,
+                                    exemplar_neighbourhoods, scratch, &coordinates[3 * p]);
+          }
+        }
+      });
+    }
+    double sum = 0;
+    for (float e : error) sum += e;
+    return sum / static_cast<double>(error.size());
+  }
+
+  const float* At(const std::vector<float>& coordinates, int side, const Int3& p,
+                  const Int3& offset) const {
+    return &coordinates[3 * Index(side, WrapInt(p[0] + offset[0], side),
+                                  WrapInt(p[1] + offset[1], side),
+                                  WrapInt(p[2] + offset[2], side))];
+  }
+
+  float CorrectVoxel(const Int3& p, int side, int spacing, const Neighbourhood& local,
+                     const std::vector<float>& snapshot,
+                     const std::vector<float>& exemplar_neighbourhoods, Scratch& scratch,
+                     float* out) const {
+    std::vector<float>& synthesized = scratch.synthesized;
+    std::vector<std::size_t>& candidates = scratch.candidates;
+    // N_S(p): per diagonal, the mean of 4 predictions of its appearance.
+    for (int i = 0; i < kDiagonals; ++i) {
+      std::array<std::span<const float>, 4> predictions;
+      for (int m = 0; m < 4; ++m) {
+        const float* s = At(snapshot, side, p, local.predictor[i][static_cast<std::size_t>(m)]);
+        const Eigen::Vector3f& shift = local.prediction_shift[i][static_cast<std::size_t>(m)];
+        const float h = static_cast<float>(spacing);
+        const std::size_t u = domain_.Index(domain_.Wrap(Round(s[0] + h * shift.x()), 0),
+                                            domain_.Wrap(Round(s[1] + h * shift.y()), 1),
+                                            domain_.Wrap(Round(s[2] + h * shift.z()), 2));
+        predictions[static_cast<std::size_t>(m)] = appearance_.at(u);
+      }
+      float* target = synthesized.data() + static_cast<std::size_t>(i) * d_;
+      for (std::size_t k = 0; k < d_; ++k) {
+        // Pairwise, so four equal predictions average to exactly that value.
+        target[k] =
+            ((predictions[0][k] + predictions[1][k]) + (predictions[2][k] + predictions[3][k])) *
+            0.25f;
+      }
+    }
+    // Candidates: the current coordinate first (ties keep it), then C_j(S[p + D]) - h D.
+    candidates.clear();
+    candidates.push_back(Lookup(&snapshot[3 * Index(side, p[0], p[1], p[2])]));
+    for (int i = 0; i < kDiagonals; ++i) {
+      const std::size_t base = Lookup(At(snapshot, side, p, local.neighbour[i]));
+      for (std::int32_t c : similarity_.at(base)) {
+        if (c < 0) continue;
+        const auto u = domain_.Coordinates(static_cast<std::size_t>(c));
+        const Eigen::Vector3f& shift = local.candidate_shift[i];
+        const float h = static_cast<float>(spacing);
+        const Int3 shifted{u[0] + Round(h * shift.x()), u[1] + Round(h * shift.y()),
+                           u[2] + Round(h * shift.z())};
+        if (!domain_.periodic && !domain_.Contains(shifted[0], shifted[1], shifted[2])) continue;
+        const std::size_t candidate = domain_.Index(
+            domain_.Wrap(shifted[0], 0), domain_.Wrap(shifted[1], 1), domain_.Wrap(shifted[2], 2));
+        if (std::find(candidates.begin(), candidates.end(), candidate) == candidates.end()) {
+          candidates.push_back(candidate);
+        }
+      }
+    }
+    float best = std::numeric_limits<float>::infinity();
+    std::size_t best_candidate = candidates[0];
+    const std::size_t length = kDiagonals * d_;
+    for (std::size_t candidate : candidates) {
+      const float* e = &exemplar_neighbourhoods[candidate * length];
+      float distance = 0.0f;
+      for (std::size_t k = 0; k < length; ++k) {
+        const float diff = synthesized[k] - e[k];
+        distance += diff * diff;
+      }
+      if (distance < best) best = distance, best_candidate = candidate;
+    }
+    const auto u = domain_.Coordinates(best_candidate);
+    for (int axis = 0; axis < 3; ++axis)
+      out[axis] = static_cast<float>(u[static_cast<std::size_t>(axis)]);
+    return best;
+  }
+
+  void Output(const std::vector<float>& coordinates, int side, ExemplarSolidResult& result) const {
+    const VolumeSize& size = options_.size;
+    result.volume = Volume(size, exemplar_.channels());
+    if (!exemplar_.channel_names().empty()) {
+      result.volume.set_channel_names(exemplar_.channel_names());
+    }
+    result.coordinates =
+        Volume(size, std::vector<std::string>{"exemplar.x", "exemplar.y", "exemplar.z"});
+    tbb::parallel_for(0, size.z, [&](int z) {
+      for (int y = 0; y < size.y; ++y) {
+        for (int x = 0; x < size.x; ++x) {
+          const std::size_t u = Lookup(&coordinates[3 * Index(side, x, y, z)]);
+          const auto source = exemplar_.voxel(u);
+          std::copy(source.begin(), source.end(), result.volume.voxel(x, y, z).begin());
+          const auto c = domain_.Coordinates(u);
+          for (int axis = 0; axis < 3; ++axis) {
+            result.coordinates.at(x, y, z, axis) =
+                static_cast<float>(c[static_cast<std::size_t>(axis)]);
+          }
+        }
+      }
+    });
+  }
+
+  const Volume& exemplar_;
+  const AppearanceSpace& appearance_;
+  const SimilaritySet& similarity_;
+  const ExemplarDomain& domain_;
+  const ExemplarSolidOptions& options_;
+  std::size_t d_;
+  int smallest_extent_ = 0;
+};
+
+}  // namespace
+
+ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
+                                            const PreparedExemplar& prepared,
+                                            const ExemplarSolidOptions& options,
+                                            Progress* progress) {
+  if (options.size.x < 1 || options.size.y < 1 || options.size.z < 1) {
+    throw Error(fmt::format("invalid output size {}", ToString(options.size)));
+  }
+  if (!(options.jitter >= 0.0) || options.correction_passes < 0) {
+    throw Error("jitter and correction passes must not be negative");
+  }
+  if (prepared.appearance.domain.size != exemplar.size() ||
+      prepared.similarity.indices.size() !=
+          exemplar.voxel_count() * static_cast<std::size_t>(prepared.similarity.k)) {
+    throw Error("the prepared appearance space and similarity set are not this exemplar's");
+  }
+  NullProgress null_progress;
+  Synthesizer synthesizer(exemplar, prepared, options);
+  return synthesizer.Run(OrNull(progress, null_progress));
+}
+
+ExemplarSolidResult RandomCoordinateSolid(const Volume& exemplar, const ExemplarDomain& domain,
+                                          VolumeSize size, std::uint64_t seed) {
+  ExemplarSolidResult result;
+  result.volume = Volume(size, exemplar.channels());
+  if (!exemplar.channel_names().empty()) result.volume.set_channel_names(exemplar.channel_names());
+  result.coordinates =
+      Volume(size, std::vector<std::string>{"exemplar.x", "exemplar.y", "exemplar.z"});
+  const auto extent = domain.extent();
+  for (int z = 0; z < size.z; ++z) {
+    for (int y = 0; y < size.y; ++y) {
+      for (int x = 0; x < size.x; ++x) {
+        Int3 u;
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          const std::uint64_t h = HashVoxel(seed, 100 + axis, x, y, z);
+          u[axis] =
+              domain.origin() + static_cast<int>(h % static_cast<std::uint64_t>(extent[axis]));
+          result.coordinates.at(x, y, z, static_cast<int>(axis)) = static_cast<float>(u[axis]);
+        }
+        const auto source = exemplar.voxel(domain.Index(u[0], u[1], u[2]));
+        std::copy(source.begin(), source.end(), result.volume.voxel(x, y, z).begin());
+      }
+    }
+  }
+  return result;
+}
+
+}  // namespace photomat

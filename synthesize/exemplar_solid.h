@@ -1,0 +1,62 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/progress.h"
+#include "synthesize/frame_field.h"
+#include "synthesize/similarity_set.h"
+#include "synthesize/volume.h"
+
+namespace photomat {
+
+// Exemplar-based solid synthesis with vector-field control (Su 2008; ../shared/specs/
+// solid-texture-vector-field.md), a 3D version of Lefebvre and Hoppe's parallel controllable
+// synthesis: a pyramid of exemplar coordinates, each level upsampled from the last, jittered by a
+// hash of the voxel, then corrected by matching appearance-space neighbourhoods (8 diagonal
+// neighbours, each the mean of 4 predictions) among 24 k-coherence candidates and the current
+// coordinate. With a frame field, upsampling and neighbourhoods follow the local frame
+// (anisometric synthesis). The output takes every channel of the exemplar voxel its coordinate
+// points to, so any representation's maps grow as a solid.
+//
+// Determinism: jitter comes from a hash of (seed, level, voxel); correction updates the 8 parity
+// classes of voxels one after another (Gauss-Seidel), and voxels of one class never read each
+// other, so the result is the same bytes for any thread count.
+struct ExemplarSolidOptions {
+  VolumeSize size = VolumeSize::Cube(128);
+  double jitter = 0.7;  // r: jitter of h_l * r per level
+  // Correction passes per level (Lefebvre and Hoppe's 2; the thesis gives none). 0 turns
+  // correction off (upsampling and jitter only).
+  int correction_passes = 2;
+  std::uint64_t seed = 1;
+  // Anisometric synthesis when set: the frames over the output (any size; resampled to it).
+  const FrameField* field = nullptr;
+};
+
+struct PassReport {
+  int level = 0;
+  int spacing = 0;  // h_l
+  int pass = 0;
+  // Mean over the level's voxels of |N_S(p) - N_E(S[p])|^2 after the pass (the internal
+  // objective; it cannot rise within a pass, since the current coordinate is a candidate).
+  double objective = 0;
+};
+
+struct ExemplarSolidResult {
+  Volume volume;       // the exemplar's channels
+  Volume coordinates;  // "exemplar.x/y/z": the exemplar voxel of each output voxel
+  std::vector<PassReport> passes;
+};
+
+// `prepared` must come from `exemplar` (PrepareExemplar). Throws Error for sizes below 1 or a
+// negative jitter.
+ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
+                                            const PreparedExemplar& prepared,
+                                            const ExemplarSolidOptions& options,
+                                            Progress* progress = nullptr);
+
+// The baseline of uniformly random exemplar coordinates (a hash of seed and voxel).
+ExemplarSolidResult RandomCoordinateSolid(const Volume& exemplar, const ExemplarDomain& domain,
+                                          VolumeSize size, std::uint64_t seed);
+
+}  // namespace photomat

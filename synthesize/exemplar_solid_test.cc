@@ -1,0 +1,396 @@
+#include "synthesize/exemplar_solid.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "synthesize/procedural_exemplars.h"
+#include "synthesize/solid_quality.h"
+#include "synthesize/voxel_hash.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+// Smooth periodic noise plus a per-voxel hash: no two neighbourhoods are equal.
+Volume UniqueExemplar(int n) {
+  Volume volume = MakeProceduralExemplar(ProceduralPattern::kNoise, n, 5);
+  for (std::size_t i = 0; i < volume.values().size(); ++i) {
+    volume.values()[i] += 0.01f * HashToSigned(HashVoxel(6, 0, static_cast<std::int64_t>(i), 0, 0));
+  }
+  return volume;
+}
+
+bool SameBytes(const Volume& a, const Volume& b) {
+  return a.SameShape(b) &&
+         std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
+}
+
+double AngleDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::min(1.0, std::abs(a.normalized().dot(b.normalized())))) * 180.0 /
+         std::numbers::pi;
+}
+
+TEST(ExemplarSolidTest, IdentityReproduction) {
+  const Volume exemplar = UniqueExemplar(16);
+  const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
+  ExemplarSolidOptions options;
+  options.size = VolumeSize::Cube(16);
+  options.jitter = 0.0;
+  for (int passes : {0, 2}) {
+    options.correction_passes = passes;
+    const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
+    for (int z = 0; z < 16; ++z) {
+      for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 16; ++x) {
+          ASSERT_EQ(result.coordinates.at(x, y, z, 0), x);
+          ASSERT_EQ(result.coordinates.at(x, y, z, 1), y);
+          ASSERT_EQ(result.coordinates.at(x, y, z, 2), z);
+        }
+      }
+    }
+    EXPECT_TRUE(SameBytes(result.volume, exemplar));
+    for (const PassReport& pass : result.passes) EXPECT_EQ(pass.objective, 0.0);
+  }
+}
+
+void ExpectValidSimilaritySet(const AppearanceSpace& appearance, const SimilaritySet& set,
+                              int exclusion) {
+  for (std::size_t u : appearance.domain.ValidIndices()) {
+    const auto candidates = set.at(u);
+    ASSERT_EQ(candidates[0], static_cast<std::int32_t>(u));
+    float previous = 0.0f;
+    for (std::size_t j = 1; j < candidates.size(); ++j) {
+      ASSERT_TRUE(appearance.domain.Contains(
+          appearance.domain.Coordinates(static_cast<std::size_t>(candidates[j]))[0],
+          appearance.domain.Coordinates(static_cast<std::size_t>(candidates[j]))[1],
+          appearance.domain.Coordinates(static_cast<std::size_t>(candidates[j]))[2]));
+      for (std::size_t i = 0; i < j; ++i) {
+        EXPECT_GT(ChebyshevDistance(appearance.domain, static_cast<std::size_t>(candidates[j]),
+                                    static_cast<std::size_t>(candidates[i])),
+                  exclusion / 2);
+      }
+      float distance = 0;
+      for (int k = 0; k < appearance.dimensions; ++k) {
+        distance += std::pow(appearance.at(u)[k] - appearance.at(candidates[j])[k], 2.0f);
+      }
+      EXPECT_GE(distance, previous);
+      previous = distance;
+    }
+  }
+}
+
+TEST(SimilaritySetTest, AgreesWithBruteForceAndKeepsItsInvariants) {
+  for (ExemplarBoundary boundary : {ExemplarBoundary::kPeriodic, ExemplarBoundary::kInterior}) {
+    const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 12, 2);
+    AppearanceOptions appearance_options;
+    appearance_options.boundary = boundary;
+    const AppearanceSpace appearance = ComputeAppearanceSpace(exemplar, appearance_options);
+    const SimilaritySet tree = BuildSimilaritySet(appearance, {});
+    const SimilaritySet brute = BuildSimilaritySetBruteForce(appearance, {});
+    EXPECT_EQ(tree.indices, brute.indices);
+    ExpectValidSimilaritySet(appearance, tree, 7);
+    if (boundary == ExemplarBoundary::kInterior) {
+      EXPECT_EQ(tree.at(0)[0], -1);  // a border voxel has no candidates
+      EXPECT_EQ(appearance.domain.ValidIndices().size(), 8u * 8u * 8u);
+    }
+  }
+  // More candidates and a larger box.
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 4);
+  const AppearanceSpace appearance = ComputeAppearanceSpace(exemplar, {});
+  const SimilarityOptions wide{5, 5};
+  EXPECT_EQ(BuildSimilaritySet(appearance, wide).indices,
+            BuildSimilaritySetBruteForce(appearance, wide).indices);
+  ExpectValidSimilaritySet(appearance, BuildSimilaritySet(appearance, wide), 5);
+}
+
+TEST(AppearanceSpaceTest, KeepsMoreVarianceWithMoreDimensions) {
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 1);
+  double previous = 0;
+  for (int d : {2, 4, 8, 16}) {
+    AppearanceOptions options;
+    options.dimensions = d;
+    const AppearanceSpace space = ComputeAppearanceSpace(exemplar, options);
+    EXPECT_GT(space.retained_variance, previous);
+    EXPECT_LE(space.retained_variance, 1.0);
+    previous = space.retained_variance;
+    // Projecting a voxel of the exemplar itself gives its stored appearance vector.
+    std::vector<float> projected(static_cast<std::size_t>(d));
+    space.Project(exemplar, 3, 4, 5, projected);
+    for (int k = 0; k < d; ++k) {
+      EXPECT_NEAR(projected[static_cast<std::size_t>(k)],
+                  space.at(exemplar.Index(3, 4, 5))[static_cast<std::size_t>(k)], 1e-3);
+    }
+  }
+  EXPECT_THROW(ComputeAppearanceSpace(MakeProceduralExemplar(ProceduralPattern::kNoise, 8, 1),
+                                      {.neighbourhood = 9}),
+               Error);
+}
+
+struct Quality {
+  double match_error;
+  double histogram;
+  double spectrum_db;
+};
+
+Quality Measure(const Volume& solid, const Volume& exemplar, const AppearanceSpace& appearance) {
+  return {NeighbourhoodMatchError(solid, exemplar, appearance), HistogramDistance(solid, exemplar),
+          LogSpectralDistance(RadialPowerSpectrum(solid, 8), RadialPowerSpectrum(exemplar, 8))};
+}
+
+TEST(ExemplarSolidTest, CorrectionBeatsJitterOnlyWhichBeatsRandomCoordinates) {
+  for (ProceduralPattern pattern :
+       {ProceduralPattern::kMarble, ProceduralPattern::kStripes, ProceduralPattern::kCells}) {
+    SCOPED_TRACE(std::string(ToString(pattern)));
+    const Volume exemplar = MakeProceduralExemplar(pattern, 16, 3);
+    const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
+    ExemplarSolidOptions options;
+    options.size = VolumeSize::Cube(32);
+    const ExemplarSolidResult corrected = SynthesizeExemplarSolid(exemplar, prepared, options);
+    options.correction_passes = 0;
+    const ExemplarSolidResult jitter = SynthesizeExemplarSolid(exemplar, prepared, options);
+    const ExemplarSolidResult random =
+        RandomCoordinateSolid(exemplar, prepared.appearance.domain, options.size, 1);
+    const Quality a = Measure(corrected.volume, exemplar, prepared.appearance);
+    const Quality b = Measure(jitter.volume, exemplar, prepared.appearance);
+    const Quality c = Measure(random.volume, exemplar, prepared.appearance);
+    std::printf(
+        "%s: match error %.4f / %.4f / %.4f, histogram %.3f / %.3f / %.3f, spectrum "
+        "%.2f / %.2f / %.2f dB (corrected / jitter only / random)\n",
+        std::string(ToString(pattern)).c_str(), a.match_error, b.match_error, c.match_error,
+        a.histogram, b.histogram, c.histogram, a.spectrum_db, b.spectrum_db, c.spectrum_db);
+    EXPECT_LT(a.match_error, 0.5 * b.match_error);
+    EXPECT_LT(b.match_error, c.match_error);
+    EXPECT_LT(a.spectrum_db, c.spectrum_db);
+    // The internal objective falls with every pass of a level.
+    for (std::size_t i = 1; i < corrected.passes.size(); ++i) {
+      if (corrected.passes[i].level == corrected.passes[i - 1].level) {
+        EXPECT_LT(corrected.passes[i].objective, corrected.passes[i - 1].objective);
+      }
+    }
+    // Not a translated copy: many coherent patches, yet far more coherence than noise.
+    const double coherence = CoherentFraction(corrected.coordinates, prepared.appearance.domain);
+    EXPECT_LT(coherence, 0.8);
+    EXPECT_GT(coherence, 2 * CoherentFraction(random.coordinates, prepared.appearance.domain));
+  }
+}
+
+TEST(ExemplarSolidTest, StatisticsOfAStochasticExemplar) {
+  // Marble: the colour histogram stays close to the exemplar's and the spectrum is closer than
+  // the jitter-only result's. (On the cells exemplar the corrected result's histogram and
+  // spectrum are further than jitter-only: see README, solid textures.)
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 3);
+  const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
+  ExemplarSolidOptions options;
+  options.size = VolumeSize::Cube(32);
+  const Quality a = Measure(SynthesizeExemplarSolid(exemplar, prepared, options).volume, exemplar,
+                            prepared.appearance);
+  options.correction_passes = 0;
+  const Quality b = Measure(SynthesizeExemplarSolid(exemplar, prepared, options).volume, exemplar,
+                            prepared.appearance);
+  EXPECT_LT(a.histogram, 0.15);
+  EXPECT_LT(a.spectrum_db, 0.5 * b.spectrum_db);
+}
+
+TEST(ExemplarSolidTest, ConstantRotationFieldRotatesTheStatistics) {
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kStripes, 32, 3);
+  const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
+  ExemplarSolidOptions options;
+  options.size = VolumeSize::Cube(32);
+  const Eigen::Vector3d isometric = PrincipalDirection(
+      StructureTensor(SynthesizeExemplarSolid(exemplar, prepared, options).volume));
+  EXPECT_LT(AngleDegrees(isometric, Eigen::Vector3d::UnitX()), 2.0);
+  const Eigen::Matrix3f slant =
+      Eigen::AngleAxisf(static_cast<float>(std::numbers::pi / 6), Eigen::Vector3f::UnitZ())
+          .toRotationMatrix();
+  const Eigen::Matrix3f tilted =
+      Eigen::AngleAxisf(0.5f, Eigen::Vector3f(1, 1, 1).normalized()).toRotationMatrix();
+  for (const Eigen::Matrix3f& rotation : {slant, tilted}) {
+    const FrameField field = ConstantFrameField(options.size, rotation);
+    options.field = &field;
+    const Volume rotated = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
+    // The sheets' normal (the exemplar's x) follows the frame's first column.
+    const Eigen::Vector3d expected = rotation.col(0).cast<double>();
+    const double error = AngleDegrees(PrincipalDirection(StructureTensor(rotated)), expected);
+    std::printf("rotated sheets: %.1f degrees from the frame's x axis\n", error);
+    EXPECT_LT(error, 6.0);
+  }
+}
+
+TEST(ExemplarSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 7);
+  ExemplarSolidOptions options;
+  options.size = VolumeSize{24, 16, 12};
+  const FrameField field = MakeFrameField(FieldKind::kCircular, options.size, {});
+  for (const FrameField* control : {static_cast<const FrameField*>(nullptr), &field}) {
+    options.field = control;
+    ExemplarSolidResult one, two;
+    {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+      one = SynthesizeExemplarSolid(exemplar, PrepareExemplar(exemplar, {}, {}, std::nullopt),
+                                    options);
+    }
+    {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+      two = SynthesizeExemplarSolid(exemplar, PrepareExemplar(exemplar, {}, {}, std::nullopt),
+                                    options);
+    }
+    EXPECT_EQ(one.volume.size(), options.size);
+    EXPECT_TRUE(SameBytes(one.volume, two.volume));
+    EXPECT_TRUE(SameBytes(one.coordinates, two.coordinates));
+    options.seed = 2;
+    const ExemplarSolidResult other =
+        SynthesizeExemplarSolid(exemplar, PrepareExemplar(exemplar, {}, {}, std::nullopt), options);
+    EXPECT_FALSE(SameBytes(one.volume, other.volume));
+    options.seed = 1;
+  }
+}
+
+TEST(ExemplarSolidTest, GrowsAnyNumberOfChannels) {
+  // An 18-channel exemplar (as a PTM map stack's six terms per colour): every output voxel is an
+  // exemplar voxel, all channels together.
+  const Volume colour = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 8);
+  std::vector<std::string> names;
+  for (int term = 0; term < 6; ++term) {
+    for (const char* c : {"R", "G", "B"}) names.push_back("ptm.a" + std::to_string(term) + "." + c);
+  }
+  Volume exemplar(colour.size(), names);
+  for (std::size_t i = 0; i < exemplar.voxel_count(); ++i) {
+    for (int k = 0; k < 18; ++k) {
+      exemplar.voxel(i)[static_cast<std::size_t>(k)] =
+          colour.voxel(i)[static_cast<std::size_t>(k % 3)] * (1.0f + 0.3f * (k / 3)) -
+          0.1f * (k / 3);
+    }
+  }
+  const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
+  EXPECT_EQ(prepared.appearance.reduced_channels(), 4);
+  ExemplarSolidOptions options;
+  options.size = VolumeSize::Cube(16);
+  const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
+  EXPECT_EQ(result.volume.channel_names(), names);
+  for (int z = 0; z < 16; ++z) {
+    for (int y = 0; y < 16; ++y) {
+      for (int x = 0; x < 16; ++x) {
+        const auto source = exemplar.voxel(static_cast<int>(result.coordinates.at(x, y, z, 0)),
+                                           static_cast<int>(result.coordinates.at(x, y, z, 1)),
+                                           static_cast<int>(result.coordinates.at(x, y, z, 2)));
+        const auto out = result.volume.voxel(x, y, z);
+        ASSERT_TRUE(std::equal(source.begin(), source.end(), out.begin()));
+      }
+    }
+  }
+  EXPECT_LT(
+      NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance),
+      0.5 * NeighbourhoodMatchError(
+                RandomCoordinateSolid(exemplar, prepared.appearance.domain, options.size, 3).volume,
+                exemplar, prepared.appearance));
+}
+
+TEST(ExemplarSolidTest, InteriorModeKeepsCoordinatesInside) {
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 20, 2);
+  AppearanceOptions appearance;
+  appearance.boundary = ExemplarBoundary::kInterior;
+  const PreparedExemplar prepared = PrepareExemplar(exemplar, appearance, {}, std::nullopt);
+  ExemplarSolidOptions options;
+  options.size = VolumeSize::Cube(24);
+  const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
+  for (std::size_t i = 0; i < result.coordinates.voxel_count(); ++i) {
+    for (float c : result.coordinates.voxel(i)) {
+      EXPECT_GE(c, 2.0f);
+      EXPECT_LE(c, 17.0f);
+    }
+  }
+}
+
+TEST(SimilaritySetTest, CacheIsReusedAndSurvivesDamage) {
+  testing::TempDir dir;
+  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 1);
+  const PreparedExemplar first = PrepareExemplar(exemplar, {}, {}, dir.path());
+  EXPECT_FALSE(first.from_cache);
+  ASSERT_TRUE(std::filesystem::exists(first.cache_file));
+  const PreparedExemplar second = PrepareExemplar(exemplar, {}, {}, dir.path());
+  EXPECT_TRUE(second.from_cache);
+  EXPECT_EQ(second.similarity.indices, first.similarity.indices);
+  EXPECT_EQ(second.appearance.values, first.appearance.values);
+  EXPECT_TRUE(second.appearance.feature_basis.isApprox(first.appearance.feature_basis, 0.0f));
+
+  // The key names the content and every parameter.
+  Volume changed = exemplar;
+  changed.values()[100] += 1e-3f;
+  EXPECT_NE(SimilarityCacheKey(changed, {}, {}), SimilarityCacheKey(exemplar, {}, {}));
+  EXPECT_NE(SimilarityCacheKey(exemplar, {.dimensions = 6}, {}),
+            SimilarityCacheKey(exemplar, {}, {}));
+  EXPECT_NE(SimilarityCacheKey(exemplar, {}, {.candidates = 2}),
+            SimilarityCacheKey(exemplar, {}, {}));
+
+  // A damaged file is an Error when read directly, and recomputed (and rewritten) by Prepare.
+  const std::string key = SimilarityCacheKey(exemplar, {}, {});
+  std::string bytes = ReadTextFile(first.cache_file);
+  testing::WriteFile(first.cache_file, bytes.substr(0, bytes.size() / 2));
+  EXPECT_THROW(LoadPreparedExemplar(first.cache_file, key), Error);
+  const PreparedExemplar third = PrepareExemplar(exemplar, {}, {}, dir.path());
+  EXPECT_FALSE(third.from_cache);
+  EXPECT_EQ(third.similarity.indices, first.similarity.indices);
+  EXPECT_NO_THROW(LoadPreparedExemplar(first.cache_file, key));
+  EXPECT_THROW(LoadPreparedExemplar(first.cache_file, "0123456789abcdef"), Error);
+}
+
+TEST(FrameFieldTest, GeneratorsGiveOrthonormalFramesThatFollowTheirShapes) {
+  const VolumeSize size = VolumeSize::Cube(16);
+  for (FieldKind kind : {FieldKind::kCircular, FieldKind::kOval, FieldKind::kSlant,
+                         FieldKind::kZigzag, FieldKind::kSlant3d}) {
+    const FrameField field = MakeFrameField(kind, size, {});
+    for (int z = 0; z < 16; z += 5) {
+      for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 16; ++x) {
+          const Eigen::Matrix3f& f = field.at(x, y, z);
+          ASSERT_TRUE((f.transpose() * f).isIdentity(1e-4f)) << ToString(kind);
+          ASSERT_NEAR(f.determinant(), 1.0f, 1e-4f);
+        }
+      }
+    }
+  }
+  const FrameField circular = MakeFrameField(FieldKind::kCircular, size, {});
+  // At (12.5, 8.5) (right of the centre 8, 8) the tangent is +y, the second axis points inward.
+  EXPECT_TRUE(circular.at(12, 8, 3).col(0).isApprox(Eigen::Vector3f(0, 1, 0), 0.15f));
+  EXPECT_TRUE(circular.at(12, 8, 3).col(1).isApprox(Eigen::Vector3f(-1, 0, 0), 0.15f));
+  const FrameField zigzag = MakeFrameField(FieldKind::kZigzag, size, {.band = 4});
+  EXPECT_GT(zigzag.at(0, 0, 0)(1, 0), 0.4f);   // +30 degrees
+  EXPECT_LT(zigzag.at(0, 4, 0)(1, 0), -0.4f);  // -30 degrees
+  // Volume round trip, downsampling keeps frames orthonormal.
+  const FrameField back = FrameFieldFromVolume(FrameFieldToVolume(circular));
+  EXPECT_TRUE(back.at(3, 4, 5).isApprox(circular.at(3, 4, 5), 1e-5f));
+  const FrameField half = circular.Downsampled();
+  EXPECT_EQ(half.size(), VolumeSize::Cube(8));
+  EXPECT_TRUE((half.at(6, 4, 1).transpose() * half.at(6, 4, 1)).isIdentity(1e-4f));
+  EXPECT_THROW(FrameFieldFromVolume(Volume(size, 3)), Error);
+}
+
+TEST(ProceduralExemplarTest, PatternsTileAndDiffer) {
+  for (ProceduralPattern pattern : {ProceduralPattern::kMarble, ProceduralPattern::kCells,
+                                    ProceduralPattern::kStripes, ProceduralPattern::kNoise}) {
+    const Volume volume = MakeProceduralExemplar(pattern, 16, 1);
+    // Across the wrap the steps are no larger than inside (periodic).
+    double inside = 0, across = 0;
+    for (int z = 0; z < 16; ++z) {
+      for (int y = 0; y < 16; ++y) {
+        inside += std::abs(volume.at(8, y, z, 0) - volume.at(7, y, z, 0));
+        across += std::abs(volume.at(0, y, z, 0) - volume.at(15, y, z, 0));
+      }
+    }
+    EXPECT_LT(across, 3 * inside + 1.0) << ToString(pattern);
+    EXPECT_TRUE(SameBytes(volume, MakeProceduralExemplar(pattern, 16, 1)));
+    EXPECT_FALSE(SameBytes(volume, MakeProceduralExemplar(pattern, 16, 2)));
+  }
+  EXPECT_EQ(ParseProceduralPattern("wood"), ProceduralPattern::kWood);
+  EXPECT_FALSE(ParseProceduralPattern("plaid"));
+}
+
+}  // namespace
+}  // namespace photomat

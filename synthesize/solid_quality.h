@@ -1,0 +1,44 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "synthesize/appearance_space.h"
+#include "synthesize/volume.h"
+
+namespace photomat {
+
+// Measures of how much a synthesised solid looks like its exemplar (spec section 11 of the
+// vector-field seed), for tests, benchmarks and the command's report.
+
+// The neighbourhood-match error: the mean over output voxels p of min_u |N(p) - N_V(u)|^2, with N
+// the raw neighbourhood (appearance.neighbourhood^3 voxels, all channels, wrapping around the
+// solid) divided by its number of values. u is searched exactly in appearance space (PCA), and the
+// distance then measured on the raw values, so the result is an upper bound of the exact minimum.
+// At most `samples` voxels, drawn by a hash of `seed` (all of them when the solid is smaller).
+double NeighbourhoodMatchError(const Volume& solid, const Volume& exemplar,
+                               const AppearanceSpace& appearance, int samples = 4096,
+                               std::uint64_t seed = 1);
+
+// Mean over channels of the L1 distance between the normalised histograms of `solid` and
+// `reference` on `bins` bins over the reference's range of that channel (0 to 2).
+double HistogramDistance(const Volume& solid, const Volume& reference, int bins = 32);
+
+// Radially averaged 3D power spectrum, averaged over channels (each channel's mean removed): the
+// mean |F|^2 / voxel count in `bins` rings of frequency radius (cycles per voxel) over (0, 1/2],
+// comparable between volumes of different sizes. A ring holding no frequency of this size is NaN.
+std::vector<double> RadialPowerSpectrum(const Volume& volume, int bins = 16);
+// RMS of 10 log10(a / b) over the rings both spectra have, in dB.
+double LogSpectralDistance(const std::vector<double>& a, const std::vector<double>& b);
+
+// Sum over voxels of g g^T, g the central-difference gradient (wrapping) of the channel mean.
+Eigen::Matrix3d StructureTensor(const Volume& volume);
+// Unit eigenvector of the largest eigenvalue (the direction across stripes or sheets).
+Eigen::Vector3d PrincipalDirection(const Eigen::Matrix3d& tensor);
+
+// Share of face-adjacent voxel pairs (p, p + e) whose exemplar coordinates also differ by e
+// (mod the domain): 1 for a translated copy, near 0 for noise.
+double CoherentFraction(const Volume& coordinates, const ExemplarDomain& domain);
+
+}  // namespace photomat
