@@ -18,6 +18,7 @@
 
 #include "core/error.h"
 #include "represent/fit.h"
+#include "represent/hsh.h"
 #include "represent/light_basis.h"
 
 namespace photomat {
@@ -27,7 +28,7 @@ namespace fs = std::filesystem;
 
 // Same limits as the least-squares fits (fit.cc): lights within about 1 degree of a plane.
 constexpr double kGradientConditionLimit = 0.02;
-constexpr double kPtmConditionLimit = 1e-6;
+constexpr double kBasisConditionLimit = 1e-6;
 // Pixels per parallel task: enough work to amortise scheduling, small enough to balance 2 cores.
 constexpr Eigen::Index kPixelGrain = 256;
 // EM iterations of the weighted low-rank approximation (robust Eigen-k). The reconstruction
@@ -410,6 +411,8 @@ Representation RobustFit::Fit(const Method& method) const {
       return FitPtm(true);
     case Method::Kind::kEigen:
       return FitEigen(method.eigen_k);
+    case Method::Kind::kHsh:
+      return FitHsh(method.hsh_terms);
   }
   return FitObservations(observations_, lights_, method, selected_, source_);
 }
@@ -431,16 +434,29 @@ Representation RobustFit::FitGradient() const {
 }
 
 Representation RobustFit::FitPtm(bool lrgb) const {
-  std::vector<LightDirection> selected_lights;
-  for (int i : selected_) selected_lights.push_back(lights_[i]);
-  const Eigen::MatrixXd terms = PtmTerms(selected_lights);  // 6 x n
+  return FitBasisTerms(std::make_shared<PtmLightBasis>(), lrgb ? "ptm-lrgb" : "ptm", "ptm.a", lrgb);
+}
+
+Representation RobustFit::FitHsh(int terms) const {
+  return FitBasisTerms(std::make_shared<HshLightBasis>(terms), fmt::format("hsh{}", terms), "hsh.h",
+                       false);
+}
+
+Representation RobustFit::FitBasisTerms(std::shared_ptr<const LightBasis> basis,
+                                        const std::string& method, const std::string& prefix,
+                                        bool lrgb) const {
+  const int size = basis->size();
+  Eigen::MatrixXd terms(size, static_cast<Eigen::Index>(selected_.size()));  // size x n
+  for (std::size_t i = 0; i < selected_.size(); ++i) {
+    terms.col(static_cast<Eigen::Index>(i)) = basis->Coefficients(lights_[selected_[i]]);
+  }
   {
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(terms);
     const Eigen::VectorXd s = svd.singularValues();
-    if (s.size() < 6 || s[5] < kPtmConditionLimit * s[0]) {
-      throw Error(source_, fmt::format("{}: the {} lights do not determine the 6 PTM coefficients; "
+    if (s.size() < size || s[size - 1] < kBasisConditionLimit * s[0]) {
+      throw Error(source_, fmt::format("{}: the {} lights do not determine the {} coefficients; "
                                        "add lights at other slants",
-                                       lrgb ? "ptm-lrgb" : "ptm", selected_.size()));
+                                       method, selected_.size(), size));
     }
   }
   const Eigen::Index m = observations_.pixels();
@@ -450,16 +466,16 @@ Representation RobustFit::FitPtm(bool lrgb) const {
   const auto channel_names = OutputChannelNames(channels);
   std::vector<std::string> names;
   if (lrgb) {
-    for (int j = 0; j < 6; ++j) names.push_back(fmt::format("ptm.a{}", j));
+    for (int j = 0; j < size; ++j) names.push_back(fmt::format("{}{}", prefix, j));
     for (const auto& c : channel_names) names.push_back("rgb." + c);
   } else {
-    names = TermNames("ptm.a", 6, channel_names);
+    names = TermNames(prefix, size, channel_names);
   }
   Image maps(observations_.width(), observations_.height(), names);
   const Eigen::MatrixXf& matrix = observations_.matrix();
   // The unweighted normal matrix: the fallback for a pixel whose weights leave too few
-  // observations to determine 6 coefficients.
-  const Eigen::Matrix<double, 6, 6> unweighted = terms * terms.transpose();
+  // observations to determine the coefficients.
+  const Eigen::MatrixXd unweighted = terms * terms.transpose();
   tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
     Eigen::VectorXd w(n);
     int used = 0;
@@ -467,9 +483,9 @@ Representation RobustFit::FitPtm(bool lrgb) const {
       w[i] = weights_(k, selected_[i]);
       if (w[i] > 0.0) ++used;
     }
-    Eigen::Matrix<double, 6, 6> a = terms * w.asDiagonal() * terms.transpose();
-    Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(a);
-    const bool usable = used >= 8 && ldlt.info() == Eigen::Success &&
+    const Eigen::MatrixXd a = terms * w.asDiagonal() * terms.transpose();
+    Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
+    const bool usable = used >= size + 2 && ldlt.info() == Eigen::Success &&
                         ldlt.vectorD().minCoeff() > 1e-6 * ldlt.vectorD().maxCoeff();
     if (!usable) {
       w.setOnes();
@@ -486,16 +502,16 @@ Representation RobustFit::FitPtm(bool lrgb) const {
         for (int c = 0; c < channels; ++c) values(i, c) = matrix(c * m + k, selected_[i]);
       }
     }
-    const Eigen::MatrixXd coefficients = ldlt.solve(terms * w.asDiagonal() * values);  // 6 x f
+    const Eigen::MatrixXd coefficients = ldlt.solve(terms * w.asDiagonal() * values);  // size x f
     const auto pixel = maps.pixel(observations_.pixel_indices()[k]);
     if (!lrgb) {
-      for (int j = 0; j < 6; ++j) {
+      for (int j = 0; j < size; ++j) {
         for (int c = 0; c < channels; ++c)
           pixel[j * channels + c] = static_cast<float>(coefficients(j, c));
       }
       return;
     }
-    for (int j = 0; j < 6; ++j) pixel[j] = static_cast<float>(coefficients(j, 0));
+    for (int j = 0; j < size; ++j) pixel[j] = static_cast<float>(coefficients(j, 0));
     const Eigen::VectorXd luminance = terms.transpose() * coefficients.col(0);  // at each light
     const double denominator = (w.array() * luminance.array().square()).sum();
     for (int c = 0; c < channels; ++c) {
@@ -503,19 +519,15 @@ Representation RobustFit::FitPtm(bool lrgb) const {
       for (Eigen::Index i = 0; i < n; ++i) {
         numerator += w[i] * matrix(c * m + k, selected_[i]) * luminance[i];
       }
-      pixel[6 + c] = denominator > 0.0 ? static_cast<float>(numerator / denominator) : 0.0f;
+      pixel[size + c] = denominator > 0.0 ? static_cast<float>(numerator / denominator) : 0.0f;
     }
   });
   const MapLayout layout =
-      lrgb ? MapLayout{6, false, true, channels} : MapLayout{6, true, false, channels};
-  return Representation(lrgb ? "ptm-lrgb" : "ptm", std::move(maps), layout,
-                        std::make_shared<PtmLightBasis>(), {{"robust", options_.ToJson()}});
+      lrgb ? MapLayout{size, false, true, channels} : MapLayout{size, true, false, channels};
+  return Representation(method, std::move(maps), layout, std::move(basis),
+                        {{"robust", options_.ToJson()}});
 }
 
-// Eigen-k with outlier weights: the rank-k approximation of the weighted data by EM imputation
-// (Srebro and Jaakkola 2003): observations are replaced by w * captured + (1 - w) * current
-// reconstruction and the thin SVD (through the Gram matrix, as the least-squares fit) repeated.
-// The start imputes the robust Lambertian prediction, so shadows and highlights never enter.
 Representation RobustFit::FitEigen(int k) const {
   const Eigen::Index m = observations_.pixels();
   const auto n = static_cast<Eigen::Index>(selected_.size());

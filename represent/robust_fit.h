@@ -123,6 +123,11 @@ class RobustFit {
  private:
   Representation FitGradient() const;
   Representation FitPtm(bool lrgb) const;
+  Representation FitHsh(int terms) const;
+  // Weighted least squares of per-light basis terms (PTM, HSH); `lrgb`: one luminance fit times
+  // a per-channel chroma, as PTM's LRGB form.
+  Representation FitBasisTerms(std::shared_ptr<const LightBasis> basis, const std::string& method,
+                               const std::string& prefix, bool lrgb) const;
   Representation FitEigen(int k) const;
 
   const Observations& observations_;

@@ -69,7 +69,7 @@ TEST(RobustFitTest, ShadowsAndHighlightsHurtLeastSquaresNotTheRobustFit) {
   }
 }
 
-// Robust PTM and Eigen-k share the photometric-stereo weights: fitted to an image set with
+// Robust PTM, HSH and Eigen-k share the photometric-stereo weights: fitted to an image set with
 // shadows and highlights, they relight closer to the same material without them (the part their
 // models can represent) than the least-squares fits do.
 TEST(RobustFitTest, RobustPtmAndEigenIgnoreTheSameOutliers) {
@@ -92,7 +92,7 @@ TEST(RobustFitTest, RobustPtmAndEigenIgnoreTheSameOutliers) {
   const RobustFit robust(observations, captured.lights(), all, RobustFitOptions{});
   EXPECT_GT(robust.summary().down_weighted, 0u);
   EXPECT_GT(robust.summary().attached_shadow, 0u);
-  for (const char* name : {"ptm", "ptm-lrgb", "eigen6"}) {
+  for (const char* name : {"ptm", "ptm-lrgb", "hsh9", "eigen6"}) {
     const Method method = Method::Parse(name);
     const Representation plain = FitObservations(observations, captured.lights(), method, all);
     const Representation weighted = robust.Fit(method);
