@@ -125,6 +125,7 @@ void AddEvaluateCommand(CLI::App& app) {
       EvaluationReportOptions report;
       report.title = fmt::format("photomat evaluation of {}", options->input.string());
       report.images = report_images;
+      report.robust = evaluation.robust;
       report.progress = &bar;
       WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
                             report);

@@ -333,13 +333,26 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
   Progress& progress = OrNull(options.progress, no_progress);
   const Mask mask = set.MaskOrAll();
 
+  const Observations observations(set);
+  // The fits as the evaluation made them: least squares, or robust with its options.
+  const auto fit = [&](const Method& method, std::span<const int> selected) {
+    if (!options.robust) {
+      return FitObservations(observations, set.lights(), method, selected, set.source());
+    }
+    RobustFitOptions robust = *options.robust;
+    robust.progress = nullptr;
+    return RobustFit(observations, set.lights(), selected, robust, set.source()).Fit(method);
+  };
+  std::vector<int> every_image(set.size());
+  std::iota(every_image.begin(), every_image.end(), 0);
+
   WriteFolderAtomically(folder, kReportManifest, kReportFormat, [&](const fs::path& temp) {
     fs::create_directories(temp / "images");
     progress.Start("report", evaluations.size());
     std::vector<Representation> fits;
     std::vector<std::optional<Image>> errors(evaluations.size());
     for (std::size_t m = 0; m < evaluations.size(); ++m) {
-      fits.push_back(Fit(set, evaluations[m].method));
+      fits.push_back(fit(evaluations[m].method, every_image));
       if (truth && evaluations[m].normals) {
         if (const auto normals = EstimateNormals(fits.back())) {
           errors[m] = AngularErrorMap(*normals, *truth, mask);
@@ -353,9 +366,10 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
         "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
-        "channel(s), {7} pixels evaluated.</p>\n",
+        "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
         EscapeHtml(options.title), kStyle, EscapeHtml(set.source().string()), set.size(),
-        set.width(), set.height(), set.channels(), mask.CountSet());
+        set.width(), set.height(), set.channels(), mask.CountSet(),
+        options.robust ? "robust" : "least-squares");
 
     // The table.
     html +=
@@ -465,8 +479,6 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
     for (const MethodEvaluation& e : evaluations)
       html += "<th>" + EscapeHtml(e.method.Name()) + "</th>";
     html += "</tr>\n";
-    std::optional<Observations> observations;
-    if (prediction) observations.emplace(set);
     progress.Start("report images", chosen.size());
     for (int index : chosen) {
       const LightDirection& light = set.light(index);
@@ -492,8 +504,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         for (int i = 0; i < set.size(); ++i) {
           if (i != index) others.push_back(i);
         }
-        const Representation fold = FitObservations(*observations, set.lights(),
-                                                    evaluations[m].method, others, set.source());
+        const Representation fold = fit(evaluations[m].method, others);
         const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
         WriteDisplayImage(temp / predicted, Scaled(fold.Relight(light), gain));
         predicted_cells.push_back(fmt::format(

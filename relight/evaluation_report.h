@@ -2,6 +2,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "core/photometric_set.h"
 #include "core/progress.h"
 #include "represent/evaluation.h"
+#include "represent/robust_fit.h"
 
 namespace photomat {
 
@@ -31,6 +33,9 @@ struct EvaluationReportOptions {
   // Captured images to show beside their relighting (indices into the set); empty: up to three
   // spread-out lights (ChooseReportImages).
   std::vector<int> images;
+  // The fits the evaluation used: set when it evaluated robust fits (EvaluationOptions::robust), so
+  // that the relit images and normal maps are those of the same fits.
+  std::optional<RobustFitOptions> robust;
   Progress* progress = nullptr;
 };
 

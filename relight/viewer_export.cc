@@ -388,10 +388,13 @@ void ExportViewer(const fs::path& folder, const std::vector<Representation>& rep
       }
       const std::string data = fmt::format("maps/{}.f32", stem);
       WriteTextFileAtomically(temp / data, MapLayers(r.maps()));
+      const auto encoding = options.value_encodings.find(r.method());
       methods.push_back(
           {{"name", r.method()},
            {"label", MethodLabel(r.method())},
            {"layout", r.layout().ToJson()},
+           {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
+                                                                         : encoding->second)},
            {"channels", r.maps().channel_names()},
            {"data",
             {{"file", data}, {"type", "float32"}, {"layers", (r.maps().channels() + 3) / 4}}},

@@ -2,12 +2,14 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "core/colour.h"
 #include "core/light_direction.h"
 #include "core/progress.h"
 #include "represent/light_basis.h"
@@ -44,6 +46,10 @@ struct ViewerExportOptions {
   // basis.js has the exact formula (for tests of the table; bases basis.js does not know always
   // use it: ViewerEvaluatesExactly).
   std::set<std::string> table_methods;
+  // How each method's relit values encode light (by method name; default linear): kSrgb for
+  // stacks read from .ptm/.rti files, whose values are display codes (relight/stack_file.h
+  // StackValueEncoding). The viewer decodes them as `photomat relight` does.
+  std::map<std::string, ColourSpace> value_encodings;
   // Write normal, albedo and height display maps (from the first method that gives normals).
   bool display_maps = true;
   Progress* progress = nullptr;

@@ -33,7 +33,9 @@ bool Outside(ivec2 p) { return any(lessThan(p, ivec2(0))) || any(greaterThanEqua
 `;
 
 // The relighting shader of one method layout (MapLayout in represent/representation.h).
-function relightShader(layout, layers) {
+// `srgbValues`: the relit values are display codes (stacks from .ptm/.rti files), decoded to
+// linear first as `photomat relight` does.
+function relightShader(layout, layers, srgbValues) {
   const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
   const gainOffset = layout.basis_size * perTerm;
   return `#version 300 es
@@ -44,6 +46,7 @@ function relightShader(layout, layers) {
 #define PER_CHANNEL ${layout.basis_per_channel ? 1 : 0}
 #define HAS_GAIN ${layout.has_gain ? 1 : 0}
 #define GAIN_OFFSET ${gainOffset}
+#define VALUES_SRGB ${srgbValues ? 1 : 0}
 precision highp sampler2DArray;
 ${COMMON_GLSL}
 uniform sampler2DArray u_maps;     // map 4 * layer + component
@@ -54,6 +57,12 @@ uniform float u_exposure;          // linear scale
 float Srgb(float v) {
   v = clamp(v, 0.0, 1.0);
   return v <= 0.0031308 ? v * 12.92 : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+}
+
+// Its inverse (core/colour.cc SrgbToLinear), for values that are display codes.
+float Linear(float v) {
+  v = clamp(v, 0.0, 1.0);
+  return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
 
 void main() {
@@ -76,6 +85,7 @@ void main() {
     colour[o] = HAS_GAIN == 1 ? sum * maps[GAIN_OFFSET + o] : sum;
   }
   if (CHANNELS == 1) colour = vec3(colour.r);
+  if (VALUES_SRGB == 1) colour = vec3(Linear(colour.r), Linear(colour.g), Linear(colour.b));
   colour *= u_exposure;
   o_colour = vec4(Srgb(colour.r), Srgb(colour.g), Srgb(colour.b), 1.0);
 }`;
@@ -180,7 +190,7 @@ async function loadMethodData(method) {
       // Float textures are not filterable everywhere; texelFetch reads exact texels anyway.
       gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
       gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-      method.program = program(relightShader(method.json.layout, layers));
+      method.program = program(relightShader(method.json.layout, layers, method.json.values === 'srgb'));
       method.values = data; // for the pixel readout
       method.texture = texture;
     })();
@@ -447,7 +457,8 @@ function showPixel(event) {
     for (let j = 0; j < layout.basis_size; ++j) sum += c[j] * maps(j * perTerm + (layout.basis_per_channel ? o : 0));
     out.push(layout.has_gain ? sum * maps(layout.basis_size * perTerm + o) : sum);
   }
-  $('pixel-readout').textContent = `pixel ${x}, ${y}: ${out.map((v) => v.toFixed(4)).join(' ')} (linear)`;
+  const encoding = method.json.values === 'srgb' ? 'sRGB codes / 255' : 'linear';
+  $('pixel-readout').textContent = `pixel ${x}, ${y}: ${out.map((v) => v.toFixed(4)).join(' ')} (${encoding})`;
 }
 
 // ---- user interface ------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 //              exported to a viewer, evaluated into a report
 //  irregular/  a capture under irregular lights (Eigen-k: Delaunay triangulation)
 //  table/      the grid's PTM and Gradient with their coefficients from the (slant, tilt) table
+//  files/      a .ptm and an HSH .rti exported from the grid's fits (values are display codes)
 // and, for each viewer, method and test light, photomat's CPU relighting
 // (`photomat relight STACK --light S,T --out X.png`), which the viewer's canvas must reproduce.
 // Writes OUT/fixtures.json describing it all.
@@ -51,9 +52,17 @@ rmSync(out, { recursive: true, force: true });
 mkdirSync(out, { recursive: true });
 const fixtures = { out, viewers: [], reports: [] };
 
-function addViewer(name, stacks, methods, extra = []) {
+// Exports `stacks` (a fit folder or a .ptm/.rti file) with `photomat export --viewer` (or, with
+// `table`, with the test tool that forces the coefficient table) and relights every method.
+function addViewer(name, stacks, { table = null } = {}) {
   const viewer = path.join(out, name, 'viewer');
-  run(exportTool, [stacks, viewer, '--title', `browser test: ${name}`, ...extra]);
+  if (table) {
+    run(exportTool, [stacks, viewer, '--title', `browser test: ${name}`, '--table', table.join(',')]);
+  } else {
+    run(photomat, ['export', stacks, '--viewer', viewer]);
+  }
+  const exported = JSON.parse(readFileSync(path.join(viewer, 'viewer.json'), 'utf8')).methods.map((m) => m.name);
+  const methods = table ?? exported;
   const comparisons = [];
   for (const method of methods) {
     for (const [slant, tilt] of TEST_LIGHTS) {
@@ -63,18 +72,18 @@ function addViewer(name, stacks, methods, extra = []) {
       comparisons.push({ method, slant, tilt, reference });
     }
   }
-  const exported = JSON.parse(readFileSync(path.join(viewer, 'viewer.json'), 'utf8')).methods.map((m) => m.name);
   fixtures.viewers.push({ name, url: `${name}/viewer/index.html`, folder: viewer, methods: exported, compared: methods, comparisons });
 }
 
-// Fits `methods` and, where this photomat has hemispherical harmonics, HSH too; returns what it fitted.
-function fit(capture, stacks, methods) {
-  const withHsh = [...methods, 'hsh9', 'hsh16'];
+// Fits `methods` and, where this photomat has hemispherical harmonics, the `hsh` ones too (16
+// terms need lights at 4 or more slants); returns what it fitted.
+function fit(capture, stacks, methods, hsh) {
+  const withHsh = [...methods, ...hsh];
   try {
     run(photomat, ['fit', capture, '--method', withHsh.join(','), '--out', stacks]);
     return withHsh;
   } catch (error) {
-    if (!/unknown method "hsh9"/.test(error.message)) throw error;
+    if (!/unknown method "hsh/.test(error.message)) throw error;
     console.log('make-fixtures: this photomat has no HSH methods; testing the others');
     run(photomat, ['fit', capture, '--method', methods.join(','), '--out', stacks]);
     return methods;
@@ -86,8 +95,8 @@ const grid = path.join(out, 'grid');
 run(photomat, ['generate', '--out', path.join(grid, 'capture'), '--size', '96x72', '--pattern', 'bricks',
   '--relief', '45', '--shadows', '--specular', '0.3', '--noise', '0.002', '--seed', '3']);
 const all = fit(path.join(grid, 'capture'), path.join(grid, 'stacks'),
-  ['3i', 'gradient', 'ptm', 'ptm-lrgb', 'eigen3', 'eigen6']);
-addViewer('grid', path.join(grid, 'stacks'), all);
+  ['3i', 'gradient', 'ptm', 'ptm-lrgb', 'eigen3', 'eigen6'], ['hsh4', 'hsh9']);
+addViewer('grid', path.join(grid, 'stacks'));
 run(photomat, ['evaluate', path.join(grid, 'capture'), '--methods', all.join(','), '--report',
   path.join(grid, 'report'), '--report-images', '0,17,30']);
 fixtures.reports.push({ name: 'grid', url: 'grid/report/index.html', methods: all });
@@ -98,12 +107,22 @@ mkdirSync(irregular, { recursive: true });
 writeFileSync(path.join(irregular, 'lights.lp'), irregularLp());
 run(photomat, ['generate', '--out', path.join(irregular, 'capture'), '--size', '64x64', '--pattern', 'bumps',
   '--lights', path.join(irregular, 'lights.lp'), '--seed', '5']);
-const irregularMethods = fit(path.join(irregular, 'capture'), path.join(irregular, 'stacks'),
-  ['gradient', 'ptm', 'eigen3', 'eigen6']);
-addViewer('irregular', path.join(irregular, 'stacks'), irregularMethods);
+fit(path.join(irregular, 'capture'), path.join(irregular, 'stacks'),
+  ['gradient', 'ptm', 'eigen3', 'eigen6'], ['hsh16']);
+addViewer('irregular', path.join(irregular, 'stacks'));
 
 // table: the grid's stacks again, PTM and Gradient evaluated from the coefficient table.
-addViewer('table', path.join(grid, 'stacks'), ['ptm', 'gradient'], ['--table', 'ptm,gradient']);
+addViewer('table', path.join(grid, 'stacks'), { table: ['ptm', 'gradient'] });
+
+// files: interchange files hold display codes, which the viewer decodes as `photomat relight` does.
+const files = path.join(out, 'files');
+mkdirSync(files, { recursive: true });
+run(photomat, ['export', path.join(grid, 'stacks'), '--method', 'ptm', '--ptm', path.join(files, 'grid.ptm')]);
+addViewer('ptm-file', path.join(files, 'grid.ptm'));
+if (all.includes('hsh9')) {
+  run(photomat, ['export', path.join(grid, 'stacks'), '--method', 'hsh9', '--rti', path.join(files, 'grid.rti')]);
+  addViewer('rti-file', path.join(files, 'grid.rti'));
+}
 
 writeFileSync(path.join(out, 'fixtures.json'), `${JSON.stringify(fixtures, null, 2)}\n`);
 console.log(`fixtures in ${out}: ${fixtures.viewers.map((v) => `${v.name} (${v.comparisons.length} references)`).join(', ')}`);
