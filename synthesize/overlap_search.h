@@ -1,0 +1,96 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string_view>
+#include <vector>
+
+#include "synthesize/block_placement.h"
+#include "synthesize/matching_space.h"
+
+namespace photomat {
+
+// How the overlap error of every candidate block is computed.
+//  kBruteForce: the exact error of each candidate, summed pixel by pixel (the reference).
+//  kFast: SSD through FFT correlation (cv::dft: E = sum M^2 - 2 corr(M, T) + sum T^2, the first
+//    term from an integral image), SAD through vectorised, multi-threaded direct sums. Both give
+//    each candidate an interval that provably holds its exact error; every candidate whose
+//    interval reaches the tolerance threshold is then re-scored with the same exact sum as brute
+//    force. The blocks chosen are therefore identical to brute force for the same seed, on any
+//    number of threads.
+enum class SearchMode { kBruteForce, kFast };
+std::string_view ToString(SearchMode mode);
+// "brute" or "fast"; throws Error otherwise.
+SearchMode ParseSearchMode(std::string_view name);
+
+// The already-synthesised pixels a candidate block must match: the overlap shape and, per channel,
+// a block_size x block_size plane of scaled values (0 outside the overlap).
+struct OverlapTemplate {
+  OverlapShape shape;
+  int channels = 0;
+  std::vector<float> values;  // channel-major planes, row-major within a plane
+
+  OverlapTemplate(const OverlapShape& overlap, int channel_count);
+  float& at(int u, int v, int c) {
+    return values[(static_cast<std::size_t>(c) * shape.block + v) * shape.block + u];
+  }
+  float at(int u, int v, int c) const {
+    return values[(static_cast<std::size_t>(c) * shape.block + v) * shape.block + u];
+  }
+};
+
+// The candidates whose error lies within the tolerance of the best, in raster order of their
+// sample positions, with their exact errors.
+struct QualifyingBlocks {
+  std::vector<SamplePixel> positions;
+  std::vector<double> errors;
+  double min_error = 0.0;
+  double threshold = 0.0;
+  int rescored = 0;  // exact evaluations (all candidates for brute force)
+};
+
+// Every sample position of a block_size x block_size block (on a grid of `stride`) is a candidate.
+// Not thread-safe (it keeps FFT work buffers); use one per synthesis.
+class OverlapSearch {
+ public:
+  OverlapSearch(const PlanarImage& space, int block_size, ErrorMetric metric, int stride);
+
+  int candidate_columns() const { return columns_; }
+  int candidate_rows() const { return rows_; }
+  int candidate_count() const { return columns_ * rows_; }
+  SamplePixel Candidate(int index) const {
+    return {(index % columns_) * stride_, (index / columns_) * stride_};
+  }
+
+  // The exact overlap error of the block at `candidate`: a sum in double over the overlap
+  // pixels in raster order and, within a pixel, over channels. The reference for every mode.
+  double ExactError(const OverlapTemplate& pattern, SamplePixel candidate) const;
+
+  // The candidates with error <= (1 + tolerance) * max(min_error, floor).
+  QualifyingBlocks Qualifying(const OverlapTemplate& pattern, double tolerance, double floor,
+                              SearchMode mode);
+
+ private:
+  // Lower and upper bounds of every candidate's exact error.
+  void BoundFft(const OverlapTemplate& pattern, std::vector<double>& low,
+                std::vector<double>& high);
+  void BoundDirect(const OverlapTemplate& pattern, std::vector<double>& low,
+                   std::vector<double>& high) const;
+
+  const PlanarImage& space_;
+  int block_;
+  ErrorMetric metric_;
+  int stride_;
+  int columns_ = 0;
+  int rows_ = 0;
+  // FFT state (SSD): padded size, spectra of the sample planes, their norms, the integral image
+  // of sum_c M_c^2, and per-channel work buffers.
+  cv::Size padded_;
+  std::vector<cv::Mat> spectra_;
+  std::vector<double> plane_norms_;
+  cv::Mat squares_integral_;
+  double squares_total_ = 0.0;
+  std::vector<cv::Mat> template_planes_;
+  std::vector<cv::Mat> products_;
+};
+
+}  // namespace photomat
