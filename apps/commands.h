@@ -11,5 +11,6 @@ void AddFitCommand(CLI::App& app);
 void AddRelightCommand(CLI::App& app);
 void AddEvaluateCommand(CLI::App& app);
 void AddDemoCommand(CLI::App& app);
+void AddSynthesizeCommand(CLI::App& app);
 
 }  // namespace photomat::app

@@ -2,6 +2,7 @@
 
 #include "apps/cli_support.h"
 #include "apps/commands.h"
+#include "apps/synthesis_cli.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -18,6 +19,7 @@ void AddEvaluateCommand(CLI::App& app) {
     bool no_prediction = false;
     bool literal_rms = false;
     bool raw_intensities = false;
+    SynthesisEvaluationOptions synthesis;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -39,7 +41,25 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "Do not divide the images by the light intensities the input gives");
+  // Synthesis quality (issue 4): INPUT is then the sample the synthesis was grown from.
+  command->add_option("--synthesised", options->synthesis.synthesised,
+                      "Score this synthesised stack or image against INPUT, the sample it was "
+                      "grown from (a map stack, fit folder or image): nearest-patch distance, "
+                      "roughness, wrap and (with --source-map) seam scores");
+  command->add_option("--source-map", options->synthesis.source_map,
+                      "With --synthesised: the source map `synthesize --save-source-map` wrote");
+  command
+      ->add_option("--patch", options->synthesis.patch_size,
+                   "With --synthesised: side of the compared patches")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   command->callback([options] {
+    if (!options->synthesis.synthesised.empty()) {
+      options->synthesis.sample = options->input;
+      options->synthesis.json = options->json;
+      EvaluateSynthesis(options->synthesis);
+      return;
+    }
     const std::vector<Method> methods = ParseMethodList(options->methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;

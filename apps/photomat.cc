@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   photomat::app::AddRelightCommand(app);
   photomat::app::AddEvaluateCommand(app);
   photomat::app::AddDemoCommand(app);
+  photomat::app::AddSynthesizeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -76,19 +77,53 @@ struct Best {
   int y = -1;
 };
 
-// The candidate of least error (first in raster order among equals), rows in parallel.
-Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metric) {
+// The error of one candidate, summed in the same order and precision as a lane of the rows below
+// (so both give bit-identical values).
+float CandidateError(const std::vector<Term>& terms, int x, int y, bool squared) {
+  float sum = 0.0f;
+  for (const Term& term : terms) {
+    const float d =
+        term.plane[static_cast<std::ptrdiff_t>(y + term.dy) * term.stride + x + term.dx] -
+        term.value;
+    sum += squared ? d * d : std::fabs(d);
+  }
+  return sum;
+}
+
+// Lowers `bound` to `value` if smaller.
+void LowerBound(std::atomic<float>& bound, float value) {
+  float current = bound.load(std::memory_order_relaxed);
+  while (value < current && !bound.compare_exchange_weak(current, value)) {
+  }
+}
+
+// The candidate of least error (first in raster order among equals), rows in parallel. Exact
+// exhaustive search with partial-distance pruning: the terms are non-negative, so a float partial
+// sum never exceeds the full one, and a row is abandoned once all its partial sums exceed the best
+// error found so far. A row holding a candidate whose error is at most the final minimum is never
+// abandoned, so the result (ties included) does not depend on which rows ran first or on how many
+// threads ran them. `hint` (a likely good candidate) seeds the bound.
+Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metric,
+            SamplePixel hint) {
+  constexpr std::size_t kCheckEvery = 16;  // terms between pruning checks
   const int span = range.x_high - range.x_low + 1;
   const int rows = range.y_high - range.y_low + 1;
-  std::vector<Best> row_best(rows);
   const bool squared = metric == ErrorMetric::kSsd;
+  std::atomic<float> bound(std::numeric_limits<float>::infinity());
+  if (hint.x >= range.x_low && hint.x <= range.x_high && hint.y >= range.y_low &&
+      hint.y <= range.y_high) {
+    bound = CandidateError(terms, hint.x, hint.y, squared);
+  }
+  std::vector<Best> row_best(rows);
   tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const tbb::blocked_range<int>& block) {
     std::vector<float> sums(span);
     for (int r = block.begin(); r != block.end(); ++r) {
       const int y = range.y_low + r;
       std::fill(sums.begin(), sums.end(), 0.0f);
       float* acc = sums.data();
-      for (const Term& term : terms) {
+      bool abandoned = false;
+      for (std::size_t k = 0; k < terms.size(); ++k) {
+        const Term& term = terms[k];
         const float* line = term.plane + static_cast<std::ptrdiff_t>(y + term.dy) * term.stride +
                             range.x_low + term.dx;
         const float t = term.value;
@@ -100,9 +135,16 @@ Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metr
         } else {
           for (int i = 0; i < span; ++i) acc[i] += std::fabs(line[i] - t);
         }
+        if ((k + 1) % kCheckEvery == 0 && k + 1 < terms.size() &&
+            *std::min_element(sums.begin(), sums.end()) > bound.load(std::memory_order_relaxed)) {
+          abandoned = true;
+          break;
+        }
       }
+      if (abandoned) continue;  // row_best[r] stays at infinity
       const int best = static_cast<int>(std::min_element(sums.begin(), sums.end()) - sums.begin());
       row_best[r] = {sums[best], range.x_low + best, y};
+      LowerBound(bound, sums[best]);
     }
   });
   Best best;
@@ -180,20 +222,7 @@ class LevelSynthesizer {
     std::vector<Term> terms;
     const int n = sample_.channels();
     const int h = options_.neighbourhood / 2;
-    // The square around the pixel, of which only the pixels already synthesised at this level
-    // count: the causal half (rows above, the left part of this row) and, when the output wraps,
-    // the first rows and columns met again past its last ones.
-    const int below = tileable_ ? h : 0;
-    for (int dy = -h; dy <= below; ++dy) {
-      for (int dx = -h; dx <= h; ++dx) {
-        const int xx = Place(x + dx, output_.width()), yy = Place(y + dy, output_.height());
-        if (xx < 0 || yy < 0 || yy > y || (yy == y && xx >= x)) continue;
-        for (int c = 0; c < n; ++c) {
-          terms.push_back(
-              {sample_.plane(c).data(), sample_.width(), dx, dy, output_.at(xx, yy, c)});
-        }
-      }
-    }
+    // The parent level first: it constrains most, so partial sums rise fastest (pruning).
     if (parent_output_) {
       const int hp = options_.parent_neighbourhood / 2;
       for (int dy = -hp; dy <= hp; ++dy) {
@@ -208,13 +237,29 @@ class LevelSynthesizer {
         }
       }
     }
+    // The square around the pixel, of which only the pixels already synthesised at this level
+    // count: the causal half (rows above, the left part of this row) and, when the output wraps,
+    // the first rows and columns met again past its last ones.
+    const int below = tileable_ ? h : 0;
+    for (int dy = -h; dy <= below; ++dy) {
+      for (int dx = -h; dx <= h; ++dx) {
+        const int xx = Place(x + dx, output_.width()), yy = Place(y + dy, output_.height());
+        if (xx < 0 || yy < 0 || yy > y || (yy == y && xx >= x)) continue;
+        for (int c = 0; c < n; ++c) {
+          terms.push_back(
+              {sample_.plane(c).data(), sample_.width(), dx, dy, output_.at(xx, yy, c)});
+        }
+      }
+    }
     if (terms.empty()) {  // the very first pixel: nothing to match yet
       const int columns = range_.x_high - range_.x_low + 1;
       const int rows = range_.y_high - range_.y_low + 1;
       const auto pick = static_cast<int>(random.Index(static_cast<std::uint64_t>(columns) * rows));
       return {range_.x_low + pick % columns, range_.y_low + pick / columns};
     }
-    const Best best = Search(terms, range_, options_.matching.metric);
+    // The previous pixel's continuation is usually a good match: it seeds the pruning bound.
+    const SamplePixel previous = x > 0 ? sources_[Index(x - 1, y)] : SamplePixel{};
+    const Best best = Search(terms, range_, options_.matching.metric, {previous.x + 1, previous.y});
     return {best.x, best.y};
   }
 
