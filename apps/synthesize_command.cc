@@ -98,7 +98,11 @@ void AddSynthesizeCommand(CLI::App& app) {
       ->add_option("--stride", options->quilt.candidate_stride,
                    "quilt: candidate blocks every STRIDE pixels (1 = every offset)")
       ->capture_default_str();
-  command->add_option("--search", options->search, "quilt: fast (FFT / vectorised) or brute")
+  command
+      ->add_option("--search", options->search,
+                   "fast (exact: FFT correlation or vectorised sums for quilting, pruned sums "
+                   "for pixels) or brute (every candidate summed in full); both choose the "
+                   "same")
       ->capture_default_str();
   command->add_flag("--no-coherence", options->no_coherence,
                     "quilt: search every block (no neighbour-block reuse)");
@@ -139,7 +143,7 @@ void AddSynthesizeCommand(CLI::App& app) {
     synthesis.method = ParseSynthesisMethod(options->method);
     synthesis.target = {width, height, options->tileable, options->seed};
     synthesis.quilt = options->quilt;
-    synthesis.quilt.search = ParseSearchMode(options->search);
+    synthesis.quilt.search = synthesis.pixel.search = ParseSearchMode(options->search);
     synthesis.quilt.coherence = !options->no_coherence;
     synthesis.pixel = options->pixel;
     MatchingOptions& matching = synthesis.method == SynthesisMethod::kQuilt

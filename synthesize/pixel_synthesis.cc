@@ -104,13 +104,13 @@ void LowerBound(std::atomic<float>& bound, float value) {
 // abandoned, so the result (ties included) does not depend on which rows ran first or on how many
 // threads ran them. `hint` (a likely good candidate) seeds the bound.
 Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metric,
-            SamplePixel hint) {
+            SamplePixel hint, bool prune) {
   constexpr std::size_t kCheckEvery = 16;  // terms between pruning checks
   const int span = range.x_high - range.x_low + 1;
   const int rows = range.y_high - range.y_low + 1;
   const bool squared = metric == ErrorMetric::kSsd;
   std::atomic<float> bound(std::numeric_limits<float>::infinity());
-  if (hint.x >= range.x_low && hint.x <= range.x_high && hint.y >= range.y_low &&
+  if (prune && hint.x >= range.x_low && hint.x <= range.x_high && hint.y >= range.y_low &&
       hint.y <= range.y_high) {
     bound = CandidateError(terms, hint.x, hint.y, squared);
   }
@@ -135,7 +135,7 @@ Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metr
         } else {
           for (int i = 0; i < span; ++i) acc[i] += std::fabs(line[i] - t);
         }
-        if ((k + 1) % kCheckEvery == 0 && k + 1 < terms.size() &&
+        if (prune && (k + 1) % kCheckEvery == 0 && k + 1 < terms.size() &&
             *std::min_element(sums.begin(), sums.end()) > bound.load(std::memory_order_relaxed)) {
           abandoned = true;
           break;
@@ -259,7 +259,8 @@ class LevelSynthesizer {
     }
     // The previous pixel's continuation is usually a good match: it seeds the pruning bound.
     const SamplePixel previous = x > 0 ? sources_[Index(x - 1, y)] : SamplePixel{};
-    const Best best = Search(terms, range_, options_.matching.metric, {previous.x + 1, previous.y});
+    const Best best = Search(terms, range_, options_.matching.metric, {previous.x + 1, previous.y},
+                             options_.search == SearchMode::kFast);
     return {best.x, best.y};
   }
 

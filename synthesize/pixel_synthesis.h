@@ -4,6 +4,7 @@
 #include "core/progress.h"
 #include "synthesize/block_placement.h"
 #include "synthesize/matching_space.h"
+#include "synthesize/overlap_search.h"
 #include "synthesize/source_map.h"
 
 namespace photomat {
@@ -29,6 +30,9 @@ struct PixelSynthesisOptions {
   double forced_search_rate = 0.5;
   // The thesis matches by SAD.
   MatchingOptions matching = {ErrorMetric::kSad, ChannelScaling::kMinMax, {}};
+  // kFast abandons candidate rows whose partial sums already exceed the best error found (exact:
+  // the same pixels as kBruteForce, which sums every candidate in full).
+  SearchMode search = SearchMode::kFast;
 };
 
 // Plans the output from `guide`: the returned map's pixels are finest-level sample pixels.

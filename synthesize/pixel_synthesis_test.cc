@@ -89,6 +89,18 @@ TEST(PixelSynthesisTest, SameSeedSameOutputOnAnyNumberOfThreads) {
   EXPECT_NE(PlanPixelSynthesis(sample, other, Small()), reference);
 }
 
+TEST(PixelSynthesisTest, PrunedSearchFindsTheExhaustiveSearchsPixels) {
+  const Image sample = BumpsAlbedoAndNormals(40);
+  for (bool tileable : {false, true}) {
+    PixelSynthesisOptions options;
+    options.forced_search_rate = 0.8;
+    options.search = SearchMode::kBruteForce;
+    const SourceMap brute = PlanPixelSynthesis(sample, {44, 36, tileable, 6}, options);
+    options.search = SearchMode::kFast;
+    EXPECT_EQ(PlanPixelSynthesis(sample, {44, 36, tileable, 6}, options), brute) << tileable;
+  }
+}
+
 TEST(PixelSynthesisTest, ContinuesARecurringTextureWithoutVisibleSeams) {
   const Image sample = Lattice(30, 30);
   for (double rate : {1.0, 0.5}) {

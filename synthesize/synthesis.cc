@@ -45,6 +45,7 @@ nlohmann::json Describe(const Image& guide, const SynthesisOptions& options,
                             {"neighbourhood", pixel.neighbourhood},
                             {"parent_neighbourhood", pixel.parent_neighbourhood},
                             {"forced_search_rate", pixel.forced_search_rate},
+                            {"search", ToString(pixel.search)},
                             {"matching", MatchingJson(pixel.matching)}};
   }
   return description;
