@@ -104,13 +104,14 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
   const int n = space_.channels();
   const OverlapShape& shape = pattern.shape;
   double template_energy = 0.0;
-  std::vector<double> template_l1(n, 0.0);
+  std::vector<double> template_l1(n, 0.0), template_l2(n, 0.0);  // |T_c|_1 and |T_c|_2^2
   for (int c = 0; c < n; ++c) {
     for (int v = 0; v < block_; ++v) {
       for (int u = 0; u < block_; ++u) {
         const double t = pattern.at(u, v, c);
         template_energy += t * t;
         template_l1[c] += std::abs(t);
+        template_l2[c] += t * t;
       }
     }
   }
@@ -132,15 +133,20 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
   cv::Mat correlation;
   cv::dft(sum, correlation, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT, needed_rows);
 
-  // Rounding of the FFT correlation is bounded normwise by ~ u log2(N) |M|_2 |T|_1 per channel
-  // (the transforms are stable, each product bounded by |M|_2 sqrt(N) |T|_1 / sqrt(N)); the
-  // integral image by ~ (W + H) u sum(M^2). Both are inflated a thousandfold (IMPLEMENTER
-  // CHOICE): the bound only decides which candidates are re-scored exactly, so generosity costs
-  // a few exact sums while a bound that failed would break equality with brute force.
-  const double log_size = std::log2(static_cast<double>(padded_.area()));
+  // Rounding of the FFT correlation, per channel and output value, is at most of the order of
+  // u log2(N) |M|_2 (|T|_1 + sqrt(N) |T|_2): the transforms are normwise stable (error
+  // ~ u log2(N) times the transformed norm), the error of FFT(M) is weighted by
+  // max|FFT(T)| <= |T|_1, the error of FFT(T) by |FFT(M)|_2 = sqrt(N) |M|_2, and the inverse
+  // maps a 2-norm error e to at most e / sqrt(N) in any value. The integral image adds
+  // ~ (W + H) u sum(M^2). Both are inflated a thousandfold (IMPLEMENTER CHOICE): the bound only
+  // decides which candidates are re-scored exactly, so generosity costs a few exact sums while a
+  // bound that failed would break equality with brute force.
+  const double size = static_cast<double>(padded_.area());
   double correlation_bound = 0.0;
-  for (int c = 0; c < n; ++c) correlation_bound += plane_norms_[c] * template_l1[c];
-  correlation_bound *= 2.0 * log_size * kDoubleEpsilon;
+  for (int c = 0; c < n; ++c) {
+    correlation_bound += plane_norms_[c] * (template_l1[c] + std::sqrt(size * template_l2[c]));
+  }
+  correlation_bound *= 2.0 * std::log2(size) * kDoubleEpsilon;
   const double integral_bound =
       4.0 * (space_.width() + space_.height()) * kDoubleEpsilon * squares_total_;
   const double slack = 1000.0 * (correlation_bound + integral_bound);
