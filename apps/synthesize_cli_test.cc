@@ -159,6 +159,11 @@ TEST(SynthesizeCliTest, ErrorsAreOneLineAndNonZero) {
       "synthesize " + (dir / "other.exr").string() + " --size 30x30 --save-source-map " +
       (dir / "map.exr").string() + " --out " + (dir / "o.exr").string());
   ASSERT_EQ(map.exit_code, 0) << map.output;
+  const RunResult height =
+      RunPhotomat("synthesize " + (dir / "other.exr").string() + " --size 30x30 --height " +
+                  (dir / "h.exr").string() + " --out " + (dir / "o2.exr").string());
+  EXPECT_EQ(height.exit_code, 1);
+  EXPECT_THAT(height.output, HasSubstr("--height needs a map stack that gives normals"));
   const RunResult mismatch =
       RunPhotomat("synthesize " + stacks + " --stack ptm --size 30x30 " + "--source-map " +
                   (dir / "map.exr").string() + " --out " + (dir / "x.exr").string());

@@ -138,14 +138,25 @@ void AddSynthesizeCommand(CLI::App& app) {
     const std::optional<std::string> stack_name =
         options->stack.empty() ? std::nullopt : std::optional(options->stack);
     const MapsInput input = LoadMapsInput(options->input, stack_name);
+    // What needs normals is checked before the work.
+    if (options->integrable && (!input.stack || !HasNormalMaps(input.stack->representation))) {
+      throw Error(input.path,
+                  "--integrable needs normal maps (normal.X, normal.Y, normal.Z: a "
+                  "gradient stack)");
+    }
+    if (!options->height.empty() &&
+        (!input.stack || (!HasNormalMaps(input.stack->representation) &&
+                          !EstimateNormals(input.stack->representation)))) {
+      throw Error(input.path, "--height needs a map stack that gives normals (gradient, 3i, ptm)");
+    }
 
     SynthesisOptions synthesis;
     synthesis.method = ParseSynthesisMethod(options->method);
     synthesis.target = {width, height, options->tileable, options->seed};
     synthesis.quilt = options->quilt;
+    synthesis.pixel = options->pixel;
     synthesis.quilt.search = synthesis.pixel.search = ParseSearchMode(options->search);
     synthesis.quilt.coherence = !options->no_coherence;
-    synthesis.pixel = options->pixel;
     MatchingOptions& matching = synthesis.method == SynthesisMethod::kQuilt
                                     ? synthesis.quilt.matching
                                     : synthesis.pixel.matching;
@@ -192,9 +203,6 @@ void AddSynthesizeCommand(CLI::App& app) {
     if (!options->save_source_map.empty()) SaveSourceMap(options->save_source_map, map);
 
     if (!input.stack) {
-      if (options->integrable || !options->height.empty()) {
-        throw Error(input.path, "--integrable and --height need a map stack with normals");
-      }
       WritePlainMaps(options->out, map.Apply(input.image), input.info);
       fmt::print("wrote {} ({}x{}, {} channels)\n", options->out.string(), width, height,
                  input.image.channels());

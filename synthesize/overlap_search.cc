@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
@@ -39,6 +40,16 @@ SearchMode ParseSearchMode(std::string_view name) {
   throw Error(fmt::format("unknown search mode '{}' (fast or brute)", name));
 }
 
+struct OverlapSearch::Fft {
+  cv::Size padded;
+  std::vector<cv::Mat> spectra;
+  std::vector<double> plane_norms;
+  cv::Mat squares_integral;
+  double squares_total = 0.0;
+  std::vector<cv::Mat> template_planes;
+  std::vector<cv::Mat> products;
+};
+
 OverlapTemplate::OverlapTemplate(const OverlapShape& overlap, int channel_count)
     : shape(overlap),
       channels(channel_count),
@@ -55,15 +66,16 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
   columns_ = (space.width() - block_size) / stride + 1;
   rows_ = (space.height() - block_size) / stride + 1;
   if (metric != ErrorMetric::kSsd) return;
+  fft_ = std::make_unique<Fft>();
 
   // SSD by correlation: the sample planes' spectra once, each template's per block. The
   // correlation is circular over the padded size; a candidate's window never crosses the edge,
   // so no wrapped value enters a candidate's sum.
-  padded_ = {cv::getOptimalDFTSize(space.width()), cv::getOptimalDFTSize(space.height())};
+  fft_->padded = {cv::getOptimalDFTSize(space.width()), cv::getOptimalDFTSize(space.height())};
   const int n = space.channels();
   cv::Mat squares(space.height(), space.width(), CV_64F, cv::Scalar(0.0));
   for (int c = 0; c < n; ++c) {
-    cv::Mat plane(padded_, CV_64F, cv::Scalar(0.0));
+    cv::Mat plane(fft_->padded, CV_64F, cv::Scalar(0.0));
     double norm2 = 0.0;
     for (int y = 0; y < space.height(); ++y) {
       for (int x = 0; x < space.width(); ++x) {
@@ -75,14 +87,16 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
     }
     cv::Mat spectrum;
     cv::dft(plane, spectrum);
-    spectra_.push_back(spectrum);
-    plane_norms_.push_back(std::sqrt(norm2));
-    template_planes_.emplace_back(padded_, CV_64F, cv::Scalar(0.0));
-    products_.emplace_back();
+    fft_->spectra.push_back(spectrum);
+    fft_->plane_norms.push_back(std::sqrt(norm2));
+    fft_->template_planes.emplace_back(fft_->padded, CV_64F, cv::Scalar(0.0));
+    fft_->products.emplace_back();
   }
-  cv::integral(squares, squares_integral_, CV_64F);
-  squares_total_ = cv::sum(squares)[0];
+  cv::integral(squares, fft_->squares_integral, CV_64F);
+  fft_->squares_total = cv::sum(squares)[0];
 }
+
+OverlapSearch::~OverlapSearch() = default;
 
 double OverlapSearch::ExactError(const OverlapTemplate& pattern, SamplePixel candidate) const {
   double sum = 0.0;
@@ -118,17 +132,17 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
   // One forward transform per channel (only the template's B rows are non-zero) and its product
   // with the sample's spectrum, channels in parallel; summed in channel order.
   tbb::parallel_for(0, n, [&](int c) {
-    cv::Mat& plane = template_planes_[c];
+    cv::Mat& plane = fft_->template_planes[c];
     for (int v = 0; v < block_; ++v) {
       double* row = plane.ptr<double>(v);
       for (int u = 0; u < block_; ++u) row[u] = pattern.at(u, v, c);
     }
     cv::Mat spectrum;
     cv::dft(plane, spectrum, 0, block_);
-    cv::mulSpectrums(spectra_[c], spectrum, products_[c], 0, /*conjB=*/true);
+    cv::mulSpectrums(fft_->spectra[c], spectrum, fft_->products[c], 0, /*conjB=*/true);
   });
-  cv::Mat sum = products_[0].clone();
-  for (int c = 1; c < n; ++c) sum += products_[c];
+  cv::Mat sum = fft_->products[0].clone();
+  for (int c = 1; c < n; ++c) sum += fft_->products[c];
   const int needed_rows = (rows_ - 1) * stride_ + 1;
   cv::Mat correlation;
   cv::dft(sum, correlation, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT, needed_rows);
@@ -141,14 +155,14 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
   // ~ (W + H) u sum(M^2). Both are inflated a thousandfold (IMPLEMENTER CHOICE): the bound only
   // decides which candidates are re-scored exactly, so generosity costs a few exact sums while a
   // bound that failed would break equality with brute force.
-  const double size = static_cast<double>(padded_.area());
+  const double size = static_cast<double>(fft_->padded.area());
   double correlation_bound = 0.0;
   for (int c = 0; c < n; ++c) {
-    correlation_bound += plane_norms_[c] * (template_l1[c] + std::sqrt(size * template_l2[c]));
+    correlation_bound += fft_->plane_norms[c] * (template_l1[c] + std::sqrt(size * template_l2[c]));
   }
   correlation_bound *= 2.0 * std::log2(size) * kDoubleEpsilon;
   const double integral_bound =
-      4.0 * (space_.width() + space_.height()) * kDoubleEpsilon * squares_total_;
+      4.0 * (space_.width() + space_.height()) * kDoubleEpsilon * fft_->squares_total;
   const double slack = 1000.0 * (correlation_bound + integral_bound);
 
   const int inner_width = block_ - shape.left - shape.right;
@@ -158,9 +172,9 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
     const double* correlation_row = correlation.ptr<double>(y);
     for (int column = 0; column < columns_; ++column) {
       const int x = column * stride_;
-      const double squares =
-          SumOfBox(squares_integral_, x, y, block_, block_) -
-          SumOfBox(squares_integral_, x + shape.left, y + shape.top, inner_width, inner_height);
+      const double squares = SumOfBox(fft_->squares_integral, x, y, block_, block_) -
+                             SumOfBox(fft_->squares_integral, x + shape.left, y + shape.top,
+                                      inner_width, inner_height);
       const double estimate = squares - 2.0 * correlation_row[x] + template_energy;
       const double margin = slack + kExactSlack * (squares + template_energy);
       const std::size_t index = static_cast<std::size_t>(row) * columns_ + column;

@@ -1,6 +1,6 @@
 #pragma once
 
-#include <opencv2/core.hpp>
+#include <memory>
 #include <string_view>
 #include <vector>
 
@@ -53,6 +53,9 @@ struct QualifyingBlocks {
 class OverlapSearch {
  public:
   OverlapSearch(const PlanarImage& space, int block_size, ErrorMetric metric, int stride);
+  ~OverlapSearch();
+  OverlapSearch(const OverlapSearch&) = delete;
+  OverlapSearch& operator=(const OverlapSearch&) = delete;
 
   int candidate_columns() const { return columns_; }
   int candidate_rows() const { return rows_; }
@@ -82,15 +85,10 @@ class OverlapSearch {
   int stride_;
   int columns_ = 0;
   int rows_ = 0;
-  // FFT state (SSD): padded size, spectra of the sample planes, their norms, the integral image
-  // of sum_c M_c^2, and per-channel work buffers.
-  cv::Size padded_;
-  std::vector<cv::Mat> spectra_;
-  std::vector<double> plane_norms_;
-  cv::Mat squares_integral_;
-  double squares_total_ = 0.0;
-  std::vector<cv::Mat> template_planes_;
-  std::vector<cv::Mat> products_;
+  // SSD by FFT: the sample planes' spectra, their norms, the integral image of sum_c M_c^2 and
+  // work buffers (OpenCV types, kept out of this header).
+  struct Fft;
+  std::unique_ptr<Fft> fft_;
 };
 
 }  // namespace photomat
