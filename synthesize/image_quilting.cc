@@ -1,6 +1,7 @@
 #include "synthesize/image_quilting.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -132,6 +133,55 @@ std::optional<SamplePixel> Continuation(const BlockPlacement& placement, int col
   return proposal;
 }
 
+// Whether [a, a + length) and [b, b + length) meet on an axis of `extent` pixels (circular when
+// `wrap`).
+bool Meet(int a, int b, int length, int extent, bool wrap) {
+  if (!wrap) return a < b + length && b < a + length;
+  const int forward = ((b - a) % extent + extent) % extent;
+  const int backward = ((a - b) % extent + extent) % extent;
+  return forward < length || backward < length;
+}
+
+// The blocks (indices into placement.blocks) grouped in waves: a block's wave is one more than the
+// latest wave of the earlier blocks whose footprints meet its own. Footprints are B apart at most
+// two rows up (rows are at least B/2 apart); a tileable output's last row also meets its first.
+std::vector<std::vector<int>> Waves(const BlockPlacement& placement) {
+  const int columns = static_cast<int>(placement.column_positions.size());
+  const int rows = static_cast<int>(placement.row_positions.size());
+  const int b = placement.block_size;
+  std::vector<int> wave(placement.blocks.size(), 0);
+  std::vector<std::vector<int>> waves;
+  for (std::size_t k = 0; k < placement.blocks.size(); ++k) {
+    const PlacedBlock& block = placement.blocks[k];
+    int latest = -1;
+    for (int row : {block.row - 2, block.row - 1, block.row, 0, 1}) {
+      if (row < 0 || row >= rows || row > block.row) continue;
+      for (int column = 0; column < columns; ++column) {
+        const std::size_t other = static_cast<std::size_t>(row) * columns + column;
+        if (other >= k) break;
+        const PlacedBlock& earlier = placement.blocks[other];
+        if (Meet(block.x, earlier.x, b, placement.canvas_width, placement.tileable) &&
+            Meet(block.y, earlier.y, b, placement.canvas_height, placement.tileable)) {
+          latest = std::max(latest, wave[other]);
+        }
+      }
+    }
+    wave[k] = latest + 1;
+    if (wave[k] >= static_cast<int>(waves.size())) waves.resize(wave[k] + 1);
+    waves[wave[k]].push_back(static_cast<int>(k));
+  }
+  return waves;
+}
+
+// Each block's own random stream (SplitMix64 of the seed and the block's index), so the draws do
+// not depend on the order in which blocks run.
+std::uint64_t BlockSeed(std::uint64_t seed, std::size_t index) {
+  std::uint64_t z = seed + 0x9e3779b97f4a7c15ull * (index + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
 }  // namespace
 
 int DefaultBlockSize(int sample_width, int sample_height) {
@@ -168,12 +218,10 @@ BlockPlacement PlanQuilt(const Image& guide, const SynthesisTarget& target,
   const int columns = static_cast<int>(placement.column_positions.size());
   const int rows = static_cast<int>(placement.row_positions.size());
 
-  SourceMap canvas(placement.canvas_width, placement.canvas_height, guide.width(), guide.height());
-  OverlapSearch search(space, block, metric, options.candidate_stride);
-  Random random(target.seed);
-  NullProgress null_progress;
-  Progress& report = OrNull(progress, null_progress);
-  report.Start("quilting", static_cast<std::size_t>(columns) * rows);
+  // Every block's position and overlap first; then the blocks in waves: a block depends on the
+  // earlier blocks (raster order) whose footprints meet its own, and all blocks of a wave run at
+  // once. Each block reads and writes only its footprint and draws from its own random stream,
+  // so the result is that of raster order whatever the number of threads.
   for (int row = 0; row < rows; ++row) {
     for (int column = 0; column < columns; ++column) {
       PlacedBlock placed;
@@ -187,34 +235,47 @@ BlockPlacement PlanQuilt(const Image& guide, const SynthesisTarget& target,
       if (row > 0) shape.top = placement.row_positions[row - 1] + block - placed.y;
       if (target.tileable && column == columns - 1) shape.right = placed.x + block - target.width;
       if (target.tileable && row == rows - 1) shape.bottom = placed.y + block - target.height;
-      // Drawn for every block, so the random sequence does not depend on which branch ran.
-      const bool forced = random.Uniform() < options.forced_search_rate;
-
-      std::optional<SamplePixel> continuation;
-      if (options.coherence && !forced && shape.right == 0 && shape.bottom == 0) {
-        continuation = Continuation(placement, column, row);
-      }
-      if (shape.empty()) {
-        placed.source = search.Candidate(static_cast<int>(random.Index(search.candidate_count())));
-        placed.choice = PlacedBlock::Choice::kRandom;
-      } else {
-        const OverlapTemplate pattern = MakeTemplate(shape, placed, canvas, space);
-        if (continuation) {
-          placed.source = *continuation;
-          placed.choice = PlacedBlock::Choice::kCoherence;
-        } else {
-          const double floor = options.error_floor * neighbour_error * shape.PixelCount();
-          const QualifyingBlocks found =
-              search.Qualifying(pattern, options.tolerance, floor, options.search);
-          placed.source = found.positions[random.Index(found.positions.size())];
-          placed.choice = PlacedBlock::Choice::kSearch;
-        }
-        placed.cuts = CutBlock(shape, PixelErrors(pattern, placed.source, space, metric));
-      }
-      placement.Paste(placed, canvas);
       placement.blocks.push_back(std::move(placed));
-      report.Advance();
     }
+  }
+  const std::vector<std::vector<int>> waves = Waves(placement);
+
+  SourceMap canvas(placement.canvas_width, placement.canvas_height, guide.width(), guide.height());
+  const OverlapSearch search(space, block, metric, options.candidate_stride);
+  NullProgress null_progress;
+  Progress& report = OrNull(progress, null_progress);
+  report.Start("quilting", placement.blocks.size());
+  auto place = [&](int index) {
+    PlacedBlock& placed = placement.blocks[index];
+    const OverlapShape& shape = placed.overlap;
+    Random random(BlockSeed(target.seed, index));
+    const bool forced = random.Uniform() < options.forced_search_rate;
+    std::optional<SamplePixel> continuation;
+    if (options.coherence && !forced && shape.right == 0 && shape.bottom == 0) {
+      continuation = Continuation(placement, placed.column, placed.row);
+    }
+    if (shape.empty()) {
+      placed.source = search.Candidate(static_cast<int>(random.Index(search.candidate_count())));
+      placed.choice = PlacedBlock::Choice::kRandom;
+    } else {
+      const OverlapTemplate pattern = MakeTemplate(shape, placed, canvas, space);
+      if (continuation) {
+        placed.source = *continuation;
+        placed.choice = PlacedBlock::Choice::kCoherence;
+      } else {
+        const double floor = options.error_floor * neighbour_error * shape.PixelCount();
+        const QualifyingBlocks found =
+            search.Qualifying(pattern, options.tolerance, floor, options.search);
+        placed.source = found.positions[random.Index(found.positions.size())];
+        placed.choice = PlacedBlock::Choice::kSearch;
+      }
+      placed.cuts = CutBlock(shape, PixelErrors(pattern, placed.source, space, metric));
+    }
+    placement.Paste(placed, canvas);
+    report.Advance();
+  };
+  for (const std::vector<int>& wave : waves) {
+    tbb::parallel_for(std::size_t{0}, wave.size(), [&](std::size_t k) { place(wave[k]); });
   }
   report.Finish();
   return placement;

@@ -35,9 +35,11 @@ TEST(IntegrableProjectionTest, GrownGradientMapsBecomeIntegrable) {
   const Representation grown = Synthesize(gradient, options);
   const Representation projected = ProjectNormalsToIntegrable(grown);
 
+  const double sample = NonIntegrability(Normals(gradient));
   const double before = NonIntegrability(Normals(grown));
   const double after = NonIntegrability(Normals(projected));
-  EXPECT_GT(before, 0.01) << "quilted gradients are not a surface's";
+  // The sample's gradients come from a surface; the quilt's do not, across its seams.
+  EXPECT_GT(before, 20.0 * sample) << "quilted gradients are not a surface's";
   // (Not 0: the Nyquist terms of a real FFT projection do not survive a second projection.)
   EXPECT_LT(after, 0.02 * before);
   EXPECT_EQ(projected.details()["integrable_projection"], true);

@@ -46,8 +46,16 @@ struct OverlapSearch::Fft {
   std::vector<double> plane_norms;
   cv::Mat squares_integral;
   double squares_total = 0.0;
-  std::vector<cv::Mat> template_planes;
+};
+
+// Buffers one search needs, kept between searches (allocating them anew would page-fault).
+struct OverlapSearch::Workspace {
+  std::vector<cv::Mat> template_planes;  // padded, zero outside the block
+  std::vector<cv::Mat> spectra;
   std::vector<cv::Mat> products;
+  cv::Mat sum;
+  cv::Mat correlation;
+  std::vector<double> low, high;
 };
 
 OverlapTemplate::OverlapTemplate(const OverlapShape& overlap, int channel_count)
@@ -89,14 +97,41 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
     cv::dft(plane, spectrum);
     fft_->spectra.push_back(spectrum);
     fft_->plane_norms.push_back(std::sqrt(norm2));
-    fft_->template_planes.emplace_back(fft_->padded, CV_64F, cv::Scalar(0.0));
-    fft_->products.emplace_back();
   }
   cv::integral(squares, fft_->squares_integral, CV_64F);
   fft_->squares_total = cv::sum(squares)[0];
 }
 
 OverlapSearch::~OverlapSearch() = default;
+
+std::unique_ptr<OverlapSearch::Workspace> OverlapSearch::Borrow() const {
+  {
+    const std::lock_guard<std::mutex> lock(pool_mutex_);
+    if (!pool_.empty()) {
+      std::unique_ptr<Workspace> workspace = std::move(pool_.back());
+      pool_.pop_back();
+      return workspace;
+    }
+  }
+  auto workspace = std::make_unique<Workspace>();
+  const std::size_t count = static_cast<std::size_t>(candidate_count());
+  workspace->low.resize(count);
+  workspace->high.resize(count);
+  if (fft_) {
+    const int n = space_.channels();
+    for (int c = 0; c < n; ++c) {
+      workspace->template_planes.emplace_back(fft_->padded, CV_64F, cv::Scalar(0.0));
+    }
+    workspace->spectra.resize(n);
+    workspace->products.resize(n);
+  }
+  return workspace;
+}
+
+void OverlapSearch::Return(std::unique_ptr<Workspace> workspace) const {
+  const std::lock_guard<std::mutex> lock(pool_mutex_);
+  pool_.push_back(std::move(workspace));
+}
 
 double OverlapSearch::ExactError(const OverlapTemplate& pattern, SamplePixel candidate) const {
   double sum = 0.0;
@@ -113,8 +148,7 @@ double OverlapSearch::ExactError(const OverlapTemplate& pattern, SamplePixel can
   return sum;
 }
 
-void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>& low,
-                             std::vector<double>& high) {
+void OverlapSearch::BoundFft(const OverlapTemplate& pattern, Workspace& workspace) const {
   const int n = space_.channels();
   const OverlapShape& shape = pattern.shape;
   double template_energy = 0.0;
@@ -132,19 +166,20 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
   // One forward transform per channel (only the template's B rows are non-zero) and its product
   // with the sample's spectrum, channels in parallel; summed in channel order.
   tbb::parallel_for(0, n, [&](int c) {
-    cv::Mat& plane = fft_->template_planes[c];
+    cv::Mat& plane = workspace.template_planes[c];
     for (int v = 0; v < block_; ++v) {
       double* row = plane.ptr<double>(v);
       for (int u = 0; u < block_; ++u) row[u] = pattern.at(u, v, c);
     }
-    cv::Mat spectrum;
-    cv::dft(plane, spectrum, 0, block_);
-    cv::mulSpectrums(fft_->spectra[c], spectrum, fft_->products[c], 0, /*conjB=*/true);
+    cv::dft(plane, workspace.spectra[c], 0, block_);
+    cv::mulSpectrums(fft_->spectra[c], workspace.spectra[c], workspace.products[c], 0,
+                     /*conjB=*/true);
   });
-  cv::Mat sum = fft_->products[0].clone();
-  for (int c = 1; c < n; ++c) sum += fft_->products[c];
+  cv::Mat& sum = workspace.sum;
+  workspace.products[0].copyTo(sum);
+  for (int c = 1; c < n; ++c) sum += workspace.products[c];
   const int needed_rows = (rows_ - 1) * stride_ + 1;
-  cv::Mat correlation;
+  cv::Mat& correlation = workspace.correlation;
   cv::dft(sum, correlation, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT, needed_rows);
 
   // Rounding of the FFT correlation, per channel and output value, is at most of the order of
@@ -178,14 +213,13 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, std::vector<double>
       const double estimate = squares - 2.0 * correlation_row[x] + template_energy;
       const double margin = slack + kExactSlack * (squares + template_energy);
       const std::size_t index = static_cast<std::size_t>(row) * columns_ + column;
-      low[index] = estimate - margin;
-      high[index] = estimate + margin;
+      workspace.low[index] = estimate - margin;
+      workspace.high[index] = estimate + margin;
     }
   });
 }
 
-void OverlapSearch::BoundDirect(const OverlapTemplate& pattern, std::vector<double>& low,
-                                std::vector<double>& high) const {
+void OverlapSearch::BoundDirect(const OverlapTemplate& pattern, Workspace& workspace) const {
   const int n = space_.channels();
   const int width = space_.width();
   const int span = space_.width() - block_ + 1;  // every x; strided columns are read from it
@@ -229,15 +263,15 @@ void OverlapSearch::BoundDirect(const OverlapTemplate& pattern, std::vector<doub
       for (int column = 0; column < columns_; ++column) {
         const double estimate = sums[column * stride_];
         const std::size_t index = static_cast<std::size_t>(row) * columns_ + column;
-        low[index] = estimate / (1.0 + gamma) * (1.0 - kExactSlack);
-        high[index] = estimate / (1.0 - gamma) * (1.0 + kExactSlack);
+        workspace.low[index] = estimate / (1.0 + gamma) * (1.0 - kExactSlack);
+        workspace.high[index] = estimate / (1.0 - gamma) * (1.0 + kExactSlack);
       }
     }
   });
 }
 
 QualifyingBlocks OverlapSearch::Qualifying(const OverlapTemplate& pattern, double tolerance,
-                                           double floor, SearchMode mode) {
+                                           double floor, SearchMode mode) const {
   if (pattern.shape.block != block_ || pattern.channels != space_.channels()) {
     throw Error("an overlap template of the wrong block size or channel count");
   }
@@ -247,19 +281,22 @@ QualifyingBlocks OverlapSearch::Qualifying(const OverlapTemplate& pattern, doubl
     rescore.resize(count);
     for (int i = 0; i < count; ++i) rescore[i] = i;
   } else {
-    std::vector<double> low(count), high(count);
+    std::unique_ptr<Workspace> workspace = Borrow();
     if (metric_ == ErrorMetric::kSsd) {
-      BoundFft(pattern, low, high);
+      BoundFft(pattern, *workspace);
     } else {
-      BoundDirect(pattern, low, high);
+      BoundDirect(pattern, *workspace);
     }
     // Whatever the exact errors are, the best is at most min(high), so no candidate whose error
     // is above (1 + tolerance) * max(min(high), floor) can qualify.
+    const std::vector<double>& low = workspace->low;
+    const std::vector<double>& high = workspace->high;
     const double best_high = *std::min_element(high.begin(), high.end());
     const double reach = (1.0 + tolerance) * std::max(best_high, floor);
     for (int i = 0; i < count; ++i) {
       if (low[i] <= reach) rescore.push_back(i);
     }
+    Return(std::move(workspace));
   }
   std::vector<double> exact(rescore.size());
   tbb::parallel_for(std::size_t{0}, rescore.size(),

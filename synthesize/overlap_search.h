@@ -1,6 +1,7 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <string_view>
 #include <vector>
 
@@ -49,7 +50,7 @@ struct QualifyingBlocks {
 };
 
 // Every sample position of a block_size x block_size block (on a grid of `stride`) is a candidate.
-// Not thread-safe (it keeps FFT work buffers); use one per synthesis.
+// Thread-safe: several blocks can be searched at once (each search borrows its own work buffers).
 class OverlapSearch {
  public:
   OverlapSearch(const PlanarImage& space, int block_size, ErrorMetric metric, int stride);
@@ -70,14 +71,16 @@ class OverlapSearch {
 
   // The candidates with error <= (1 + tolerance) * max(min_error, floor).
   QualifyingBlocks Qualifying(const OverlapTemplate& pattern, double tolerance, double floor,
-                              SearchMode mode);
+                              SearchMode mode) const;
 
  private:
-  // Lower and upper bounds of every candidate's exact error.
-  void BoundFft(const OverlapTemplate& pattern, std::vector<double>& low,
-                std::vector<double>& high);
-  void BoundDirect(const OverlapTemplate& pattern, std::vector<double>& low,
-                   std::vector<double>& high) const;
+  struct Fft;
+  struct Workspace;
+  // Lower and upper bounds of every candidate's exact error, into workspace.low / high.
+  void BoundFft(const OverlapTemplate& pattern, Workspace& workspace) const;
+  void BoundDirect(const OverlapTemplate& pattern, Workspace& workspace) const;
+  std::unique_ptr<Workspace> Borrow() const;
+  void Return(std::unique_ptr<Workspace> workspace) const;
 
   const PlanarImage& space_;
   int block_;
@@ -85,10 +88,12 @@ class OverlapSearch {
   int stride_;
   int columns_ = 0;
   int rows_ = 0;
-  // SSD by FFT: the sample planes' spectra, their norms, the integral image of sum_c M_c^2 and
-  // work buffers (OpenCV types, kept out of this header).
-  struct Fft;
+  // SSD by FFT: the sample planes' spectra, their norms and the integral image of sum_c M_c^2
+  // (OpenCV types, kept out of this header).
   std::unique_ptr<Fft> fft_;
+  // Work buffers of finished searches, for the next ones.
+  mutable std::mutex pool_mutex_;
+  mutable std::vector<std::unique_ptr<Workspace>> pool_;
 };
 
 }  // namespace photomat
