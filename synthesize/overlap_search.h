@@ -12,12 +12,13 @@ namespace photomat {
 
 // How the overlap error of every candidate block is computed.
 //  kBruteForce: the exact error of each candidate, summed pixel by pixel (the reference).
-//  kFast: SSD through FFT correlation (cv::dft: E = sum M^2 - 2 corr(M, T) + sum T^2, the first
-//    term from an integral image), SAD through vectorised, multi-threaded direct sums. Both give
-//    each candidate an interval that provably holds its exact error; every candidate whose
-//    interval reaches the tolerance threshold is then re-scored with the same exact sum as brute
-//    force. The blocks chosen are therefore identical to brute force for the same seed, on any
-//    number of threads.
+//  kFast: SSD through FFT correlation (FFTW: E = sum M^2 - 2 corr(M, T) + sum T^2, the first term
+//    from an integral image), SAD through vectorised, multi-threaded direct sums. Both give each
+//    candidate an interval that provably holds its exact error. The exact threshold is found from
+//    the few candidates that can be the best, and only candidates whose interval straddles it are
+//    re-scored with the same exact sum as brute force (an interval wholly under or over it
+//    decides alone). The blocks chosen are therefore identical to brute force for the same seed,
+//    on any number of threads.
 enum class SearchMode { kBruteForce, kFast };
 std::string_view ToString(SearchMode mode);
 // "brute" or "fast"; throws Error otherwise.
@@ -40,13 +41,11 @@ struct OverlapTemplate {
 };
 
 // The candidates whose error lies within the tolerance of the best, in raster order of their
-// sample positions, with their exact errors.
+// sample positions, and the threshold they were held to.
 struct QualifyingBlocks {
   std::vector<SamplePixel> positions;
-  std::vector<double> errors;
-  double min_error = 0.0;
-  double threshold = 0.0;
-  int rescored = 0;  // exact evaluations (all candidates for brute force)
+  double threshold = 0.0;  // (1 + tolerance) * max(best error, floor)
+  int rescored = 0;        // exact evaluations (all candidates for brute force)
 };
 
 // Every sample position of a block_size x block_size block (on a grid of `stride`) is a candidate.
@@ -66,7 +65,7 @@ class OverlapSearch {
   }
 
   // The exact overlap error of the block at `candidate`: a sum in double over the overlap
-  // pixels in raster order and, within a pixel, over channels. The reference for every mode.
+  // pixels, row by row and channel by channel, in a fixed order. The reference for every mode.
   double ExactError(const OverlapTemplate& pattern, SamplePixel candidate) const;
 
   // The candidates with error <= (1 + tolerance) * max(min_error, floor).
