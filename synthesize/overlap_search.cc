@@ -52,6 +52,18 @@ RealArray NewReal(std::size_t n) {
 }
 ComplexArray NewComplex(std::size_t n) { return ComplexArray(fftw_alloc_complex(n)); }
 
+// The smallest value (four running minima break the dependency chain of one).
+double Minimum(const std::vector<double>& values) {
+  double m[4] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                 std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  std::size_t i = 0;
+  for (; i + 4 <= values.size(); i += 4) {
+    for (int k = 0; k < 4; ++k) m[k] = std::min(m[k], values[i + k]);
+  }
+  for (; i < values.size(); ++i) m[0] = std::min(m[0], values[i]);
+  return std::min(std::min(m[0], m[1]), std::min(m[2], m[3]));
+}
+
 }  // namespace
 
 std::string_view ToString(SearchMode mode) {
@@ -190,6 +202,28 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
 
 OverlapSearch::~OverlapSearch() = default;
 
+const std::vector<double>& OverlapSearch::SquaresUnder(const OverlapShape& shape) const {
+  const std::lock_guard<std::mutex> lock(pool_mutex_);
+  for (const auto& [known, squares] : squares_under_) {
+    if (known == shape) return squares;
+  }
+  // sum_c M_c^2 over the overlap of every candidate: the block's box minus its inner box.
+  std::vector<double> squares(static_cast<std::size_t>(candidate_count()));
+  const int inner_width = block_ - shape.left - shape.right;
+  const int inner_height = block_ - shape.top - shape.bottom;
+  for (int row = 0; row < rows_; ++row) {
+    for (int column = 0; column < columns_; ++column) {
+      const int x = column * stride_, y = row * stride_;
+      squares[static_cast<std::size_t>(row) * columns_ + column] =
+          fft_->SumOfBox(space_.width(), x, y, block_, block_) -
+          fft_->SumOfBox(space_.width(), x + shape.left, y + shape.top, inner_width, inner_height);
+    }
+  }
+  // A list keeps references valid as shapes are added (a quilt has a handful of shapes).
+  squares_under_.emplace_back(shape, std::move(squares));
+  return squares_under_.back().second;
+}
+
 std::unique_ptr<OverlapSearch::Workspace> OverlapSearch::Borrow() const {
   {
     const std::lock_guard<std::mutex> lock(pool_mutex_);
@@ -322,16 +356,13 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, Workspace& workspac
       4.0 * (space_.width() + space_.height()) * kDoubleEpsilon * fft.squares_total;
   const double slack = 1000.0 * (correlation_bound + integral_bound);
 
-  const int inner_width = block_ - shape.left - shape.right;
-  const int inner_height = block_ - shape.top - shape.bottom;
+  const std::vector<double>& all_squares = SquaresUnder(shape);
   tbb::parallel_for(0, rows_, [&](int row) {
     const int y = row * stride_;
     const double* correlation_row = correlation + static_cast<std::size_t>(y) * fft.width;
     for (int column = 0; column < columns_; ++column) {
       const int x = column * stride_;
-      const double squares =
-          fft.SumOfBox(space_.width(), x, y, block_, block_) -
-          fft.SumOfBox(space_.width(), x + shape.left, y + shape.top, inner_width, inner_height);
+      const double squares = all_squares[static_cast<std::size_t>(row) * columns_ + column];
       const double estimate = squares - 2.0 * unscale * correlation_row[x] + template_energy;
       const double margin = slack + kExactSlack * (squares + template_energy);
       const std::size_t index = static_cast<std::size_t>(row) * columns_ + column;
@@ -431,7 +462,7 @@ QualifyingBlocks OverlapSearch::Qualifying(const OverlapTemplate& pattern, doubl
   // The threshold (1 + tolerance) * max(best, floor) exactly as brute force computes it: when
   // even the best upper bound is under the floor, the floor decides; otherwise the best exact
   // error, which is among the candidates whose lower bound reaches the best upper bound.
-  const double best_high = *std::min_element(high.begin(), high.end());
+  const double best_high = Minimum(high);
   if (best_high <= floor) {
     result.threshold = (1.0 + tolerance) * floor;
   } else {

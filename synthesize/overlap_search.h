@@ -1,8 +1,10 @@
 #pragma once
 
+#include <list>
 #include <memory>
 #include <mutex>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "synthesize/block_placement.h"
@@ -78,6 +80,9 @@ class OverlapSearch {
   // Lower and upper bounds of every candidate's exact error, into workspace.low / high.
   void BoundFft(const OverlapTemplate& pattern, Workspace& workspace) const;
   void BoundDirect(const OverlapTemplate& pattern, Workspace& workspace) const;
+  // sum_c M_c^2 over `shape`'s overlap at every candidate (SSD's first term), computed once per
+  // shape.
+  const std::vector<double>& SquaresUnder(const OverlapShape& shape) const;
   std::unique_ptr<Workspace> Borrow() const;
   void Return(std::unique_ptr<Workspace> workspace) const;
 
@@ -90,9 +95,10 @@ class OverlapSearch {
   // SSD by FFT: the sample planes' spectra, their norms and the integral image of sum_c M_c^2
   // (OpenCV types, kept out of this header).
   std::unique_ptr<Fft> fft_;
-  // Work buffers of finished searches, for the next ones.
+  // Work buffers of finished searches, for the next ones, and the overlap sums per shape.
   mutable std::mutex pool_mutex_;
   mutable std::vector<std::unique_ptr<Workspace>> pool_;
+  mutable std::list<std::pair<OverlapShape, std::vector<double>>> squares_under_;
 };
 
 }  // namespace photomat
