@@ -4,8 +4,9 @@
 // patch-based synthesis on the same inputs and prints the table the issue asks for.
 //
 // Each case times planning plus applying the plan in memory (no file I/O), as wall time and as
-// the CPU time of all the process's threads, and reports, as counters, the quality of its output: the mean nearest-patch distance (7 x 7, RMS per value in
-// min-max units of the sample), the seam score from the source map and the roughness ratio.
+// the CPU time of all the process's threads, and reports, as counters, the quality of its output:
+// the mean nearest-patch distance (7 x 7, RMS per value in min-max units of the sample), the seam
+// score from the source map and the roughness ratio.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
