@@ -5,6 +5,7 @@
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/robust_support.h"
+#include "apps/synthesis_cli.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -47,6 +48,7 @@ void AddEvaluateCommand(CLI::App& app) {
     bool raw_intensities = false;
     bool robust = false;
     std::string loss = "cauchy";
+    SynthesisEvaluationOptions synthesis;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -78,7 +80,25 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Evaluate the robust fits (fit --robust) instead of the least-squares ones");
   command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
       ->capture_default_str();
+  // Synthesis quality (issue 4): INPUT is then the sample the synthesis was grown from.
+  command->add_option("--synthesised", options->synthesis.synthesised,
+                      "Score this synthesised stack or image against INPUT, the sample it was "
+                      "grown from (a map stack, fit folder or image): nearest-patch distance, "
+                      "roughness, wrap and (with --source-map) seam scores");
+  command->add_option("--source-map", options->synthesis.source_map,
+                      "With --synthesised: the source map `synthesize --save-source-map` wrote");
+  command
+      ->add_option("--patch", options->synthesis.patch_size,
+                   "With --synthesised: side of the compared patches")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   command->callback([options] {
+    if (!options->synthesis.synthesised.empty()) {
+      options->synthesis.sample = options->input;
+      options->synthesis.json = options->json;
+      EvaluateSynthesis(options->synthesis);
+      return;
+    }
     const std::vector<Method> methods = ParseMethodList(options->methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
