@@ -5,7 +5,9 @@
 #include "capture/capture_manifest.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/evaluation_report.h"
 #include "relight/relight.h"
+#include "relight/viewer_export.h"
 #include "represent/evaluation.h"
 #include "represent/fit.h"
 #include "represent/map_stack.h"
@@ -98,6 +100,22 @@ void AddDemoCommand(CLI::App& app) {
         "{}\n",
         fitted.size(), options->size, options->size, 2 * options->size, 2 * options->size,
         grown_folder.string());
+
+    EvaluationReportOptions report;
+    report.title = "photomat demo: evaluation of the built-in bricks sample";
+    report.progress = &bar;
+    WriteEvaluationReport(out / "report", loaded.set, results, &truth, report);
+    ViewerExportOptions viewer;
+    viewer.title = "photomat demo: bricks sample";
+    viewer.capture_lights = loaded.set.lights();
+    viewer.progress = &bar;
+    ExportViewer(out / "viewer", fitted, viewer);
+    fmt::print(
+        "report: open {} in a browser\n"
+        "viewer: serve {} with any static file server and open it, e.g.\n"
+        "        python3 -m http.server --directory {} 8000   then   http://localhost:8000/\n",
+        (out / "report" / "index.html").string(), (out / "viewer").string(),
+        (out / "viewer").string());
   });
 }
 
