@@ -29,15 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool IsImageFile(const fs::path& path) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (const char* known : {".png", ".tif", ".tiff", ".exr", ".jpg", ".jpeg", ".pgm", ".ppm"}) {
-    if (extension == known) return true;
-  }
-  return false;
-}
-
 bool IsMaskName(const fs::path& path) {
   std::string stem = path.stem().string();
   for (char& c : stem) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -76,7 +67,7 @@ struct ImageFolder {
 ImageFolder ListImageFolder(const fs::path& folder) {
   ImageFolder listing;
   for (const auto& entry : fs::directory_iterator(folder)) {
-    if (!entry.is_regular_file() || !IsImageFile(entry.path())) continue;
+    if (!entry.is_regular_file() || !IsReadableImageFileName(entry.path())) continue;
     if (IsMaskName(entry.path())) {
       if (listing.mask) {
         throw Error(folder, fmt::format("two masks ({} and {}); give one with --mask",
