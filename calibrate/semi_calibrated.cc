@@ -75,8 +75,7 @@ PhotometricSet SampleSet(const PhotometricSet& set, const std::vector<std::size_
 // W - W L^T (L W L^T)^-1 L W of pixel p's weighted lights. With L W L^T = C C^T (Cholesky),
 // entry (a, b) of pixel p's term is w_a I_a^2 [a = b] - z_a.z_b with z_a = I_a C^-1 (w_a l_a):
 // a diagonal plus a rank-3 downdate, accumulated per block of pixels.
-std::vector<Eigen::MatrixXd> NullSpaceSums(const PhotometricSet& samples,
-                                           const Eigen::Matrix3Xd& l,
+std::vector<Eigen::MatrixXd> NullSpaceSums(const PhotometricSet& samples, const Eigen::Matrix3Xd& l,
                                            const Eigen::MatrixXf& weights) {
   const Eigen::Index n = samples.size(), m = samples.width();
   const int channels = samples.channels();
@@ -214,6 +213,8 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   progress.Start("semi-calibrated", static_cast<std::size_t>(options.max_iterations));
+  double smallest_change = std::numeric_limits<double>::infinity();
+  int stalled = 0;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
     std::vector<std::vector<float>> rows(n, std::vector<float>(channels));
     for (int i = 0; i < n; ++i) {
@@ -226,9 +227,10 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
             : RankWindowWeights(samples, options.dark_fraction, options.bright_fraction);
     if (weights.rows() != m || weights.cols() != n || !weights.allFinite() ||
         weights.minCoeff() < 0.0f) {
-      set.Fail(fmt::format("semi-calibrated: the observation weights are {}x{} (want {}x{}, "
-                           "finite and not negative)",
-                           weights.rows(), weights.cols(), m, n));
+      set.Fail(
+          fmt::format("semi-calibrated: the observation weights are {}x{} (want {}x{}, "
+                      "finite and not negative)",
+                      weights.rows(), weights.cols(), m, n));
     }
     const std::vector<Eigen::MatrixXd> sums = NullSpaceSums(samples, l, weights);
     Eigen::MatrixXd next(n, channels);
@@ -242,9 +244,10 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
         const Eigen::VectorXd diagonal = total.diagonal();
         for (int i = 0; i < n; ++i) {
           if (!(diagonal[i] > 0.0)) {
-            set.Fail(fmt::format("{}: semi-calibrated: no sampled observation of this image "
-                                 "takes part (it is dark, clipped or an outlier everywhere)",
-                                 set.image_name(i)));
+            set.Fail(
+                fmt::format("{}: semi-calibrated: no sampled observation of this image "
+                            "takes part (it is dark, clipped or an outlier everywhere)",
+                            set.image_name(i)));
           }
         }
         const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();
@@ -265,6 +268,14 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
     result.iterations = iteration + 1;
     progress.Advance();
     if (result.last_change < options.tolerance) break;
+    // Re-weighing can settle into a cycle between nearly equal weight sets, where the change
+    // stops falling: stop once it has not reached a new low for `stall_iterations`.
+    if (result.last_change < smallest_change) {
+      smallest_change = result.last_change;
+      stalled = 0;
+    } else if (++stalled >= options.stall_iterations) {
+      break;
+    }
   }
   progress.Finish();
   result.intensities.assign(n, std::vector<float>(channels));
