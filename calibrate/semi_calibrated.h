@@ -44,8 +44,10 @@ using ObservationWeigher = std::function<Eigen::MatrixXf(const PhotometricSet& s
 
 struct SemiCalibratedOptions {
   int max_iterations = 100;
-  // Stops when no intensity changes by more than this fraction in an iteration.
-  double tolerance = 1e-4;
+  // Stops when no intensity changes by more than this fraction in an iteration (0.1 %: far below
+  // what the intensities are known to; on DiLiGenT cat 1e-4 changes the normals by 0.015 degree
+  // and takes twice the iterations).
+  double tolerance = 1e-3;
   // Also stops when the largest change has not fallen to a new low for this many iterations
   // (the weights cycle; on DiLiGenT cat the robust weights settle at changes near 3e-4).
   int stall_iterations = 3;
