@@ -23,6 +23,7 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/progress.h"
+#include "represent/robust_intensities.h"
 
 namespace photomat::app {
 namespace {
@@ -341,7 +342,7 @@ void AddIntensitiesCommand(CLI::App& calibrate) {
     SemiCalibratedOptions semi;
     TerminalProgressBar bar;
     semi.progress = &bar;
-    const SemiCalibratedResult result = EstimateLightIntensities(loaded.set, semi);
+    const SemiCalibratedResult result = EstimateLightIntensitiesRobust(loaded.set, semi);
     WriteLightIntensities(options->out, result.intensities);
     fmt::print("{} intensities ({} iterations) -> {}\n", result.intensities.size(),
                result.iterations, options->out.string());
@@ -495,7 +496,7 @@ void AddApplyCommand(CLI::App& calibrate) {
       set.set_intensities(ReadLightIntensities(options->intensities));
       steps.push_back({{"intensities", fs::absolute(options->intensities).generic_string()}});
     } else if (options->semi_calibrated) {
-      set.set_intensities(EstimateLightIntensities(set).intensities);
+      set.set_intensities(EstimateLightIntensitiesRobust(set).intensities);
       steps.push_back({{"intensities", "semi-calibrated"}});
     } else if (options->ignore_intensities) {
       set.set_intensities({});
