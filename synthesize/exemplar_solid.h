@@ -29,6 +29,12 @@ struct ExemplarSolidOptions {
   // correction off (upsampling and jitter only).
   int correction_passes = 2;
   std::uint64_t seed = 1;
+  // Histogram matching after Kopf et al. 2007 (section 4.2), lambda of the weight below; 0 turns
+  // it off (the thesis has none). At the start of every subpass the level's coordinates are
+  // binned by the exemplar's (reduced) channels, 16 bins each; a candidate whose colour falls in
+  // bins the result already over-uses has its neighbourhood distance multiplied by
+  // 1 + lambda sum_c max(0, H_result,c(b) / H_exemplar,c(b) - 1). IMPLEMENTER CHOICE (README).
+  double histogram_matching = 0.0;
   // Anisometric synthesis when set: the frames over the output (any size; resampled to it).
   const FrameField* field = nullptr;
 };
@@ -48,8 +54,9 @@ struct ExemplarSolidResult {
   std::vector<PassReport> passes;
 };
 
-// `prepared` must come from `exemplar` (PrepareExemplar). Throws Error for sizes below 1 or a
-// negative jitter.
+// `prepared` must come from `exemplar` (PrepareExemplar); its Gaussian-stack levels, when it has
+// them, are matched at the levels of their spacing. Throws Error for sizes below 1 or a negative
+// jitter or histogram weight.
 ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
                                             const PreparedExemplar& prepared,
                                             const ExemplarSolidOptions& options,
