@@ -348,19 +348,22 @@ void AddGrow(CLI::App& solid) {
                           {"pass", pass.pass},
                           {"objective", pass.objective}});
       }
-      WriteJsonFile(options->report,
-                    {{"exemplar", options->exemplar},
-                     {"size", ToString(*size)},
-                     {"retained_variance", prepared.appearance.retained_variance},
-                     {"similarity_from_cache", prepared.from_cache},
-                     {"gaussian_stack_levels", prepared.stack.size()},
-                     {"prepare_seconds", prepare_seconds},
-                     {"synthesis_seconds", synthesis_seconds},
-                     {"passes", passes},
-                     {"neighbourhood_match_error",
-                      NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance)},
-                     {"coherent_fraction",
-                      CoherentFraction(result.coordinates, prepared.appearance.domain)}});
+      WriteJsonFile(
+          options->report,
+          {{"exemplar", options->exemplar},
+           {"size", ToString(*size)},
+           {"retained_variance", prepared.appearance.retained_variance},
+           {"similarity_from_cache", prepared.from_cache},
+           {"gaussian_stack_levels", prepared.stack.size()},
+           {"prepare_seconds", prepare_seconds},
+           {"synthesis_seconds", synthesis_seconds},
+           {"passes", passes},
+           {"neighbourhood_match_error",
+            NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance)},
+           {"coherent_fraction", CoherentFraction(result.coordinates, prepared.appearance.domain)},
+           {"histogram_distance", HistogramDistance(result.volume, exemplar)},
+           {"spectrum_distance_db", LogSpectralDistance(RadialPowerSpectrum(result.volume, 8),
+                                                        RadialPowerSpectrum(exemplar, 8))}});
     }
   });
 }

@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "synthesize/mesh_io.h"
 #include "synthesize/volume_io.h"
 #include "synthesize/voxel_hash.h"
 #include "tests/support/test_support.h"
@@ -67,6 +68,9 @@ TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
   const nlohmann::json report = ReadJsonFile(dir / "r.json");
   EXPECT_TRUE(report["similarity_from_cache"].get<bool>());
   EXPECT_GT(report["passes"].size(), 0u);
+  EXPECT_GE(report["histogram_distance"].get<double>(), 0.0);
+  EXPECT_LE(report["histogram_distance"].get<double>(), 2.0);  // L1 of two distributions
+  EXPECT_GE(report["spectrum_distance_db"].get<double>(), 0.0);
 }
 
 TEST(SolidCommandTest, GrowsAProceduralExemplarIntoASliceStack) {
@@ -124,7 +128,13 @@ TEST(SolidCommandTest, CarvesAMeshOutOfASolid) {
   const std::string ply = ReadTextFile(dir / "carved" / "carved.ply");
   EXPECT_THAT(ply, HasSubstr(fmt::format("element vertex {}", vertices)));
   EXPECT_THAT(ply, HasSubstr("property uchar red"));
-  EXPECT_GT(std::filesystem::file_size(dir / "carved" / "carved.glb"), 1000u);
+  // Both meshes read back whole (positions on the octahedron's surface: |x| + |y| + |z| = 1).
+  for (const char* file : {"carved.ply", "carved.glb"}) {
+    const TriangleMesh mesh = ReadMesh(dir / "carved" / file);
+    EXPECT_EQ(mesh.vertex_count(), vertices) << file;
+    EXPECT_EQ(mesh.triangle_count(), 8 * 256) << file;
+    for (const Eigen::Vector3d& p : mesh.positions) ASSERT_NEAR(p.cwiseAbs().sum(), 1.0, 1e-5);
+  }
   const std::string table = ReadTextFile(dir / "carved" / "vertex_values.csv");
   EXPECT_EQ(table.substr(0, 6), "R,G,B\n");
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), vertices + 1);

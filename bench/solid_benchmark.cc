@@ -62,10 +62,12 @@ void BM_GrowExemplar(benchmark::State& state, ProceduralPattern pattern) {
 // (default settings) and jitter only (correction off): colour histogram L1, radially averaged
 // spectrum (dB), neighbourhood-match error, and the largest coherent patch as a share of the
 // output. The output of 64^3 is a whole number of periods of a 32^3 exemplar and not of a 24^3
-// one: the two show how much of the histogram agreement comes from copying whole periods.
+// one: the two show how much of the histogram agreement comes from copying whole periods. The
+// third argument is the histogram-matching lambda (ExemplarSolidOptions::histogram_matching).
 void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
   const int exemplar_size = static_cast<int>(state.range(0));
   const int output_size = static_cast<int>(state.range(1));
+  const double histogram_matching = static_cast<double>(state.range(2));
   const Volume exemplar = MakeProceduralExemplar(pattern, exemplar_size, 3);
   const auto spectrum = [&exemplar](const Volume& solid) {
     return LogSpectralDistance(RadialPowerSpectrum(solid, 8), RadialPowerSpectrum(exemplar, 8));
@@ -74,6 +76,7 @@ void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
     const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
     ExemplarSolidOptions options;
     options.size = VolumeSize::Cube(output_size);
+    options.histogram_matching = histogram_matching;
     const ExemplarSolidResult corrected = SynthesizeExemplarSolid(exemplar, prepared, options);
     options.correction_passes = 0;
     const Volume jitter = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
@@ -143,23 +146,19 @@ BENCHMARK_CAPTURE(BM_GrowExemplar, cells, ProceduralPattern::kCells)
     ->UseRealTime()
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, marble, ProceduralPattern::kMarble)
-    ->Args({32, 64})
-    ->Args({24, 64})
+    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, cells, ProceduralPattern::kCells)
-    ->Args({32, 64})
-    ->Args({24, 64})
+    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, wood, ProceduralPattern::kWood)
-    ->Args({32, 64})
-    ->Args({24, 64})
+    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, stripes, ProceduralPattern::kStripes)
-    ->Args({32, 64})
-    ->Args({24, 64})
+    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK(BM_FromThreeViews)
