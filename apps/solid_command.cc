@@ -276,6 +276,10 @@ void AddGrow(CLI::App& solid) {
                    "Weight lambda of the histogram matching (Kopf et al. 2007; 0: off)")
       ->capture_default_str();
   command
+      ->add_option("--occupancy-matching", options->synthesis.occupancy_matching,
+                   "Weight lambda against over-used exemplar regions (0: off)")
+      ->capture_default_str();
+  command
       ->add_option("--seed", options->synthesis.seed,
                    "Seed of the jitter (and of a "
                    "procedural exemplar)")

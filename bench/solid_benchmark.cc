@@ -59,16 +59,12 @@ void BM_GrowExemplar(benchmark::State& state, ProceduralPattern pattern) {
 }
 
 // Statistics of a grown solid against the exemplar (spec section 11, items 4 and 5), corrected
-// (default settings) and jitter only (correction off): colour histogram L1, radially averaged
-// spectrum (dB), neighbourhood-match error, and the largest coherent patch as a share of the
-// output. The output of 64^3 is a whole number of periods of a 32^3 exemplar and not of a 24^3
-// one: the two show how much of the histogram agreement comes from copying whole periods. The
-// third argument is the histogram-matching lambda (ExemplarSolidOptions::histogram_matching).
-void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
-  const int exemplar_size = static_cast<int>(state.range(0));
-  const int output_size = static_cast<int>(state.range(1));
-  const double histogram_matching = static_cast<double>(state.range(2));
-  const Volume exemplar = MakeProceduralExemplar(pattern, exemplar_size, 3);
+// and jitter only (correction off): colour histogram L1, radially averaged spectrum (dB),
+// neighbourhood-match error, and the largest coherent patch as a share of the output. An output
+// of 64^3 is a whole number of periods of 16^3 and 32^3 exemplars and not of 24^3 ones. The third
+// argument picks the settings: 0 the defaults, 1 occupancy matching off, 2 the defaults plus
+// histogram matching (lambda 1).
+void MeasureGrowth(benchmark::State& state, const Volume& exemplar, int output_size, int settings) {
   const auto spectrum = [&exemplar](const Volume& solid) {
     return LogSpectralDistance(RadialPowerSpectrum(solid, 8), RadialPowerSpectrum(exemplar, 8));
   };
@@ -76,7 +72,8 @@ void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
     const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
     ExemplarSolidOptions options;
     options.size = VolumeSize::Cube(output_size);
-    options.histogram_matching = histogram_matching;
+    if (settings == 1) options.occupancy_matching = 0.0;
+    if (settings == 2) options.histogram_matching = 1.0;
     const ExemplarSolidResult corrected = SynthesizeExemplarSolid(exemplar, prepared, options);
     options.correction_passes = 0;
     const Volume jitter = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
@@ -93,6 +90,36 @@ void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
             CoherentPatches(corrected.coordinates, prepared.appearance.domain).largest) /
         static_cast<double>(corrected.volume.voxel_count());
   }
+}
+
+void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
+  MeasureGrowth(state, MakeProceduralExemplar(pattern, static_cast<int>(state.range(0)), 3),
+                static_cast<int>(state.range(1)), static_cast<int>(state.range(2)));
+}
+
+// The same for solids made from a photograph of the solid-exemplar set (the same view on all three
+// planes, as `photomat solid from-views --view`; 3 iterations). Skipped without the data.
+void BM_GrowRealQuality(benchmark::State& state, const char* photograph) {
+  const char* data = std::getenv("PHOTOMAT_TEST_DATA");
+  const std::filesystem::path file =
+      data ? std::filesystem::path(data) / "textures" / "solid-exemplars" / photograph
+           : std::filesystem::path();
+  if (!data || !std::filesystem::exists(file)) {
+    state.SkipWithError("needs $PHOTOMAT_TEST_DATA/textures/solid-exemplars");
+    for (auto _ : state) {
+    }
+    return;
+  }
+  const Image view = ReadImage(file).image;
+  SpectralSolidOptions options;
+  options.size = static_cast<int>(state.range(0));
+  options.iterations = 3;
+  const Volume exemplar =
+      SynthesizeSpectralSolid(
+          {{SlicePlane::kXY, view}, {SlicePlane::kXZ, view}, {SlicePlane::kYZ, view}}, options)
+          .volume;
+  MeasureGrowth(state, exemplar, static_cast<int>(state.range(1)),
+                static_cast<int>(state.range(2)));
 }
 
 std::vector<SolidView> Views(int size) {
@@ -146,18 +173,26 @@ BENCHMARK_CAPTURE(BM_GrowExemplar, cells, ProceduralPattern::kCells)
     ->UseRealTime()
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, marble, ProceduralPattern::kMarble)
-    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
+    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, cells, ProceduralPattern::kCells)
-    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
+    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, wood, ProceduralPattern::kWood)
-    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
+    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, stripes, ProceduralPattern::kStripes)
+    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_GrowRealQuality, Exemplar_14, "Exemplar_14.jpg")
+    ->ArgsProduct({{32, 24}, {64}, {0, 1}})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_GrowRealQuality, Exemplar_20, "Exemplar_20.jpg")
     ->ArgsProduct({{32, 24}, {64}, {0, 1}})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);

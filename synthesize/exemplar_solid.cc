@@ -171,6 +171,64 @@ class HistogramWeights {
   std::vector<double> target_;      // channels x kHistogramBins, each channel summing to 1
 };
 
+// Occupancy matching (ExemplarSolidOptions::occupancy_matching): how much more than a uniform
+// copy the result uses each block of the exemplar.
+struct OccupancyPenalties {
+  int blocks = 0;             // per axis
+  std::vector<float> values;  // lambda * max(0, count / expected - 1) per block, x fastest
+  bool empty() const { return values.empty(); }
+};
+
+class OccupancyWeights {
+ public:
+  OccupancyWeights(const ExemplarDomain& domain, double lambda)
+      : domain_(domain), lambda_(lambda) {}
+
+  bool enabled() const { return lambda_ > 0.0; }
+
+  // Counted over the exemplar voxels `coordinates` (a level of `side`^3 voxels) point to
+  // (`lookup` maps a coordinate triple to its voxel).
+  template <typename Lookup>
+  OccupancyPenalties Penalties(const std::vector<float>& coordinates, int side,
+                               Lookup lookup) const {
+    const auto extent = domain_.extent();
+    OccupancyPenalties result;
+    result.blocks = std::max(1, std::min({extent[0], extent[1], extent[2], side / 2}));
+    result.values.assign(static_cast<std::size_t>(result.blocks) * result.blocks * result.blocks,
+                         0.0f);
+    const std::size_t voxels = coordinates.size() / 3;
+    for (std::size_t i = 0; i < voxels; ++i) {
+      result.values[Block(lookup(&coordinates[3 * i]), result.blocks)] += 1.0f;
+    }
+    const float expected = static_cast<float>(voxels) / static_cast<float>(result.values.size());
+    for (float& value : result.values) {
+      value = static_cast<float>(lambda_) * std::max(0.0f, value / expected - 1.0f);
+    }
+    return result;
+  }
+
+  // The factor of a candidate voxel's distance.
+  float Weight(const OccupancyPenalties& penalties, std::size_t voxel) const {
+    return 1.0f + penalties.values[Block(voxel, penalties.blocks)];
+  }
+
+ private:
+  std::size_t Block(std::size_t voxel, int blocks) const {
+    const auto c = domain_.Coordinates(voxel);
+    const auto extent = domain_.extent();
+    std::size_t index = 0;
+    for (int axis = 2; axis >= 0; --axis) {
+      const auto a = static_cast<std::size_t>(axis);
+      index = index * static_cast<std::size_t>(blocks) +
+              static_cast<std::size_t>((c[a] - domain_.origin()) * blocks / extent[a]);
+    }
+    return index;
+  }
+
+  const ExemplarDomain& domain_;
+  double lambda_ = 0.0;
+};
+
 class Synthesizer {
  public:
   Synthesizer(const Volume& exemplar, const PreparedExemplar& prepared,
@@ -181,7 +239,8 @@ class Synthesizer {
         similarity_(&prepared.similarity),
         domain_(prepared.appearance.domain),
         options_(options),
-        d_(static_cast<std::size_t>(prepared.appearance.dimensions)) {
+        d_(static_cast<std::size_t>(prepared.appearance.dimensions)),
+        occupancy_(prepared.appearance.domain, options.occupancy_matching) {
     const auto extent = domain_.extent();
     smallest_extent_ = std::min({extent[0], extent[1], extent[2]});
     if (options.histogram_matching > 0.0) {
@@ -328,6 +387,10 @@ class Synthesizer {
           histogram_.enabled()
               ? histogram_.Penalties(snapshot, [this](const float* c) { return Lookup(c); })
               : std::vector<float>();
+      const OccupancyPenalties occupancy =
+          occupancy_.enabled()
+              ? occupancy_.Penalties(snapshot, side, [this](const float* c) { return Lookup(c); })
+              : OccupancyPenalties();
       const int px = parity & 1, py = (parity >> 1) & 1, pz = (parity >> 2) & 1;
       if (px >= side || py >= side || pz >= side) continue;
       const int slabs = (side - pz + 1) / 2;
@@ -342,7 +405,7 @@ class Synthesizer {
             const std::size_t p = Index(side, x, y, z);
             error[p] =
                 CorrectVoxel({x, y, z}, side, spacing, local, snapshot, exemplar_neighbourhoods,
-                             penalties, scratch, &coordinates[3 * p]);
+                             penalties, occupancy, scratch, &coordinates[3 * p]);
           }
         }
       });
@@ -362,7 +425,8 @@ class Synthesizer {
   float CorrectVoxel(const Int3& p, int side, int spacing, const Neighbourhood& local,
                      const std::vector<float>& snapshot,
                      const std::vector<float>& exemplar_neighbourhoods,
-                     const std::vector<float>& penalties, Scratch& scratch, float* out) const {
+                     const std::vector<float>& penalties, const OccupancyPenalties& occupancy,
+                     Scratch& scratch, float* out) const {
     std::vector<float>& synthesized = scratch.synthesized;
     std::vector<std::size_t>& candidates = scratch.candidates;
     // N_S(p): per diagonal, the mean of 4 predictions of its appearance.
@@ -416,6 +480,7 @@ class Synthesizer {
         distance += diff * diff;
       }
       if (!penalties.empty()) distance *= histogram_.Weight(penalties, candidate);
+      if (!occupancy.empty()) distance *= occupancy_.Weight(occupancy, candidate);
       if (distance < best) best = distance, best_candidate = candidate;
     }
     const auto u = domain_.Coordinates(best_candidate);
@@ -457,6 +522,7 @@ class Synthesizer {
   std::size_t d_;
   int smallest_extent_ = 0;
   HistogramWeights histogram_;
+  OccupancyWeights occupancy_;
 };
 
 }  // namespace
@@ -469,8 +535,8 @@ ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
     throw Error(fmt::format("invalid output size {}", ToString(options.size)));
   }
   if (!(options.jitter >= 0.0) || options.correction_passes < 0 ||
-      !(options.histogram_matching >= 0.0)) {
-    throw Error("jitter, correction passes and histogram matching must not be negative");
+      !(options.histogram_matching >= 0.0) || !(options.occupancy_matching >= 0.0)) {
+    throw Error("jitter, correction passes, histogram and occupancy matching must not be negative");
   }
   const auto fits = [&](const AppearanceSpace& appearance, const SimilaritySet& similarity) {
     return appearance.domain.size == exemplar.size() &&
