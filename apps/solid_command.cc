@@ -8,14 +8,19 @@
 #include <memory>
 #include <optional>
 
+#include "apps/cli_support.h"
 #include "apps/commands.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/progress.h"
 #include "synthesize/exemplar_solid.h"
 #include "synthesize/frame_field.h"
+#include "synthesize/mesh_io.h"
+#include "synthesize/mesh_render.h"
 #include "synthesize/procedural_exemplars.h"
+#include "synthesize/solid_carving.h"
 #include "synthesize/solid_quality.h"
 #include "synthesize/spectral_solid.h"
 #include "synthesize/volume_io.h"
@@ -218,6 +223,7 @@ void AddGrow(CLI::App& solid) {
     AppearanceOptions appearance;
     SimilarityOptions similarity;
     bool interior = false;
+    bool single_resolution = false;
     std::string cache;
     bool no_cache = false;
     std::filesystem::path out, coordinates, slices, report;
@@ -262,6 +268,17 @@ void AddGrow(CLI::App& solid) {
       ->capture_default_str();
   command->add_flag("--interior", options->interior,
                     "The exemplar does not tile: use only voxels whose neighbourhood is inside");
+  command->add_flag("--single-resolution", options->single_resolution,
+                    "Match every level against the exemplar itself (the thesis) instead of its "
+                    "Gaussian stack");
+  command
+      ->add_option("--histogram-matching", options->synthesis.histogram_matching,
+                   "Weight lambda of the histogram matching (Kopf et al. 2007; 0: off)")
+      ->capture_default_str();
+  command
+      ->add_option("--occupancy-matching", options->synthesis.occupancy_matching,
+                   "Weight lambda against over-used exemplar regions (0: off)")
+      ->capture_default_str();
   command
       ->add_option("--seed", options->synthesis.seed,
                    "Seed of the jitter (and of a "
@@ -288,6 +305,7 @@ void AddGrow(CLI::App& solid) {
         LoadExemplar(options->exemplar, options->procedural_size, options->synthesis.seed);
     options->appearance.boundary =
         options->interior ? ExemplarBoundary::kInterior : ExemplarBoundary::kPeriodic;
+    options->appearance.gaussian_stack = !options->single_resolution;
     ExemplarSolidOptions synthesis = options->synthesis;
     synthesis.size = *size;
     std::optional<FrameField> field;
@@ -334,19 +352,127 @@ void AddGrow(CLI::App& solid) {
                           {"pass", pass.pass},
                           {"objective", pass.objective}});
       }
-      WriteJsonFile(options->report,
-                    {{"exemplar", options->exemplar},
-                     {"size", ToString(*size)},
-                     {"retained_variance", prepared.appearance.retained_variance},
-                     {"similarity_from_cache", prepared.from_cache},
-                     {"prepare_seconds", prepare_seconds},
-                     {"synthesis_seconds", synthesis_seconds},
-                     {"passes", passes},
-                     {"neighbourhood_match_error",
-                      NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance)},
-                     {"coherent_fraction",
-                      CoherentFraction(result.coordinates, prepared.appearance.domain)}});
+      WriteJsonFile(
+          options->report,
+          {{"exemplar", options->exemplar},
+           {"size", ToString(*size)},
+           {"retained_variance", prepared.appearance.retained_variance},
+           {"similarity_from_cache", prepared.from_cache},
+           {"gaussian_stack_levels", prepared.stack.size()},
+           {"prepare_seconds", prepare_seconds},
+           {"synthesis_seconds", synthesis_seconds},
+           {"passes", passes},
+           {"neighbourhood_match_error",
+            NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance)},
+           {"coherent_fraction", CoherentFraction(result.coordinates, prepared.appearance.domain)},
+           {"histogram_distance", HistogramDistance(result.volume, exemplar)},
+           {"spectrum_distance_db", LogSpectralDistance(RadialPowerSpectrum(result.volume, 8),
+                                                        RadialPowerSpectrum(exemplar, 8))}});
     }
+  });
+}
+
+// --- carve ---
+
+void AddCarve(CLI::App& solid) {
+  struct Options {
+    std::filesystem::path volume, mesh, out;
+    CarveOptions carve;
+    bool clamp = false;
+    bool normalise = false;
+    int preview_size = 512;
+    int threads = 0;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = solid.add_subcommand(
+      "carve",
+      "Carve a mesh out of a solid texture: every vertex takes the volume's value where the mesh "
+      "sits in it (its bounding box centred in the volume, longest side across it). Writes "
+      "carved.ply and carved.glb (per-vertex colours), vertex_values.csv (every channel), "
+      "preview_{front,right,back,left,top}.png and carve.json.");
+  command->add_option("volume", options->volume, "Solid texture: FILE.vdb or an EXR slice folder")
+      ->required();
+  command->add_option("--mesh", options->mesh, "Mesh file (OBJ, PLY, OFF, STL, ...)")->required();
+  command->add_option("--out", options->out, "Output folder")->required();
+  command
+      ->add_option("--periods", options->carve.placement.periods,
+                   "Volume periods across the mesh's longest side (above 1 repeats the volume)")
+      ->capture_default_str();
+  command->add_flag("--clamp", options->clamp,
+                    "The volume does not tile: repeat its faces instead of wrapping around");
+  command
+      ->add_option("--max-edge", options->carve.max_mean_edge_voxels,
+                   "Subdivide until the mean edge is at most this many voxels (0: never)")
+      ->capture_default_str();
+  command->add_flag("--normalise", options->normalise,
+                    "Stretch the shown channels' range over the colours (non-colour volumes)");
+  command->add_option("--preview-size", options->preview_size, "Preview side, pixels")
+      ->capture_default_str();
+  command->add_option("--threads", options->threads, "Threads (0: all; same result any count)")
+      ->capture_default_str();
+  command->callback([options] {
+    const auto limit = LimitThreads(options->threads);
+    const Volume volume = ReadVolume(options->volume);
+    const TriangleMesh mesh = ReadMesh(options->mesh);
+    CarveOptions carve = options->carve;
+    carve.placement.tileable = !options->clamp;
+    TerminalProgressBar bar;
+    const auto start = std::chrono::steady_clock::now();
+    const CarvedMesh carved = CarveMesh(mesh, volume, carve, &bar);
+    const std::vector<Eigen::Vector3f> colours = CarvedColours(carved, volume, options->normalise);
+    fmt::print(
+        "carved {} ({} vertices, {} subdivision levels: {} vertices) out of a {} solid "
+        "({:.2f} s)\n",
+        options->mesh.filename().string(), mesh.vertex_count(), carved.subdivision_levels,
+        carved.mesh.vertex_count(), ToString(volume.size()), Seconds(start));
+    CreateFolder(options->out);
+    WriteMesh(options->out / "carved.ply", carved.mesh, colours);
+    WriteMesh(options->out / "carved.glb", carved.mesh, colours);
+    // Every channel at every vertex (representation maps carry more than a colour).
+    std::string table;
+    const std::vector<std::string> names = volume.ChannelNamesOrDefault();
+    for (std::size_t c = 0; c < names.size(); ++c) table += (c ? "," : "") + names[c];
+    table += "\n";
+    for (int v = 0; v < carved.mesh.vertex_count(); ++v) {
+      const auto values = carved.at(v);
+      for (std::size_t c = 0; c < values.size(); ++c) {
+        table += fmt::format("{}{:.6g}", c ? "," : "", values[c]);
+      }
+      table += "\n";
+    }
+    WriteTextFileAtomically(options->out / "vertex_values.csv", table);
+    PreviewOptions preview;
+    preview.size = options->preview_size;
+    const std::vector<PreviewView> views = DefaultPreviewViews();
+    bar.Start("preview renders", views.size());
+    for (const PreviewView& view : views) {
+      WritePreviews(options->out, "preview", carved.mesh, colours, {view}, preview);
+      bar.Advance();
+    }
+    bar.Finish();
+    const CarveMapping& mapping = carved.mapping;
+    WriteJsonFile(
+        options->out / "carve.json",
+        {{"volume", options->volume.string()},
+         {"volume_size", ToString(volume.size())},
+         {"channels", names},
+         {"mesh", options->mesh.string()},
+         {"input_vertices", mesh.vertex_count()},
+         {"subdivision_levels", carved.subdivision_levels},
+         {"vertices", carved.mesh.vertex_count()},
+         {"triangles", carved.mesh.triangle_count()},
+         {"mean_edge_voxels", MeanEdgeLength(carved.mesh) * mapping.scale},
+         {"periods", carve.placement.periods},
+         {"tileable", carve.placement.tileable},
+         {"scale_voxels_per_unit", mapping.scale},
+         {"mesh_centre",
+          {mapping.mesh_centre.x(), mapping.mesh_centre.y(), mapping.mesh_centre.z()}},
+         {"volume_centre",
+          {mapping.volume_centre.x(), mapping.volume_centre.y(), mapping.volume_centre.z()}}});
+    fmt::print(
+        "wrote carved.ply, carved.glb, vertex_values.csv, {} previews and carve.json to "
+        "{}\n",
+        views.size(), options->out.string());
   });
 }
 
@@ -379,10 +505,13 @@ void AddExemplar(CLI::App& solid) {
 
 void AddSolidCommand(CLI::App& app) {
   CLI::App* solid = app.add_subcommand(
-      "solid", "Solid (3D) textures: from 2D views, grown from a solid exemplar, procedural.");
+      "solid",
+      "Solid (3D) textures: from 2D views, grown from a solid exemplar, procedural, and objects "
+      "carved out of them.");
   solid->require_subcommand(1);
   AddFromViews(*solid);
   AddGrow(*solid);
+  AddCarve(*solid);
   AddExemplar(*solid);
 }
 

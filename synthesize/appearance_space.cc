@@ -58,18 +58,23 @@ RowMatrixXf ReducedChannels(const Volume& volume, const AppearanceSpace& space) 
   return (values.rowwise() - space.channel_mean.transpose()) * space.channel_basis;
 }
 
-// Writes the neighbourhood of (x, y, z) of `reduced` (a volume of `size`, wrapping) into `out`,
-// z outermost, then y, then x, channels innermost.
+// An index beyond the array: wrapped (periodic exemplars) or clamped to the nearest face.
+int Edge(int value, int length, bool periodic) {
+  return periodic ? Wrap(value, length) : std::clamp(value, 0, length - 1);
+}
+
+// Writes the neighbourhood of (x, y, z) of `reduced` (a volume of `size`), samples `spacing`
+// apart, into `out`, z outermost, then y, then x, channels innermost.
 void Gather(const RowMatrixXf& reduced, const VolumeSize& size, int x, int y, int z, int side,
-            float* out) {
+            int spacing, bool periodic, float* out) {
   const int half = side / 2;
   const int channels = static_cast<int>(reduced.cols());
   for (int dz = -half; dz <= half; ++dz) {
-    const int zz = Wrap(z + dz, size.z);
+    const int zz = Edge(z + spacing * dz, size.z, periodic);
     for (int dy = -half; dy <= half; ++dy) {
-      const int yy = Wrap(y + dy, size.y);
+      const int yy = Edge(y + spacing * dy, size.y, periodic);
       for (int dx = -half; dx <= half; ++dx) {
-        const int xx = Wrap(x + dx, size.x);
+        const int xx = Edge(x + spacing * dx, size.x, periodic);
         const std::size_t index = (static_cast<std::size_t>(zz) * size.y + yy) * size.x + xx;
         const float* source = reduced.data() + index * static_cast<std::size_t>(channels);
         out = std::copy(source, source + channels, out);
@@ -105,7 +110,8 @@ void AppearanceSpace::Project(const Volume& volume, int x, int y, int z,
     for (int dy = -half; dy <= half; ++dy) {
       for (int dx = -half; dx <= half; ++dx) {
         const auto voxel =
-            volume.voxel(Wrap(x + dx, size.x), Wrap(y + dy, size.y), Wrap(z + dz, size.z));
+            volume.voxel(Wrap(x + spacing * dx, size.x), Wrap(y + spacing * dy, size.y),
+                         Wrap(z + spacing * dz, size.z));
         const Eigen::Map<const Eigen::VectorXf> v(voxel.data(), channels);
         reduced = channel_basis.transpose() * (v - channel_mean);
         feature.segment(k, reduced.size()) = reduced;
@@ -124,12 +130,13 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
   if (options.neighbourhood < 1 || options.neighbourhood % 2 == 0) {
     throw Error(fmt::format("neighbourhood {} must be odd and positive", options.neighbourhood));
   }
-  if (options.max_channels < 1 || options.covariance_samples < 16) {
-    throw Error("max_channels must be positive and covariance_samples at least 16");
+  if (options.max_channels < 1 || options.covariance_samples < 16 || options.spacing < 1) {
+    throw Error("max_channels and spacing must be positive and covariance_samples at least 16");
   }
   if (exemplar.empty()) throw Error("the exemplar is empty");
   AppearanceSpace space;
   space.neighbourhood = options.neighbourhood;
+  space.spacing = options.spacing;
   space.domain.size = exemplar.size();
   space.domain.periodic = options.boundary == ExemplarBoundary::kPeriodic;
   space.domain.border = space.domain.periodic ? 0 : options.neighbourhood / 2;
@@ -168,7 +175,8 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
       for (std::size_t i = begin; i < end; ++i) {
         const auto [x, y, z] = space.domain.Coordinates(samples[i]);
         float* row = block.row(static_cast<Eigen::Index>(i - begin)).data();
-        Gather(reduced, exemplar.size(), x, y, z, side, row);
+        Gather(reduced, exemplar.size(), x, y, z, side, options.spacing, space.domain.periodic,
+               row);
         for (Eigen::Index f = 0; f < features; ++f) row[f] -= centre[f % reduced.cols()];
       }
       const Eigen::MatrixXf product = block.transpose() * block;
@@ -213,7 +221,7 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
     block.setZero();
     for (std::size_t i = begin; i < end; ++i) {
       const auto [x, y, z] = space.domain.Coordinates(valid[i]);
-      Gather(reduced, exemplar.size(), x, y, z, side,
+      Gather(reduced, exemplar.size(), x, y, z, side, options.spacing, space.domain.periodic,
              block.row(static_cast<Eigen::Index>(i - begin)).data());
     }
     const RowMatrixXf projected =

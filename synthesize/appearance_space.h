@@ -51,7 +51,12 @@ struct ExemplarDomain {
 
 struct AppearanceOptions {
   int neighbourhood = 5;  // odd side of the cubic neighbourhood
-  int dimensions = 8;     // d: PCA components kept ([LH06]'s choice; the thesis gives none)
+  // Neighbourhood samples lie this many voxels apart: a pyramid level of spacing h matches
+  // neighbourhoods spread over h times the distance, read from that level's Gaussian-stack
+  // exemplar. The valid region stays the one of spacing 1, so every level shares one domain of
+  // coordinates; in interior mode samples beyond the array repeat its nearest face voxel.
+  int spacing = 1;
+  int dimensions = 8;  // d: PCA components kept ([LH06]'s choice; the thesis gives none)
   ExemplarBoundary boundary = ExemplarBoundary::kPeriodic;
   // Volumes with more channels (map stacks: 18 PTM terms) are first reduced to this many by a
   // per-voxel PCA, so the neighbourhood vector stays small (IMPLEMENTER CHOICE).
@@ -60,6 +65,14 @@ struct AppearanceOptions {
   // the valid ones (IMPLEMENTER CHOICE: the basis of 375 dimensions is well determined by far
   // fewer than the 262,144 voxels of a 64^3 exemplar).
   int covariance_samples = 65536;
+  // For PrepareExemplar: also build the appearance space and similarity set of every coarser
+  // Gaussian-stack level that synthesis corrects (spacing 2, 4, ... while twice the spacing is
+  // below the exemplar), as Lefebvre and Hoppe's pyramid synthesis does (spec section 3.3). False
+  // is the thesis's single-resolution exemplar shared by all levels. IMPLEMENTER CHOICE: on by
+  // default; with one shared level, coarse levels match point samples h voxels apart that say
+  // little about the structure between them, correction settles on mixed, average-looking
+  // exemplar regions, and the colour histogram drifts far from the exemplar's (README).
+  bool gaussian_stack = true;
 };
 
 // The appearance-space exemplar (thesis section 3.1, after Lefebvre and Hoppe 2006): every valid
@@ -67,6 +80,7 @@ struct AppearanceOptions {
 struct AppearanceSpace {
   ExemplarDomain domain;
   int neighbourhood = 5;
+  int spacing = 1;
   int dimensions = 0;
   double retained_variance = 0;   // share of the feature variance the d components keep
   Eigen::VectorXf channel_mean;   // channel reduction: reduced = basis^T (value - mean)
@@ -81,7 +95,7 @@ struct AppearanceSpace {
   }
   int reduced_channels() const { return static_cast<int>(channel_basis.cols()); }
   // The d-vector of the neighbourhood of (x, y, z) in any volume with the exemplar's channels,
-  // wrapping around that volume (synthesised solids are toroidal).
+  // samples `spacing` apart, wrapping around that volume (synthesised solids are toroidal).
   void Project(const Volume& volume, int x, int y, int z, std::span<float> out) const;
 };
 

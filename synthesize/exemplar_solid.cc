@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -88,18 +89,163 @@ struct Scratch {
   std::vector<std::size_t> candidates;
 };
 
+// Bins per (reduced) channel of the histogram matching: coarse enough that the few hundred voxels
+// of a coarse pyramid level fill them.
+constexpr int kHistogramBins = 16;
+
+// Histogram matching (Kopf et al. 2007, section 4.2, carried from their weighted averages over to
+// the choice among candidates): the exemplar's per-channel histograms and every voxel's bins.
+class HistogramWeights {
+ public:
+  HistogramWeights() = default;
+  // Channels as the appearance space reduces them (at most 4, decorrelated); valid voxels only.
+  HistogramWeights(const Volume& exemplar, const AppearanceSpace& appearance, double lambda)
+      : channels_(static_cast<std::size_t>(appearance.reduced_channels())), lambda_(lambda) {
+    const std::vector<std::size_t> valid = appearance.domain.ValidIndices();
+    std::vector<float> reduced(exemplar.voxel_count() * channels_, 0.0f);
+    std::vector<float> low(channels_, std::numeric_limits<float>::max());
+    std::vector<float> high(channels_, std::numeric_limits<float>::lowest());
+    for (std::size_t u : valid) {
+      const Eigen::Map<const Eigen::VectorXf> value(exemplar.voxel(u).data(), exemplar.channels());
+      const Eigen::VectorXf r =
+          appearance.channel_basis.transpose() * (value - appearance.channel_mean);
+      for (std::size_t c = 0; c < channels_; ++c) {
+        const float v = r[static_cast<Eigen::Index>(c)];
+        reduced[u * channels_ + c] = v;
+        low[c] = std::min(low[c], v);
+        high[c] = std::max(high[c], v);
+      }
+    }
+    bins_.assign(exemplar.voxel_count() * channels_, 0);
+    target_.assign(channels_ * kHistogramBins, 0.0);
+    for (std::size_t u : valid) {
+      for (std::size_t c = 0; c < channels_; ++c) {
+        const float range = high[c] > low[c] ? high[c] - low[c] : 1.0f;
+        const int bin = std::clamp(
+            static_cast<int>((reduced[u * channels_ + c] - low[c]) / range * kHistogramBins), 0,
+            kHistogramBins - 1);
+        bins_[u * channels_ + c] = static_cast<std::uint8_t>(bin);
+        target_[Slot(c, static_cast<std::size_t>(bin))] += 1.0 / static_cast<double>(valid.size());
+      }
+    }
+  }
+
+  bool enabled() const { return lambda_ > 0.0; }
+
+  // lambda * max(0, H_result / H_exemplar - 1) per (channel, bin), H_result from the exemplar
+  // voxels `coordinates` point to (`lookup` maps a coordinate triple to its voxel).
+  template <typename Lookup>
+  std::vector<float> Penalties(const std::vector<float>& coordinates, Lookup lookup) const {
+    std::vector<double> counts(target_.size(), 0.0);
+    const std::size_t voxels = coordinates.size() / 3;
+    for (std::size_t i = 0; i < voxels; ++i) {
+      const std::size_t u = lookup(&coordinates[3 * i]);
+      for (std::size_t c = 0; c < channels_; ++c) counts[Slot(c, bins_[u * channels_ + c])] += 1;
+    }
+    std::vector<float> penalties(target_.size(), 0.0f);
+    for (std::size_t k = 0; k < target_.size(); ++k) {
+      if (target_[k] <= 0.0) continue;  // no valid voxel (hence no candidate) falls in this bin
+      const double ratio = counts[k] / static_cast<double>(voxels) / target_[k];
+      penalties[k] = static_cast<float>(lambda_ * std::max(0.0, ratio - 1.0));
+    }
+    return penalties;
+  }
+
+  // The factor of a candidate voxel's distance.
+  float Weight(const std::vector<float>& penalties, std::size_t voxel) const {
+    float weight = 1.0f;
+    for (std::size_t c = 0; c < channels_; ++c) {
+      weight += penalties[Slot(c, bins_[voxel * channels_ + c])];
+    }
+    return weight;
+  }
+
+ private:
+  static std::size_t Slot(std::size_t channel, std::size_t bin) {
+    return channel * kHistogramBins + bin;
+  }
+
+  std::size_t channels_ = 0;
+  double lambda_ = 0.0;
+  std::vector<std::uint8_t> bins_;  // voxel_count x channels
+  std::vector<double> target_;      // channels x kHistogramBins, each channel summing to 1
+};
+
+// Occupancy matching (ExemplarSolidOptions::occupancy_matching): how much more than a uniform
+// copy the result uses each block of the exemplar.
+struct OccupancyPenalties {
+  int blocks = 0;             // per axis
+  std::vector<float> values;  // lambda * max(0, count / expected - 1) per block, x fastest
+  bool empty() const { return values.empty(); }
+};
+
+class OccupancyWeights {
+ public:
+  OccupancyWeights(const ExemplarDomain& domain, double lambda)
+      : domain_(domain), lambda_(lambda) {}
+
+  bool enabled() const { return lambda_ > 0.0; }
+
+  // Counted over the exemplar voxels `coordinates` (a level of `side`^3 voxels) point to
+  // (`lookup` maps a coordinate triple to its voxel).
+  template <typename Lookup>
+  OccupancyPenalties Penalties(const std::vector<float>& coordinates, int side,
+                               Lookup lookup) const {
+    const auto extent = domain_.extent();
+    OccupancyPenalties result;
+    result.blocks = std::max(1, std::min({extent[0], extent[1], extent[2], side / 2}));
+    result.values.assign(static_cast<std::size_t>(result.blocks) * result.blocks * result.blocks,
+                         0.0f);
+    const std::size_t voxels = coordinates.size() / 3;
+    for (std::size_t i = 0; i < voxels; ++i) {
+      result.values[Block(lookup(&coordinates[3 * i]), result.blocks)] += 1.0f;
+    }
+    const float expected = static_cast<float>(voxels) / static_cast<float>(result.values.size());
+    for (float& value : result.values) {
+      value = static_cast<float>(lambda_) * std::max(0.0f, value / expected - 1.0f);
+    }
+    return result;
+  }
+
+  // The factor of a candidate voxel's distance.
+  float Weight(const OccupancyPenalties& penalties, std::size_t voxel) const {
+    return 1.0f + penalties.values[Block(voxel, penalties.blocks)];
+  }
+
+ private:
+  std::size_t Block(std::size_t voxel, int blocks) const {
+    const auto c = domain_.Coordinates(voxel);
+    const auto extent = domain_.extent();
+    std::size_t index = 0;
+    for (int axis = 2; axis >= 0; --axis) {
+      const auto a = static_cast<std::size_t>(axis);
+      index = index * static_cast<std::size_t>(blocks) +
+              static_cast<std::size_t>((c[a] - domain_.origin()) * blocks / extent[a]);
+    }
+    return index;
+  }
+
+  const ExemplarDomain& domain_;
+  double lambda_ = 0.0;
+};
+
 class Synthesizer {
  public:
   Synthesizer(const Volume& exemplar, const PreparedExemplar& prepared,
               const ExemplarSolidOptions& options)
       : exemplar_(exemplar),
-        appearance_(prepared.appearance),
-        similarity_(prepared.similarity),
+        prepared_(prepared),
+        appearance_(&prepared.appearance),
+        similarity_(&prepared.similarity),
         domain_(prepared.appearance.domain),
         options_(options),
-        d_(static_cast<std::size_t>(prepared.appearance.dimensions)) {
+        d_(static_cast<std::size_t>(prepared.appearance.dimensions)),
+        occupancy_(prepared.appearance.domain, options.occupancy_matching) {
     const auto extent = domain_.extent();
     smallest_extent_ = std::min({extent[0], extent[1], extent[2]});
+    if (options.histogram_matching > 0.0) {
+      histogram_ = HistogramWeights(exemplar, prepared.appearance, options.histogram_matching);
+    }
   }
 
   ExemplarSolidResult Run(Progress& report) {
@@ -120,6 +266,9 @@ class Synthesizer {
       Jitter(coordinates, side, spacing, level);
       // Offsets of h_l >= n / 2 wrap around the exemplar: those levels are jitter only.
       if (2 * spacing < smallest_extent_ && options_.correction_passes > 0) {
+        // The Gaussian-stack level of this spacing (or the exemplar itself).
+        appearance_ = &prepared_.AppearanceAt(spacing);
+        similarity_ = &prepared_.SimilarityAt(spacing);
         const std::vector<float> exemplar_neighbourhoods = ExemplarNeighbourhoods(spacing);
         for (int pass = 0; pass < options_.correction_passes; ++pass) {
           const double objective =
@@ -218,7 +367,7 @@ class Synthesizer {
         const std::size_t v = domain_.Index(domain_.Wrap(u[0] + spacing * kDiagonal[k][0], 0),
                                             domain_.Wrap(u[1] + spacing * kDiagonal[k][1], 1),
                                             domain_.Wrap(u[2] + spacing * kDiagonal[k][2], 2));
-        const auto value = appearance_.at(v);
+        const auto value = appearance_->at(v);
         std::copy(value.begin(), value.end(), out + static_cast<std::size_t>(k) * d_);
       }
     });
@@ -234,6 +383,14 @@ class Synthesizer {
     const Neighbourhood isometric = WarpedNeighbourhood(Eigen::Matrix3f::Identity());
     for (int parity = 0; parity < 8; ++parity) {
       const std::vector<float> snapshot = coordinates;
+      const std::vector<float> penalties =
+          histogram_.enabled()
+              ? histogram_.Penalties(snapshot, [this](const float* c) { return Lookup(c); })
+              : std::vector<float>();
+      const OccupancyPenalties occupancy =
+          occupancy_.enabled()
+              ? occupancy_.Penalties(snapshot, side, [this](const float* c) { return Lookup(c); })
+              : OccupancyPenalties();
       const int px = parity & 1, py = (parity >> 1) & 1, pz = (parity >> 2) & 1;
       if (px >= side || py >= side || pz >= side) continue;
       const int slabs = (side - pz + 1) / 2;
@@ -241,13 +398,14 @@ class Synthesizer {
         const int z = pz + 2 * slab;
         Scratch scratch;
         scratch.synthesized.resize(kDiagonals * d_);
-        scratch.candidates.reserve(1 + kDiagonals * static_cast<std::size_t>(similarity_.k));
+        scratch.candidates.reserve(1 + kDiagonals * static_cast<std::size_t>(similarity_->k));
         for (int y = py; y < side; y += 2) {
           for (int x = px; x < side; x += 2) {
             const Neighbourhood local = field ? WarpedNeighbourhood(field->at(x, y, z)) : isometric;
             const std::size_t p = Index(side, x, y, z);
-            error[p] = CorrectVoxel({x, y, z}, side, spacing, local, snapshot,
-                                    exemplar_neighbourhoods, scratch, &coordinates[3 * p]);
+            error[p] =
+                CorrectVoxel({x, y, z}, side, spacing, local, snapshot, exemplar_neighbourhoods,
+                             penalties, occupancy, scratch, &coordinates[3 * p]);
           }
         }
       });
@@ -266,8 +424,9 @@ class Synthesizer {
 
   float CorrectVoxel(const Int3& p, int side, int spacing, const Neighbourhood& local,
                      const std::vector<float>& snapshot,
-                     const std::vector<float>& exemplar_neighbourhoods, Scratch& scratch,
-                     float* out) const {
+                     const std::vector<float>& exemplar_neighbourhoods,
+                     const std::vector<float>& penalties, const OccupancyPenalties& occupancy,
+                     Scratch& scratch, float* out) const {
     std::vector<float>& synthesized = scratch.synthesized;
     std::vector<std::size_t>& candidates = scratch.candidates;
     // N_S(p): per diagonal, the mean of 4 predictions of its appearance.
@@ -280,7 +439,7 @@ class Synthesizer {
         const std::size_t u = domain_.Index(domain_.Wrap(Round(s[0] + h * shift.x()), 0),
                                             domain_.Wrap(Round(s[1] + h * shift.y()), 1),
                                             domain_.Wrap(Round(s[2] + h * shift.z()), 2));
-        predictions[static_cast<std::size_t>(m)] = appearance_.at(u);
+        predictions[static_cast<std::size_t>(m)] = appearance_->at(u);
       }
       float* target = synthesized.data() + static_cast<std::size_t>(i) * d_;
       for (std::size_t k = 0; k < d_; ++k) {
@@ -295,7 +454,7 @@ class Synthesizer {
     candidates.push_back(Lookup(&snapshot[3 * Index(side, p[0], p[1], p[2])]));
     for (int i = 0; i < kDiagonals; ++i) {
       const std::size_t base = Lookup(At(snapshot, side, p, local.neighbour[i]));
-      for (std::int32_t c : similarity_.at(base)) {
+      for (std::int32_t c : similarity_->at(base)) {
         if (c < 0) continue;
         const auto u = domain_.Coordinates(static_cast<std::size_t>(c));
         const Eigen::Vector3f& shift = local.candidate_shift[i];
@@ -320,6 +479,8 @@ class Synthesizer {
         const float diff = synthesized[k] - e[k];
         distance += diff * diff;
       }
+      if (!penalties.empty()) distance *= histogram_.Weight(penalties, candidate);
+      if (!occupancy.empty()) distance *= occupancy_.Weight(occupancy, candidate);
       if (distance < best) best = distance, best_candidate = candidate;
     }
     const auto u = domain_.Coordinates(best_candidate);
@@ -353,12 +514,15 @@ class Synthesizer {
   }
 
   const Volume& exemplar_;
-  const AppearanceSpace& appearance_;
-  const SimilaritySet& similarity_;
+  const PreparedExemplar& prepared_;
+  const AppearanceSpace* appearance_;  // of the level being corrected
+  const SimilaritySet* similarity_;
   const ExemplarDomain& domain_;
   const ExemplarSolidOptions& options_;
   std::size_t d_;
   int smallest_extent_ = 0;
+  HistogramWeights histogram_;
+  OccupancyWeights occupancy_;
 };
 
 }  // namespace
@@ -370,12 +534,22 @@ ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
   if (options.size.x < 1 || options.size.y < 1 || options.size.z < 1) {
     throw Error(fmt::format("invalid output size {}", ToString(options.size)));
   }
-  if (!(options.jitter >= 0.0) || options.correction_passes < 0) {
-    throw Error("jitter and correction passes must not be negative");
+  if (!(options.jitter >= 0.0) || options.correction_passes < 0 ||
+      !(options.histogram_matching >= 0.0) || !(options.occupancy_matching >= 0.0)) {
+    throw Error("jitter, correction passes, histogram and occupancy matching must not be negative");
   }
-  if (prepared.appearance.domain.size != exemplar.size() ||
-      prepared.similarity.indices.size() !=
-          exemplar.voxel_count() * static_cast<std::size_t>(prepared.similarity.k)) {
+  const auto fits = [&](const AppearanceSpace& appearance, const SimilaritySet& similarity) {
+    return appearance.domain.size == exemplar.size() &&
+           appearance.domain.border == prepared.appearance.domain.border &&
+           appearance.dimensions == prepared.appearance.dimensions &&
+           similarity.indices.size() ==
+               exemplar.voxel_count() * static_cast<std::size_t>(similarity.k);
+  };
+  bool consistent = fits(prepared.appearance, prepared.similarity);
+  for (const PreparedLevel& level : prepared.stack) {
+    consistent = consistent && fits(level.appearance, level.similarity);
+  }
+  if (!consistent) {
     throw Error("the prepared appearance space and similarity set are not this exemplar's");
   }
   NullProgress null_progress;

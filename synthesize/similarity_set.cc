@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "synthesize/volume_filter.h"
 
 namespace photomat {
 namespace {
@@ -57,6 +58,16 @@ class NearestOutsideBoxes {
 
   std::size_t size() const { return found_ ? 1 : 0; }
   bool full() const { return true; }
+  // Offers a voxel before the search (its distance computed as the tree computes it): a close one
+  // lets the tree prune from the start. The answer stays the exact one, ties included.
+  void Seed(float distance, std::size_t voxel) {
+    for (std::size_t centre : centres_) {
+      if (ChebyshevDistance(domain_, voxel, centre) <= radius_) return;
+    }
+    best_ = distance;
+    best_voxel_ = voxel;
+    found_ = true;
+  }
   bool addPoint(float distance, std::size_t point) {
     const std::size_t voxel = valid_[point];
     if (distance > best_ || (distance == best_ && found_ && voxel > best_voxel_)) return true;
@@ -111,7 +122,10 @@ void FillCandidates(std::size_t voxel, int k, std::int32_t* out, Nearest nearest
 // --- cache file ---
 
 constexpr char kMagic[8] = {'P', 'M', 'S', 'O', 'L', 'I', 'D', '1'};
-constexpr std::uint32_t kCacheVersion = 1;
+// 2: neighbourhood spacing and the Gaussian-stack levels.
+constexpr std::uint32_t kCacheVersion = 2;
+// More stack levels than this would need an exemplar of 2^17 voxels a side.
+constexpr std::uint32_t kMaxStackLevels = 16;
 
 class Writer {
  public:
@@ -182,6 +196,81 @@ class Reader {
   std::size_t offset_ = 0;
 };
 
+void PutLevel(Writer& out, const AppearanceSpace& a, const SimilaritySet& similarity) {
+  out.Put(a.domain.size.x);
+  out.Put(a.domain.size.y);
+  out.Put(a.domain.size.z);
+  out.Put(static_cast<std::uint8_t>(a.domain.periodic));
+  out.Put(a.domain.border);
+  out.Put(a.neighbourhood);
+  out.Put(a.spacing);
+  out.Put(a.dimensions);
+  out.Put(a.retained_variance);
+  out.PutMatrix(a.channel_mean);
+  out.PutMatrix(a.channel_basis);
+  out.PutMatrix(a.feature_mean);
+  out.PutMatrix(a.feature_basis);
+  out.PutArray(a.values.data(), a.values.size());
+  out.Put(similarity.k);
+  out.PutArray(similarity.indices.data(), similarity.indices.size());
+}
+
+void GetLevel(Reader& in, AppearanceSpace& a, SimilaritySet& similarity) {
+  a.domain.size.x = in.Get<int>();
+  a.domain.size.y = in.Get<int>();
+  a.domain.size.z = in.Get<int>();
+  a.domain.periodic = in.Get<std::uint8_t>() != 0;
+  a.domain.border = in.Get<int>();
+  a.neighbourhood = in.Get<int>();
+  a.spacing = in.Get<int>();
+  a.dimensions = in.Get<int>();
+  a.retained_variance = in.Get<double>();
+  a.channel_mean = in.GetMatrix();
+  a.channel_basis = in.GetMatrix();
+  a.feature_mean = in.GetMatrix();
+  a.feature_basis = in.GetMatrix();
+  const std::size_t voxels = a.domain.size.voxel_count();
+  const auto extent = a.domain.extent();
+  if (a.domain.size.x < 1 || a.domain.size.y < 1 || a.domain.size.z < 1 || a.dimensions < 1 ||
+      a.spacing < 1 || a.domain.border < 0 || std::min({extent[0], extent[1], extent[2]}) < 1 ||
+      a.feature_basis.cols() != a.dimensions || a.feature_basis.rows() != a.feature_mean.rows() ||
+      a.channel_basis.rows() != a.channel_mean.rows()) {
+    in.Fail("inconsistent sizes");
+  }
+  a.values = in.GetArray<float>(voxels * static_cast<std::size_t>(a.dimensions));
+  if (a.values.size() != voxels * static_cast<std::size_t>(a.dimensions)) {
+    in.Fail("wrong number of appearance values");
+  }
+  similarity.k = in.Get<int>();
+  if (similarity.k < 1 || similarity.k > 64) in.Fail("k out of range");
+  similarity.indices = in.GetArray<std::int32_t>(voxels * static_cast<std::size_t>(similarity.k));
+  if (similarity.indices.size() != voxels * static_cast<std::size_t>(similarity.k)) {
+    in.Fail("wrong number of candidates");
+  }
+  for (std::size_t voxel : a.domain.ValidIndices()) {
+    for (std::int32_t candidate : similarity.at(voxel)) {
+      if (candidate < 0 || static_cast<std::size_t>(candidate) >= voxels) {
+        in.Fail("candidate index out of range");
+      }
+    }
+  }
+}
+
+// Names each phase after the stack level it belongs to.
+class LevelProgress final : public Progress {
+ public:
+  LevelProgress(Progress& inner, int spacing) : inner_(inner), spacing_(spacing) {}
+  void Start(const std::string& label, std::size_t total) override {
+    inner_.Start(fmt::format("{} (stack level, spacing {})", label, spacing_), total);
+  }
+  void Advance(std::size_t steps) override { inner_.Advance(steps); }
+  void Finish() override { inner_.Finish(); }
+
+ private:
+  Progress& inner_;
+  int spacing_;
+};
+
 }  // namespace
 
 struct AppearanceIndex::Tree {
@@ -210,6 +299,20 @@ std::size_t AppearanceIndex::Nearest(std::span<const float> query) const {
   NearestOutsideBoxes result(tree_->appearance.domain, tree_->valid, {}, -1);
   tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   return result.voxel();
+}
+
+const AppearanceSpace& PreparedExemplar::AppearanceAt(int spacing) const {
+  for (const PreparedLevel& level : stack) {
+    if (level.spacing == spacing) return level.appearance;
+  }
+  return appearance;
+}
+
+const SimilaritySet& PreparedExemplar::SimilarityAt(int spacing) const {
+  for (const PreparedLevel& level : stack) {
+    if (level.spacing == spacing) return level.similarity;
+  }
+  return similarity;
 }
 
 int ChebyshevDistance(const ExemplarDomain& domain, std::size_t a, std::size_t b) {
@@ -241,17 +344,32 @@ SimilaritySet BuildSimilaritySet(const AppearanceSpace& appearance,
   const std::size_t chunks = (valid.size() + kChunk - 1) / kChunk;
   report.Start("similarity set", chunks);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
-    for (std::size_t i = chunk * kChunk; i < std::min(valid.size(), (chunk + 1) * kChunk); ++i) {
+    const std::size_t begin = chunk * kChunk;
+    for (std::size_t i = begin; i < std::min(valid.size(), (chunk + 1) * kChunk); ++i) {
       const std::size_t voxel = valid[i];
       const float* query =
           appearance.values.data() + voxel * static_cast<std::size_t>(appearance.dimensions);
-      FillCandidates(voxel, set.k, set.indices.data() + voxel * static_cast<std::size_t>(set.k),
-                     [&](const std::vector<std::size_t>& centres) -> std::optional<std::size_t> {
-                       NearestOutsideBoxes result(appearance.domain, valid, centres, radius);
-                       tree.findNeighbors(result, query, nanoflann::SearchParams());
-                       if (!result.found()) return std::nullopt;
-                       return result.voxel();
-                     });
+      // When the previous voxel of the chunk is the one before along x, its candidates moved one
+      // step along x are usually about as close (textures are coherent): a first bound.
+      const auto position = appearance.domain.Coordinates(voxel);
+      const bool follows =
+          i > begin && valid[i - 1] + 1 == voxel && position[0] > appearance.domain.origin();
+      FillCandidates(
+          voxel, set.k, set.indices.data() + voxel * static_cast<std::size_t>(set.k),
+          [&](const std::vector<std::size_t>& centres) -> std::optional<std::size_t> {
+            NearestOutsideBoxes result(appearance.domain, valid, centres, radius);
+            if (follows) {
+              const std::int32_t previous =
+                  set.indices[(voxel - 1) * static_cast<std::size_t>(set.k) + centres.size()];
+              const auto c = appearance.domain.Coordinates(static_cast<std::size_t>(previous));
+              const std::size_t seed =
+                  appearance.domain.Index(appearance.domain.Wrap(c[0] + 1, 0), c[1], c[2]);
+              result.Seed(SquaredDistance(appearance.at(voxel), appearance.at(seed)), seed);
+            }
+            tree.findNeighbors(result, query, nanoflann::SearchParams());
+            if (!result.found()) return std::nullopt;
+            return result.voxel();
+          });
     }
     report.Advance();
   });
@@ -298,6 +416,8 @@ std::string SimilarityCacheKey(const Volume& exemplar, const AppearanceOptions& 
   description.Put(exemplar.channels());
   for (const std::string& name : exemplar.channel_names()) description.PutString(name);
   description.Put(appearance.neighbourhood);
+  description.Put(appearance.spacing);
+  description.Put(static_cast<std::uint8_t>(appearance.gaussian_stack));
   description.Put(appearance.dimensions);
   description.Put(static_cast<int>(appearance.boundary));
   description.Put(appearance.max_channels);
@@ -315,26 +435,15 @@ std::string SimilarityCacheKey(const Volume& exemplar, const AppearanceOptions& 
 
 void SavePreparedExemplar(const std::filesystem::path& path, const std::string& key,
                           const PreparedExemplar& prepared) {
-  const AppearanceSpace& a = prepared.appearance;
   Writer out;
   out.Put(kMagic);
   out.Put(kCacheVersion);
   out.PutString(key);
-  out.Put(a.domain.size.x);
-  out.Put(a.domain.size.y);
-  out.Put(a.domain.size.z);
-  out.Put(static_cast<std::uint8_t>(a.domain.periodic));
-  out.Put(a.domain.border);
-  out.Put(a.neighbourhood);
-  out.Put(a.dimensions);
-  out.Put(a.retained_variance);
-  out.PutMatrix(a.channel_mean);
-  out.PutMatrix(a.channel_basis);
-  out.PutMatrix(a.feature_mean);
-  out.PutMatrix(a.feature_basis);
-  out.PutArray(a.values.data(), a.values.size());
-  out.Put(prepared.similarity.k);
-  out.PutArray(prepared.similarity.indices.data(), prepared.similarity.indices.size());
+  PutLevel(out, prepared.appearance, prepared.similarity);
+  out.Put(static_cast<std::uint32_t>(prepared.stack.size()));
+  for (const PreparedLevel& level : prepared.stack) {
+    PutLevel(out, level.appearance, level.similarity);
+  }
   WriteTextFileAtomically(path, out.bytes());
 }
 
@@ -347,45 +456,21 @@ PreparedExemplar LoadPreparedExemplar(const std::filesystem::path& path, const s
   if (in.Get<std::uint32_t>() != kCacheVersion) in.Fail("another format version");
   if (in.GetString() != key) in.Fail("written for another exemplar or other settings");
   PreparedExemplar prepared;
-  AppearanceSpace& a = prepared.appearance;
-  a.domain.size.x = in.Get<int>();
-  a.domain.size.y = in.Get<int>();
-  a.domain.size.z = in.Get<int>();
-  a.domain.periodic = in.Get<std::uint8_t>() != 0;
-  a.domain.border = in.Get<int>();
-  a.neighbourhood = in.Get<int>();
-  a.dimensions = in.Get<int>();
-  a.retained_variance = in.Get<double>();
-  a.channel_mean = in.GetMatrix();
-  a.channel_basis = in.GetMatrix();
-  a.feature_mean = in.GetMatrix();
-  a.feature_basis = in.GetMatrix();
-  const std::size_t voxels = a.domain.size.voxel_count();
-  const auto extent = a.domain.extent();
-  if (a.domain.size.x < 1 || a.domain.size.y < 1 || a.domain.size.z < 1 || a.dimensions < 1 ||
-      a.domain.border < 0 || std::min({extent[0], extent[1], extent[2]}) < 1 ||
-      a.feature_basis.cols() != a.dimensions || a.feature_basis.rows() != a.feature_mean.rows() ||
-      a.channel_basis.rows() != a.channel_mean.rows()) {
-    in.Fail("inconsistent sizes");
-  }
-  a.values = in.GetArray<float>(voxels * static_cast<std::size_t>(a.dimensions));
-  if (a.values.size() != voxels * static_cast<std::size_t>(a.dimensions)) {
-    in.Fail("wrong number of appearance values");
-  }
-  prepared.similarity.k = in.Get<int>();
-  if (prepared.similarity.k < 1 || prepared.similarity.k > 64) in.Fail("k out of range");
-  prepared.similarity.indices =
-      in.GetArray<std::int32_t>(voxels * static_cast<std::size_t>(prepared.similarity.k));
-  if (prepared.similarity.indices.size() !=
-      voxels * static_cast<std::size_t>(prepared.similarity.k)) {
-    in.Fail("wrong number of candidates");
-  }
-  for (std::size_t voxel : a.domain.ValidIndices()) {
-    for (std::int32_t candidate : prepared.similarity.at(voxel)) {
-      if (candidate < 0 || static_cast<std::size_t>(candidate) >= voxels) {
-        in.Fail("candidate index out of range");
-      }
+  GetLevel(in, prepared.appearance, prepared.similarity);
+  const auto levels = in.Get<std::uint32_t>();
+  if (levels > kMaxStackLevels) in.Fail("too many stack levels");
+  int spacing = 1;
+  for (std::uint32_t l = 0; l < levels; ++l) {
+    PreparedLevel level;
+    GetLevel(in, level.appearance, level.similarity);
+    spacing *= 2;
+    if (level.appearance.spacing != spacing ||
+        level.appearance.domain.size != prepared.appearance.domain.size ||
+        level.appearance.domain.border != prepared.appearance.domain.border) {
+      in.Fail("a stack level that does not fit the exemplar");
     }
+    level.spacing = spacing;
+    prepared.stack.push_back(std::move(level));
   }
   if (!in.AtEnd()) in.Fail("trailing bytes");
   prepared.from_cache = true;
@@ -413,6 +498,25 @@ PreparedExemplar PrepareExemplar(const Volume& exemplar, const AppearanceOptions
   PreparedExemplar prepared;
   prepared.appearance = ComputeAppearanceSpace(exemplar, appearance, progress);
   prepared.similarity = BuildSimilaritySet(prepared.appearance, similarity, progress);
+  if (appearance.gaussian_stack) {
+    // The levels synthesis corrects: twice the spacing below the exemplar (ExemplarSolid).
+    const auto extent = prepared.appearance.domain.extent();
+    const int smallest = std::min({extent[0], extent[1], extent[2]});
+    const VolumeEdge edge =
+        prepared.appearance.domain.periodic ? VolumeEdge::kWrap : VolumeEdge::kClamp;
+    NullProgress null_progress;
+    for (int spacing = 2; 2 * spacing < smallest; spacing *= 2) {
+      LevelProgress level_progress(OrNull(progress, null_progress), spacing);
+      AppearanceOptions options = appearance;
+      options.spacing = spacing;
+      PreparedLevel level;
+      level.spacing = spacing;
+      level.appearance = ComputeAppearanceSpace(
+          GaussianBlur(exemplar, GaussianStackSigma(spacing), edge), options, &level_progress);
+      level.similarity = BuildSimilaritySet(level.appearance, similarity, &level_progress);
+      prepared.stack.push_back(std::move(level));
+    }
+  }
   if (cache_folder) {
     std::error_code error;
     std::filesystem::create_directories(*cache_folder, error);

@@ -60,13 +60,27 @@ class AppearanceIndex {
 // Chebyshev distance between two exemplar voxels (toroidal over the domain when periodic).
 int ChebyshevDistance(const ExemplarDomain& domain, std::size_t a, std::size_t b);
 
+// One coarser level of a Gaussian stack: the appearance space of the exemplar blurred by
+// GaussianStackSigma(spacing), with neighbourhood samples `spacing` apart, and its similarity set.
+struct PreparedLevel {
+  int spacing = 2;
+  AppearanceSpace appearance;
+  SimilaritySet similarity;
+};
+
 // Appearance space and similarity set of one exemplar: what synthesis needs, reusable for any
 // output size, seed or field.
 struct PreparedExemplar {
-  AppearanceSpace appearance;
+  AppearanceSpace appearance;  // of the exemplar itself (spacing 1)
   SimilaritySet similarity;
+  std::vector<PreparedLevel> stack;  // spacing 2, 4, ...; empty for a single-resolution exemplar
   bool from_cache = false;
   std::filesystem::path cache_file;  // empty without a cache folder
+
+  // The level synthesis at `spacing` matches against: the stack level of that spacing, or the
+  // exemplar itself when there is none.
+  const AppearanceSpace& AppearanceAt(int spacing) const;
+  const SimilaritySet& SimilarityAt(int spacing) const;
 };
 
 // The cache key: a hash (XXH3, 64 bits) of the exemplar's size, channel names and values and of
@@ -74,8 +88,9 @@ struct PreparedExemplar {
 std::string SimilarityCacheKey(const Volume& exemplar, const AppearanceOptions& appearance,
                                const SimilarityOptions& similarity);
 
-// Computes both, or loads them from `cache_folder`/solid-<key>.bin when present (a damaged cache
-// file is reported on the log and recomputed), and stores new results there atomically.
+// Computes both (and, with appearance.gaussian_stack, those of the coarser stack levels), or loads
+// them from `cache_folder`/solid-<key>.bin when present (a damaged cache file is reported on the
+// log and recomputed), and stores new results there atomically.
 PreparedExemplar PrepareExemplar(const Volume& exemplar, const AppearanceOptions& appearance,
                                  const SimilarityOptions& similarity,
                                  const std::optional<std::filesystem::path>& cache_folder,

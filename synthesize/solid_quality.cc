@@ -200,4 +200,47 @@ double CoherentFraction(const Volume& coordinates, const ExemplarDomain& domain)
   return pairs ? static_cast<double>(coherent) / static_cast<double>(pairs) : 0.0;
 }
 
+PatchStatistics CoherentPatches(const Volume& coordinates, const ExemplarDomain& domain) {
+  const VolumeSize& size = coordinates.size();
+  const auto extent = domain.extent();
+  // Union-find over voxels, joined along coherent pairs.
+  std::vector<std::size_t> parent(coordinates.voxel_count());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  const auto find = [&parent](std::size_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (int z = 0; z < size.z; ++z) {
+    for (int y = 0; y < size.y; ++y) {
+      for (int x = 0; x < size.x; ++x) {
+        for (int axis = 0; axis < 3; ++axis) {
+          int q[3] = {x, y, z};
+          if (++q[axis] >= (axis == 0 ? size.x : axis == 1 ? size.y : size.z)) continue;
+          bool same = true;
+          for (int a = 0; a < 3; ++a) {
+            const int diff =
+                static_cast<int>(coordinates.at(q[0], q[1], q[2], a) - coordinates.at(x, y, z, a));
+            same &= Wrap(diff - (a == axis ? 1 : 0), extent[static_cast<std::size_t>(a)]) == 0;
+          }
+          if (same)
+            parent[find(coordinates.Index(q[0], q[1], q[2]))] = find(coordinates.Index(x, y, z));
+        }
+      }
+    }
+  }
+  std::vector<std::size_t> count(parent.size(), 0);
+  for (std::size_t i = 0; i < parent.size(); ++i) ++count[find(i)];
+  PatchStatistics statistics;
+  for (std::size_t c : count) {
+    if (c == 0) continue;
+    ++statistics.patches;
+    statistics.largest = std::max(statistics.largest, c);
+    statistics.voxel_weighted += static_cast<double>(c) * static_cast<double>(c);
+  }
+  statistics.voxel_weighted /= static_cast<double>(parent.size());
+  statistics.mean_size =
+      statistics.patches ? static_cast<double>(parent.size()) / statistics.patches : 0.0;
+  return statistics;
+}
+
 }  // namespace photomat

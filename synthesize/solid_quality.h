@@ -41,4 +41,15 @@ Eigen::Vector3d PrincipalDirection(const Eigen::Matrix3d& tensor);
 // (mod the domain): 1 for a translated copy, near 0 for noise.
 double CoherentFraction(const Volume& coordinates, const ExemplarDomain& domain);
 
+// Coherent patches (spec section 11.6): the connected sets of voxels joined by coherent
+// face-adjacent pairs (as above, not across the solid's faces), each a piece of the exemplar
+// copied whole. A translated copy is one patch of every voxel.
+struct PatchStatistics {
+  int patches = 0;
+  double mean_size = 0;       // voxels per patch
+  double voxel_weighted = 0;  // size of the patch a voxel belongs to, averaged over voxels
+  std::size_t largest = 0;
+};
+PatchStatistics CoherentPatches(const Volume& coordinates, const ExemplarDomain& domain);
+
 }  // namespace photomat

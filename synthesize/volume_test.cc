@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
 
+#include <cmath>
+
 #include "core/error.h"
 #include "core/image_io.h"
+#include "synthesize/volume_filter.h"
 #include "synthesize/volume_io.h"
 #include "synthesize/voxel_hash.h"
 #include "tests/support/test_support.h"
@@ -79,6 +82,27 @@ TEST(VolumeTest, SlicesFollowTheFixedAxes) {
     ExpectSameVolume(rebuilt, volume);
   }
   EXPECT_THROW(InsertSlice(copy, SlicePlane::kXY, 0, Image(4, 4, 2)), Error);
+}
+
+TEST(VolumeFilterTest, GaussianBlurKeepsTheMeanAndSmoothsAnImpulse) {
+  Volume impulse(VolumeSize{12, 10, 8}, 2);
+  impulse.at(0, 5, 4, 0) = 1.0f;  // on a face: wraps or piles up at the edge
+  impulse.at(6, 5, 4, 1) = 1.0f;
+  const Volume wrapped = GaussianBlur(impulse, 1.0, VolumeEdge::kWrap);
+  double sum = 0;
+  for (std::size_t i = 0; i < wrapped.voxel_count(); ++i) sum += wrapped.voxel(i)[0];
+  EXPECT_NEAR(sum, 1.0, 1e-5);
+  EXPECT_NEAR(wrapped.at(11, 5, 4, 0), wrapped.at(1, 5, 4, 0), 1e-7);  // symmetric across the wrap
+  // One voxel away along one axis: exp(-1/2) of the centre.
+  EXPECT_NEAR(wrapped.at(7, 5, 4, 1) / wrapped.at(6, 5, 4, 1), std::exp(-0.5), 1e-5);
+  const Volume clamped = GaussianBlur(impulse, 1.0, VolumeEdge::kClamp);
+  EXPECT_EQ(clamped.at(11, 5, 4, 0), 0.0f);
+  EXPECT_GT(clamped.at(0, 5, 4, 0), wrapped.at(0, 5, 4, 0));  // the cut-off tail folds back
+  EXPECT_EQ(GaussianBlur(impulse, 0.0, VolumeEdge::kWrap).values()[0], impulse.values()[0]);
+  // The binomial pyramid's blur: 1 voxel at spacing 2, sqrt(5) at 4.
+  EXPECT_EQ(GaussianStackSigma(1), 0.0);
+  EXPECT_NEAR(GaussianStackSigma(2), 1.0, 1e-12);
+  EXPECT_NEAR(GaussianStackSigma(4), std::sqrt(5.0), 1e-12);
 }
 
 TEST(VolumeIoTest, OpenVdbRoundTripIsExact) {
