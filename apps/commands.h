@@ -17,5 +17,6 @@ void AddSolidCommand(CLI::App& app);
 void AddRdCommand(CLI::App& app);
 void AddCalibrateCommand(CLI::App& app);
 void AddExportCommand(CLI::App& app);
+void AddSynthesizeCommand(CLI::App& app);
 
 }  // namespace photomat::app

@@ -5,10 +5,13 @@
 #include "capture/capture_manifest.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/evaluation_report.h"
 #include "relight/relight.h"
+#include "relight/viewer_export.h"
 #include "represent/evaluation.h"
 #include "represent/fit.h"
 #include "represent/map_stack.h"
+#include "synthesize/synthesis.h"
 
 namespace photomat::app {
 
@@ -24,7 +27,7 @@ void AddDemoCommand(CLI::App& app) {
   CLI::App* command = app.add_subcommand(
       "demo",
       "Run the whole pipeline on the built-in synthetic sample: generate, fit all methods, "
-      "evaluate, relight a light sweep.");
+      "evaluate, relight a light sweep, then grow every stack to 4x its area and relight it.");
   command->add_option("--out", options->out, "Output folder")->capture_default_str();
   command->add_option("--size", options->size, "Sample width and height in pixels")
       ->capture_default_str()
@@ -78,6 +81,41 @@ void AddDemoCommand(CLI::App& app) {
     }
     fmt::print("4/4 relight: {} lights at slant 60 per method -> {}\n", sweep.size(),
                (out / "relit").string());
+
+    // Synthesis (issue 4): each stack grown to twice the sample's side (4x its area) by quilting
+    // its own maps (the thesis's five pipelines, table 6.2.1), tileable, then relit under the
+    // same sweep with the sample's light basis.
+    const std::filesystem::path grown_folder = out / "synthesis";
+    CreateFolder(grown_folder);
+    SynthesisOptions synthesis;
+    synthesis.target = {2 * options->size, 2 * options->size, true, 1};
+    for (const Representation& representation : fitted) {
+      const Representation grown = Synthesize(representation, synthesis, &bar);
+      SaveRepresentation(grown_folder / (representation.method() + ".exr"), grown,
+                         {loaded.set.lights(), "linear", "synthesised from " + capture.string()});
+      WriteRelitSet(grown_folder / "relit" / representation.method(), grown, sweep, {}, &bar);
+    }
+    fmt::print(
+        "+ synthesize: {} stacks grown from {}x{} to {}x{} (tileable quilting) and relit -> "
+        "{}\n",
+        fitted.size(), options->size, options->size, 2 * options->size, 2 * options->size,
+        grown_folder.string());
+
+    EvaluationReportOptions report;
+    report.title = "photomat demo: evaluation of the built-in bricks sample";
+    report.progress = &bar;
+    WriteEvaluationReport(out / "report", loaded.set, results, &truth, report);
+    ViewerExportOptions viewer;
+    viewer.title = "photomat demo: bricks sample";
+    viewer.capture_lights = loaded.set.lights();
+    viewer.progress = &bar;
+    ExportViewer(out / "viewer", fitted, viewer);
+    fmt::print(
+        "report: open {} in a browser\n"
+        "viewer: serve {} with any static file server and open it, e.g.\n"
+        "        python3 -m http.server --directory {} 8000   then   http://localhost:8000/\n",
+        (out / "report" / "index.html").string(), (out / "viewer").string(),
+        (out / "viewer").string());
   });
 }
 

@@ -1,14 +1,39 @@
 #include <fmt/format.h>
 
+#include <charconv>
+
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/robust_support.h"
+#include "apps/synthesis_cli.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/evaluation_report.h"
 #include "represent/evaluation.h"
 
 namespace photomat::app {
+namespace {
+
+// "3,17,40": image indices for the report; empty: none given.
+std::vector<int> ParseIndexList(const std::string& text) {
+  std::vector<int> indices;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    int index = -1;
+    const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), index);
+    if (ec != std::errc() || end != item.data() + item.size() || index < 0) {
+      throw Error(fmt::format("\"{}\": expected image indices, e.g. 0,12,30", text));
+    }
+    indices.push_back(index);
+    start = comma + 1;
+  }
+  return indices;
+}
+
+}  // namespace
 
 void AddEvaluateCommand(CLI::App& app) {
   struct Options {
@@ -16,11 +41,14 @@ void AddEvaluateCommand(CLI::App& app) {
     std::string methods = "all";
     std::filesystem::path gt_normals;
     std::filesystem::path json;
+    std::filesystem::path report;
+    std::string report_images;
     bool no_prediction = false;
     bool literal_rms = false;
     bool raw_intensities = false;
     bool robust = false;
     std::string loss = "cauchy";
+    SynthesisEvaluationOptions synthesis;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -36,6 +64,12 @@ void AddEvaluateCommand(CLI::App& app) {
                       "Float EXR of unit normals (x right, y up, z to camera); default: the one "
                       "the input names (manifest ground_truth, DiLiGenT gt_normals.exr)");
   command->add_option("--json", options->json, "Also write the results as JSON");
+  command->add_option("--report", options->report,
+                      "Also write an HTML report (table, charts, normal error maps, captured "
+                      "beside relit images) into this folder");
+  command->add_option("--report-images", options->report_images,
+                      "Comma-separated indices of the captured images the report shows beside "
+                      "their relighting (default: three spread-out lights)");
   command->add_flag("--no-prediction", options->no_prediction,
                     "Skip leave-one-out prediction (one fit per image)");
   command->add_flag("--literal-rms", options->literal_rms,
@@ -46,7 +80,25 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Evaluate the robust fits (fit --robust) instead of the least-squares ones");
   command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
       ->capture_default_str();
+  // Synthesis quality (issue 4): INPUT is then the sample the synthesis was grown from.
+  command->add_option("--synthesised", options->synthesis.synthesised,
+                      "Score this synthesised stack or image against INPUT, the sample it was "
+                      "grown from (a map stack, fit folder or image): nearest-patch distance, "
+                      "roughness, wrap and (with --source-map) seam scores");
+  command->add_option("--source-map", options->synthesis.source_map,
+                      "With --synthesised: the source map `synthesize --save-source-map` wrote");
+  command
+      ->add_option("--patch", options->synthesis.patch_size,
+                   "With --synthesised: side of the compared patches")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
   command->callback([options] {
+    if (!options->synthesis.synthesised.empty()) {
+      options->synthesis.sample = options->input;
+      options->synthesis.json = options->json;
+      EvaluateSynthesis(options->synthesis);
+      return;
+    }
     const std::vector<Method> methods = ParseMethodList(options->methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
@@ -62,6 +114,14 @@ void AddEvaluateCommand(CLI::App& app) {
       throw Error(*truth_path, fmt::format("normals are {}x{} but the images are {}x{}",
                                            truth->width(), truth->height(), loaded.set.width(),
                                            loaded.set.height()));
+    }
+    // Checked before the evaluation, which can take minutes.
+    const std::vector<int> report_images = ParseIndexList(options->report_images);
+    for (int index : report_images) {
+      if (index >= loaded.set.size()) {
+        throw Error(fmt::format("--report-images: image {} is not in the set (0 to {})", index,
+                                loaded.set.size() - 1));
+      }
     }
     const Observations observations(loaded.set);
     TerminalProgressBar bar;
@@ -81,6 +141,16 @@ void AddEvaluateCommand(CLI::App& app) {
                truth ? fmt::format(", ground truth {}", truth_path->string()) : "",
                FormatEvaluationTable(results));
     if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+    if (!options->report.empty()) {
+      EvaluationReportOptions report;
+      report.title = fmt::format("photomat evaluation of {}", options->input.string());
+      report.images = report_images;
+      report.robust = evaluation.robust;
+      report.progress = &bar;
+      WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
+                            report);
+      fmt::print("report: {}\n", (options->report / "index.html").string());
+    }
   });
 }
 

@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <functional>
 
 #include "apps/cli_support.h"
@@ -11,7 +12,9 @@
 #include "relight/ptm_file.h"
 #include "relight/rti_file.h"
 #include "relight/stack_file.h"
+#include "relight/viewer_export.h"
 #include "represent/fit.h"
+#include "represent/map_stack.h"
 
 namespace photomat::app {
 namespace {
@@ -29,6 +32,7 @@ struct ExportCommandOptions {
   int hsh_terms = 0;
   std::string colour_space;
   bool raw_intensities = false;
+  std::filesystem::path viewer;
 };
 
 // The .ptm method: what --ptm-format asks, else the input's own PTM form, else LRGB (PTMfitter's).
@@ -81,12 +85,53 @@ void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
              description["normals"]["source"].get<std::string>());
 }
 
+// The web viewer of `stacks` (relight/viewer_export.h).
+void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedStack>& stacks) {
+  std::vector<Representation> representations;
+  ViewerExportOptions viewer;
+  viewer.title = options.input.string();
+  for (const LoadedStack& stack : stacks) {
+    representations.push_back(stack.representation);
+    viewer.value_encodings[stack.representation.method()] = StackValueEncoding(stack.provenance);
+    if (viewer.capture_lights.empty()) viewer.capture_lights = stack.provenance.capture_lights;
+  }
+  TerminalProgressBar bar;
+  viewer.progress = &bar;
+  ExportViewer(options.viewer, representations, viewer);
+  fmt::print("wrote the web viewer ({} method(s)) to {}: serve that folder with any static file "
+             "server (e.g. python3 -m http.server --directory {} 8000) and open it\n",
+             representations.size(), options.viewer.string(), options.viewer.string());
+}
+
+// Every stack of a fit folder (in photomat's method order), or the one `method` or the file names.
+std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
+                                      const std::optional<std::string>& method) {
+  if (method || !std::filesystem::is_directory(input)) return {LoadStackFile(input, method)};
+  const auto files = ReadFitManifest(input);
+  std::vector<std::string> order;
+  for (const Method& m : AllMethods()) {
+    if (files.contains(m.Name())) order.push_back(m.Name());
+  }
+  for (const auto& [name, file] : files) {
+    if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
+  }
+  std::vector<LoadedStack> stacks;
+  for (const std::string& name : order) stacks.push_back(LoadStackFile(input, name));
+  return stacks;
+}
+
 void RunExport(const ExportCommandOptions& options) {
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty()) {
-    throw Error("nothing to write: give --out DIR (maps), --ptm FILE and/or --rti FILE");
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty() &&
+      options.viewer.empty()) {
+    throw Error(
+        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE and/or --viewer DIR");
   }
   const std::optional<std::string> method =
       options.method.empty() ? std::nullopt : std::optional(options.method);
+  if (!options.viewer.empty() && IsStackInput(options.input)) {
+    WriteViewer(options, ViewerStacks(options.input, method));
+    if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return;
+  }
   if (IsStackInput(options.input)) {
     const LoadedStack stack = LoadStackFile(options.input, method);
     const Representation& r = stack.representation;
@@ -104,6 +149,15 @@ void RunExport(const ExportCommandOptions& options) {
     if (!load.colour_space) throw Error("--colour-space: expected linear or srgb");
   }
   const LoadedSet loaded = LoadSetForCommand(options.input, load);
+  if (!options.viewer.empty()) {
+    // A photometric set: the viewer shows the --method fit, or every method.
+    const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string()};
+    std::vector<LoadedStack> fits;
+    for (const Method& m : method ? std::vector{Method::Parse(*method)} : AllMethods()) {
+      fits.push_back({Fit(loaded.set, m), provenance});
+    }
+    WriteViewer(options, fits);
+  }
   WriteInterchangeFiles(options, "", loaded.set.channels(),
                         [&](const Method& target) { return FitEncoded(loaded.set, target); });
   if (options.out.empty()) return;
@@ -148,6 +202,9 @@ void AddExportCommand(CLI::App& app) {
                       "For a photometric set: how integer images encode light (linear or srgb)");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "For a photometric set: do not divide by the light intensities it gives");
+  command->add_option("--viewer", options->viewer,
+                      "Also write the web relighting viewer into this folder: every stack of a fit "
+                      "folder (or --method's), or for a photometric set every method's fit");
   command->callback([options] { RunExport(*options); });
 }
 

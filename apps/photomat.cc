@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   photomat::app::AddRdCommand(app);
   photomat::app::AddCalibrateCommand(app);
   photomat::app::AddExportCommand(app);
+  photomat::app::AddSynthesizeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -101,6 +101,74 @@ TEST(PhotomatCliTest, DemoRunsTheWholePipeline) {
   const nlohmann::json evaluation = ReadJsonFile(dir / "evaluation.json");
   EXPECT_EQ(evaluation.size(), 6u);
   EXPECT_EQ(LoadPhotometricSet(dir / "relit" / "eigen6").set.size(), 4);
+  // The report and the viewer, and where to open them.
+  EXPECT_THAT(demo.output, HasSubstr((dir / "report" / "index.html").string()));
+  EXPECT_THAT(demo.output, HasSubstr("http.server --directory " + (dir / "viewer").string()));
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "images" / "normal-error-gradient.png"));
+  const nlohmann::json viewer = ReadJsonFile(dir / "viewer" / "viewer.json");
+  EXPECT_EQ(viewer["methods"].size(), 6u);
+  EXPECT_EQ(viewer["capture_lights"].size(), 36u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "viewer" / "index.html"));
+}
+
+TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
+  TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  const std::string stacks = (dir / "stacks").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 3").exit_code, 0);
+  ASSERT_EQ(RunPhotomat("fit " + capture + " --method eigen3,ptm,gradient --out " + stacks)
+                .exit_code,
+            0);
+  // Every stack of the fit folder, in photomat's method order, linear values.
+  const RunResult all = RunPhotomat("export " + stacks + " --viewer " + (dir / "v1").string());
+  ASSERT_EQ(all.exit_code, 0) << all.output;
+  EXPECT_THAT(all.output, HasSubstr("http.server --directory " + (dir / "v1").string()));
+  const nlohmann::json v1 = ReadJsonFile(dir / "v1" / "viewer.json");
+  ASSERT_EQ(v1["methods"].size(), 3u);
+  EXPECT_EQ(v1["methods"][0]["name"], "gradient");
+  EXPECT_EQ(v1["methods"][1]["name"], "ptm");
+  EXPECT_EQ(v1["methods"][2]["name"], "eigen3");
+  EXPECT_EQ(v1["methods"][1]["values"], "linear");
+  EXPECT_EQ(v1["capture_lights"].size(), 36u);
+
+  // A .ptm file holds display codes: the viewer is told so, as `relight` decodes them.
+  const std::string ptm = (dir / "x.ptm").string();
+  ASSERT_EQ(RunPhotomat("export " + stacks + " --method ptm --ptm " + ptm).exit_code, 0);
+  ASSERT_EQ(RunPhotomat("export " + ptm + " --viewer " + (dir / "v2").string()).exit_code, 0);
+  const nlohmann::json v2 = ReadJsonFile(dir / "v2" / "viewer.json");
+  ASSERT_EQ(v2["methods"].size(), 1u);
+  EXPECT_EQ(v2["methods"][0]["values"], "srgb");
+
+  // A photometric set: the --method fit (or every method's).
+  const RunResult set = RunPhotomat("export " + capture + " --method gradient --viewer " +
+                                    (dir / "v3").string());
+  ASSERT_EQ(set.exit_code, 0) << set.output;
+  EXPECT_EQ(ReadJsonFile(dir / "v3" / "viewer.json")["methods"].size(), 1u);
+}
+
+TEST(PhotomatCliTest, EvaluateWritesAReportOfTheChosenImages) {
+  TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 2").exit_code, 0);
+  const RunResult evaluate =
+      RunPhotomat("evaluate " + capture + " --methods gradient,ptm --no-prediction --report " +
+                  (dir / "report").string() + " --report-images 1,35");
+  ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
+  EXPECT_THAT(evaluate.output, HasSubstr((dir / "report" / "index.html").string()));
+  const nlohmann::json report = ReadJsonFile(dir / "report" / "report.json");
+  EXPECT_EQ(report["images_shown"], nlohmann::json({1, 35}));
+  EXPECT_TRUE(std::filesystem::exists(dir / "report" / "images" / "relit-ptm-35.png"));
+
+  const RunResult bad = RunPhotomat("evaluate " + capture + " --methods gradient --no-prediction " +
+                                    "--report " + (dir / "r2").string() + " --report-images 1,x");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_THAT(bad.output, HasSubstr("expected image indices"));
+  const RunResult outside = RunPhotomat("evaluate " + capture + " --methods gradient " +
+                                        "--no-prediction --report " + (dir / "r3").string() +
+                                        " --report-images 36");
+  EXPECT_EQ(outside.exit_code, 1);
+  EXPECT_THAT(outside.output, HasSubstr("image 36 is not in the set"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "r3"));
 }
 
 }  // namespace

@@ -13,9 +13,9 @@ namespace photomat {
 namespace {
 
 constexpr double kRingToleranceDegrees = 0.5;
-constexpr double kPoleSlantDegrees = 0.5;
+constexpr double kPoleSlantDegrees = LightInterpolator::kPoleSlantDegrees;
 // cv::Subdiv2D works in float on an integer bounding rectangle: radians are scaled to this.
-constexpr double kProjectionScale = 1000.0;
+constexpr double kProjectionScale = LightInterpolator::kProjectionScale;
 
 std::array<double, 2> Project(const LightDirection& light) {
   const double slant = light.SlantDegrees() * std::numbers::pi / 180.0;

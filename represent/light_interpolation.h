@@ -36,17 +36,31 @@ class LightInterpolator {
   explicit LightInterpolator(std::vector<LightDirection> nodes,
                              std::optional<Scheme> scheme = std::nullopt);
 
+  // A ring of the kSlantRings scheme.
+  struct Ring {
+    double slant;                                 // degrees
+    std::vector<std::pair<double, int>> by_tilt;  // (tilt degrees, node), sorted
+  };
+  // Rings within this slant of the camera axis hold one overhead light and no tilt order.
+  static constexpr double kPoleSlantDegrees = 0.5;
+  // The triangulation works on slant * (cos tilt, sin tilt) in radians times this scale.
+  static constexpr double kProjectionScale = 1000.0;
+
   Scheme scheme() const { return scheme_; }
   const std::vector<LightDirection>& nodes() const { return nodes_; }
 
   // (node index, weight) pairs with positive weights summing to 1.
   std::vector<std::pair<int, double>> Weights(const LightDirection& light) const;
 
+  // The structure Weights() evaluates, for code that re-implements it elsewhere (the web viewer's
+  // JavaScript, relight/viewer_export.h). kSlantRings: the rings by increasing slant.
+  // kTriangulation: the nodes' projected coordinates, the triangles and the hull edges.
+  const std::vector<Ring>& rings() const { return rings_; }
+  const std::vector<std::array<double, 2>>& projected() const { return projected_; }
+  const std::vector<std::array<int, 3>>& triangles() const { return triangles_; }
+  const std::vector<std::array<int, 2>>& boundary() const { return boundary_; }
+
  private:
-  struct Ring {
-    double slant;                                 // degrees
-    std::vector<std::pair<double, int>> by_tilt;  // (tilt degrees, node), sorted
-  };
   bool BuildRings();
   void BuildTriangulation();
   void AddRingWeights(const Ring& ring, double tilt, double scale,

@@ -1,0 +1,536 @@
+#include "relight/evaluation_report.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "relight/display_image.h"
+#include "relight/output_folder.h"
+#include "represent/fit.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kReportFormat = "photomat-report";
+constexpr const char* kReportManifest = "report.json";
+constexpr std::array<const char*, 4> kSeriesColours = {"#4e79a7", "#f28e2b", "#59a14f", "#e15759"};
+
+// Anchors of the heat colour scale, evenly spaced over [0, 1], linear in between.
+constexpr std::array<std::array<float, 3>, 5> kHeatAnchors = {{{0.05f, 0.05f, 0.35f},
+                                                               {0.10f, 0.45f, 0.85f},
+                                                               {0.25f, 0.80f, 0.55f},
+                                                               {0.95f, 0.85f, 0.20f},
+                                                               {0.85f, 0.15f, 0.10f}}};
+constexpr float kUndefinedGrey = 0.18f;
+
+std::string Number(double value) {
+  if (!std::isfinite(value)) return "–";
+  return fmt::format("{:.4g}", value);
+}
+
+// 1, 2 or 5 times a power of ten, so that about `ticks` steps cover `top`.
+double NiceStep(double top, int ticks) {
+  const double raw = top / ticks;
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    if (m * power >= raw) return m * power;
+  }
+  return 10.0 * power;
+}
+
+std::string HexColour(const std::array<float, 3>& rgb) {
+  const auto code = [](float v) {
+    return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255));
+  };
+  return fmt::format("#{:02x}{:02x}{:02x}", code(rgb[0]), code(rgb[1]), code(rgb[2]));
+}
+
+double Percentile(std::vector<double> values, double fraction) {
+  if (values.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(std::clamp(fraction, 0.0, 1.0) * (values.size() - 1));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+// The photograph and its relightings are brightened alike when the photograph is dark, so that a
+// DiLiGenT image (values around 0.1) shows: its 99.5th percentile goes to 0.8, never darker.
+double DisplayGain(const Image& captured, const Mask& mask) {
+  std::vector<double> values;
+  for (std::size_t p = 0; p < captured.pixel_count(); ++p) {
+    if (!mask[p]) continue;
+    for (float v : captured.pixel(p)) values.push_back(v);
+  }
+  const double high = Percentile(values, 0.995);
+  return high > 0.0 ? std::clamp(0.8 / high, 1.0, 64.0) : 1.0;
+}
+
+Image Scaled(Image image, double gain) {
+  for (float& v : image.values()) v = static_cast<float>(v * gain);
+  return image;
+}
+
+void WriteDisplayImage(const fs::path& path, const Image& linear) {
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint8;
+  options.encoding = ColourSpace::kSrgb;
+  WriteImage(path, linear, options);
+}
+
+std::string ColourBarSvg(double max_degrees) {
+  std::string svg = fmt::format(
+      "<svg class=\"colour-bar\" viewBox=\"0 0 320 44\" width=\"320\" height=\"44\" role=\"img\" "
+      "aria-label=\"colour scale from 0 to {} degrees\">\n<defs><linearGradient id=\"heat\">",
+      Number(max_degrees));
+  for (std::size_t i = 0; i < kHeatAnchors.size(); ++i) {
+    svg +=
+        fmt::format("<stop offset=\"{}\" stop-color=\"{}\"/>",
+                    static_cast<double>(i) / (kHeatAnchors.size() - 1), HexColour(kHeatAnchors[i]));
+  }
+  svg +=
+      "</linearGradient></defs>\n<rect x=\"10\" y=\"4\" width=\"300\" height=\"16\" "
+      "fill=\"url(#heat)\"/>\n";
+  const double step = NiceStep(max_degrees, 5);
+  for (double tick = 0.0; tick <= max_degrees + 1e-9; tick += step) {
+    const double x = 10.0 + 300.0 * tick / max_degrees;
+    svg += fmt::format(
+        "<line x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"20\" y2=\"25\" stroke=\"#333\"/>"
+        "<text x=\"{0:.1f}\" y=\"38\" text-anchor=\"middle\">{1}&#176;</text>\n",
+        x, Number(tick));
+  }
+  return svg + "</svg>";
+}
+
+struct ReportImage {
+  int index;
+  double gain;
+};
+
+std::string LightText(const LightDirection& l) {
+  return fmt::format("slant {:.1f}&#176;, tilt {:.1f}&#176;", l.SlantDegrees(), l.TiltDegrees());
+}
+
+const char* kStyle = R"(
+body { font: 15px/1.45 system-ui, sans-serif; color: #1d1f23; margin: 24px auto; max-width: 1100px; padding: 0 16px; }
+h1 { font-size: 24px; margin-bottom: 4px; }
+h2 { font-size: 19px; margin-top: 32px; border-bottom: 1px solid #ddd; padding-bottom: 4px; }
+h3 { font-size: 16px; margin: 16px 0 4px; }
+.meta { color: #555; }
+table { border-collapse: collapse; margin: 8px 0; }
+th, td { padding: 4px 10px; border-bottom: 1px solid #e3e3e3; text-align: right; }
+th:first-child, td:first-child { text-align: left; }
+thead th { background: #f3f4f6; }
+.chart { width: 100%; max-width: 760px; height: auto; display: block; }
+.chart text { font: 12px system-ui, sans-serif; fill: #333; }
+.chart .title { font-size: 14px; font-weight: 600; }
+.colour-bar text { font: 11px system-ui, sans-serif; fill: #333; }
+.grid { display: flex; flex-wrap: wrap; gap: 14px; }
+figure { margin: 0; }
+figcaption { font-size: 13px; color: #444; max-width: 220px; }
+img.pixels { image-rendering: pixelated; min-width: 200px; max-width: 280px; height: auto; background: #222; }
+.compare td, .compare th { vertical-align: top; text-align: center; border: none; }
+.compare th { min-width: 130px; }
+.compare img { display: block; margin: 0 auto; }
+.note { color: #555; font-size: 13px; }
+)";
+
+}  // namespace
+
+std::string EscapeHtml(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::array<float, 3> HeatColour(double fraction) {
+  const double f = std::clamp(std::isfinite(fraction) ? fraction : 1.0, 0.0, 1.0);
+  const double position = f * (kHeatAnchors.size() - 1);
+  const auto i = std::min(static_cast<std::size_t>(position), kHeatAnchors.size() - 2);
+  const auto t = static_cast<float>(position - i);
+  std::array<float, 3> rgb;
+  for (int c = 0; c < 3; ++c) rgb[c] = (1 - t) * kHeatAnchors[i][c] + t * kHeatAnchors[i + 1][c];
+  return rgb;
+}
+
+Image AngularErrorMap(const Image& estimated, const Image& truth, const Mask& mask) {
+  if (estimated.width() != truth.width() || estimated.height() != truth.height() ||
+      estimated.channels() < 3 || truth.channels() < 3) {
+    throw Error(fmt::format("normals {}x{}x{} and truth {}x{}x{} do not match", estimated.width(),
+                            estimated.height(), estimated.channels(), truth.width(), truth.height(),
+                            truth.channels()));
+  }
+  Image errors(truth.width(), truth.height(), std::vector<std::string>{"error_deg"});
+  for (std::size_t p = 0; p < truth.pixel_count(); ++p) {
+    const auto t = truth.pixel(p);
+    const auto e = estimated.pixel(p);
+    const Eigen::Vector3d tv(t[0], t[1], t[2]), ev(e[0], e[1], e[2]);
+    const bool valid = (mask.width() != truth.width() || mask[p]) && tv.squaredNorm() >= 0.25 &&
+                       ev.squaredNorm() != 0.0;
+    errors.pixel(p)[0] = valid ? static_cast<float>(AngleBetweenDegrees(tv, ev)) : -1.0f;
+  }
+  return errors;
+}
+
+Image HeatMap(const Image& errors, double max_degrees) {
+  Image colours(errors.width(), errors.height(), 3);
+  for (std::size_t p = 0; p < errors.pixel_count(); ++p) {
+    const float e = errors.pixel(p)[0];
+    const std::array<float, 3> rgb =
+        e < 0.0f ? std::array{kUndefinedGrey, kUndefinedGrey, kUndefinedGrey}
+                 : HeatColour(e / max_degrees);
+    std::copy(rgb.begin(), rgb.end(), colours.pixel(p).begin());
+  }
+  return colours;
+}
+
+std::vector<int> ChooseReportImages(const std::vector<LightDirection>& lights, int count) {
+  const int n = static_cast<int>(lights.size());
+  count = std::min(count, n);
+  if (count <= 0) return {};
+  const LightDirection start = LightDirection::FromSlantTilt(45.0, 0.0);
+  std::vector<int> chosen;
+  std::vector<double> distance(n);
+  for (int i = 0; i < n; ++i) distance[i] = lights[i].AngleToDegrees(start);
+  chosen.push_back(
+      static_cast<int>(std::min_element(distance.begin(), distance.end()) - distance.begin()));
+  std::fill(distance.begin(), distance.end(), INFINITY);
+  while (static_cast<int>(chosen.size()) < count) {
+    for (int i = 0; i < n; ++i) {
+      distance[i] = std::min(distance[i], lights[i].AngleToDegrees(lights[chosen.back()]));
+    }
+    chosen.push_back(
+        static_cast<int>(std::max_element(distance.begin(), distance.end()) - distance.begin()));
+  }
+  std::sort(chosen.begin(), chosen.end());
+  return chosen;
+}
+
+std::string BarChartSvg(const BarChart& chart) {
+  constexpr double kWidth = 760, kHeight = 290;
+  constexpr double kLeft = 60, kRight = 16, kTop = 40, kBottom = 46;
+  const double plot_width = kWidth - kLeft - kRight, plot_height = kHeight - kTop - kBottom;
+  double top = 0.0;
+  for (const auto& s : chart.series) {
+    for (double v : s.values) {
+      if (std::isfinite(v)) top = std::max(top, v);
+    }
+  }
+  const double step = NiceStep(top > 0.0 ? top : 1.0, 5);
+  top = step * std::ceil((top > 0.0 ? top : 1.0) / step - 1e-9);
+  const auto y_of = [&](double v) { return kTop + plot_height * (1.0 - v / top); };
+
+  std::string svg = fmt::format(
+      "<svg class=\"{}\" viewBox=\"0 0 {} {}\" width=\"{}\" height=\"{}\" role=\"img\" "
+      "aria-label=\"{}\"{}>\n",
+      EscapeHtml(chart.css_class), kWidth, kHeight, kWidth, kHeight, EscapeHtml(chart.title),
+      chart.method.empty() ? "" : fmt::format(" data-method=\"{}\"", EscapeHtml(chart.method)));
+  svg += fmt::format("<text class=\"title\" x=\"{}\" y=\"20\">{}</text>\n", kLeft,
+                     EscapeHtml(chart.title));
+  // Legend, right-aligned in the title row.
+  double legend_x = kWidth - kRight;
+  for (std::size_t s = chart.series.size(); s-- > 0;) {
+    legend_x -= 14.0 + 7.5 * chart.series[s].name.size() + 16.0;
+    svg += fmt::format(
+        "<rect x=\"{:.1f}\" y=\"10\" width=\"12\" height=\"12\" fill=\"{}\"/>"
+        "<text x=\"{:.1f}\" y=\"20\">{}</text>\n",
+        legend_x, kSeriesColours[s % kSeriesColours.size()], legend_x + 16,
+        EscapeHtml(chart.series[s].name));
+  }
+  // Axes and grid.
+  for (double tick = 0.0; tick <= top + 1e-9 * top; tick += step) {
+    const double y = y_of(tick);
+    svg += fmt::format(
+        "<line x1=\"{}\" x2=\"{}\" y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e3e3e3\"/>"
+        "<text x=\"{}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n",
+        kLeft, kWidth - kRight, y, y, kLeft - 6, y + 4, Number(tick));
+  }
+  svg += fmt::format(
+      "<text x=\"14\" y=\"{:.1f}\" transform=\"rotate(-90 14 {:.1f})\" "
+      "text-anchor=\"middle\">{}</text>\n",
+      kTop + plot_height / 2, kTop + plot_height / 2, EscapeHtml(chart.y_label));
+  svg +=
+      fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2:.1f}\" y2=\"{2:.1f}\" stroke=\"#333\"/>\n",
+                  kLeft, kWidth - kRight, kTop + plot_height);
+  // Bars.
+  const std::size_t categories = std::max<std::size_t>(chart.categories.size(), 1);
+  const double group = plot_width / categories;
+  const double bar = group * 0.8 / std::max<std::size_t>(chart.series.size(), 1);
+  const std::size_t label_every = (chart.categories.size() + 39) / 40;
+  for (std::size_t c = 0; c < chart.categories.size(); ++c) {
+    const double group_x = kLeft + c * group + group * 0.1;
+    for (std::size_t s = 0; s < chart.series.size(); ++s) {
+      if (c >= chart.series[s].values.size()) continue;
+      const double v = chart.series[s].values[c];
+      if (!std::isfinite(v)) continue;
+      const double y = y_of(std::max(v, 0.0));
+      svg += fmt::format(
+          "<rect class=\"bar\" x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
+          "fill=\"{}\" data-value=\"{}\"><title>{}, {}: {}</title></rect>\n",
+          group_x + s * bar, y, std::max(bar - 0.5, 0.5), kTop + plot_height - y,
+          kSeriesColours[s % kSeriesColours.size()], v, EscapeHtml(chart.categories[c]),
+          EscapeHtml(chart.series[s].name), Number(v));
+    }
+    if (c % label_every == 0) {
+      svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
+                         kLeft + (c + 0.5) * group, kTop + plot_height + 16,
+                         EscapeHtml(chart.categories[c]));
+    }
+  }
+  return svg + "</svg>";
+}
+
+void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
+                           const std::vector<MethodEvaluation>& evaluations, const Image* truth,
+                           const EvaluationReportOptions& options) {
+  if (evaluations.empty()) throw Error(folder, "no evaluation to report");
+  for (const MethodEvaluation& e : evaluations) {
+    if (static_cast<int>(e.reconstruction_per_image.size()) != set.size()) {
+      throw Error(folder,
+                  fmt::format("the {} evaluation has {} images, the set {}", e.method.Name(),
+                              e.reconstruction_per_image.size(), set.size()));
+    }
+  }
+  std::vector<int> chosen =
+      options.images.empty() ? ChooseReportImages(set.lights()) : options.images;
+  for (int i : chosen) {
+    if (i < 0 || i >= set.size()) {
+      throw Error(fmt::format("image {} is not in the set (0 to {})", i, set.size() - 1));
+    }
+  }
+  const bool prediction = std::all_of(evaluations.begin(), evaluations.end(),
+                                      [](const auto& e) { return e.eta_prediction.has_value(); });
+  const bool any_normals = std::any_of(evaluations.begin(), evaluations.end(),
+                                       [](const auto& e) { return e.normals.has_value(); });
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  const Mask mask = set.MaskOrAll();
+
+  const Observations observations(set);
+  // The fits as the evaluation made them: least squares, or robust with its options.
+  const auto fit = [&](const Method& method, std::span<const int> selected) {
+    if (!options.robust) {
+      return FitObservations(observations, set.lights(), method, selected, set.source());
+    }
+    RobustFitOptions robust = *options.robust;
+    robust.progress = nullptr;
+    return RobustFit(observations, set.lights(), selected, robust, set.source()).Fit(method);
+  };
+  std::vector<int> every_image(set.size());
+  std::iota(every_image.begin(), every_image.end(), 0);
+
+  WriteFolderAtomically(folder, kReportManifest, kReportFormat, [&](const fs::path& temp) {
+    fs::create_directories(temp / "images");
+    progress.Start("report", evaluations.size());
+    std::vector<Representation> fits;
+    std::vector<std::optional<Image>> errors(evaluations.size());
+    for (std::size_t m = 0; m < evaluations.size(); ++m) {
+      fits.push_back(fit(evaluations[m].method, every_image));
+      if (truth && evaluations[m].normals) {
+        if (const auto normals = EstimateNormals(fits.back())) {
+          errors[m] = AngularErrorMap(*normals, *truth, mask);
+        }
+      }
+      progress.Advance();
+    }
+    progress.Finish();
+
+    std::string html = fmt::format(
+        "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+        "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
+        "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
+        "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
+        EscapeHtml(options.title), kStyle, EscapeHtml(set.source().string()), set.size(),
+        set.width(), set.height(), set.channels(), mask.CountSet(),
+        options.robust ? "robust" : "least-squares");
+
+    // The table.
+    html +=
+        "<h2>Normalised RMS error (eta) per method</h2>\n<p class=\"note\">Dong's eta "
+        "(thesis eq. 4.5.1): the mean over images of the RMS of relit minus captured, over "
+        "the standard deviation of the captured image. Reconstruction: the fit of all images "
+        "relit at each; prediction: each image relit by a fit that left it out.</p>\n";
+    html +=
+        "<table class=\"eta\">\n<thead><tr><th>method</th><th>eta reconstruction</th>"
+        "<th>eta prediction</th>";
+    if (any_normals) {
+      html +=
+          "<th>normal mean (&#176;)</th><th>median (&#176;)</th><th>&lt; 5&#176;</th>"
+          "<th>&lt; 10&#176;</th>";
+    }
+    html += "</tr></thead>\n<tbody>\n";
+    for (const MethodEvaluation& e : evaluations) {
+      html += fmt::format("<tr><td>{}</td><td>{:.5f}</td><td>{}</td>", EscapeHtml(e.method.Name()),
+                          e.eta_reconstruction,
+                          e.eta_prediction ? fmt::format("{:.5f}", *e.eta_prediction) : "–");
+      if (any_normals) {
+        if (e.normals) {
+          html += fmt::format("<td>{:.2f}</td><td>{:.2f}</td><td>{:.1f} %</td><td>{:.1f} %</td>",
+                              e.normals->mean_degrees, e.normals->median_degrees,
+                              100 * e.normals->fraction_below_5_degrees,
+                              100 * e.normals->fraction_below_10_degrees);
+        } else {
+          html += "<td>–</td><td>–</td><td>–</td><td>–</td>";
+        }
+      }
+      html += "</tr>\n";
+    }
+    html += "</tbody>\n</table>\n";
+
+    // The charts.
+    BarChart summary{"eta per method",      "eta", {}, {{"reconstruction", {}}},
+                     "chart summary-chart", ""};
+    if (prediction) summary.series.push_back({"prediction", {}});
+    for (const MethodEvaluation& e : evaluations) {
+      summary.categories.push_back(e.method.Name());
+      summary.series[0].values.push_back(e.eta_reconstruction);
+      if (prediction) summary.series[1].values.push_back(*e.eta_prediction);
+    }
+    html += "<h2>Charts</h2>\n" + BarChartSvg(summary) + "\n";
+    if (any_normals) {
+      BarChart normal_chart{"normal angular error", "degrees", {}, {{"mean", {}}, {"median", {}}},
+                            "chart normal-chart",   ""};
+      for (const MethodEvaluation& e : evaluations) {
+        if (!e.normals) continue;
+        normal_chart.categories.push_back(e.method.Name());
+        normal_chart.series[0].values.push_back(e.normals->mean_degrees);
+        normal_chart.series[1].values.push_back(e.normals->median_degrees);
+      }
+      html += BarChartSvg(normal_chart) + "\n";
+    }
+    html += "<h2>Per-image error of each method</h2>\n";
+    for (const MethodEvaluation& e : evaluations) {
+      BarChart chart{
+          fmt::format("{}: eta per image", e.method.Name()), "e_k / sigma_k",      {},
+          {{"reconstruction", e.reconstruction_per_image}},  "chart method-chart", e.method.Name()};
+      if (!e.prediction_per_image.empty()) {
+        chart.series.push_back({"prediction", e.prediction_per_image});
+      }
+      for (int i = 0; i < set.size(); ++i) chart.categories.push_back(std::to_string(i));
+      html += BarChartSvg(chart) + "\n";
+    }
+
+    // Normal error heat maps.
+    if (std::any_of(errors.begin(), errors.end(), [](const auto& e) { return e.has_value(); })) {
+      std::vector<double> all;
+      for (const auto& map : errors) {
+        if (!map) continue;
+        for (float v : map->values()) {
+          if (v >= 0.0f) all.push_back(v);
+        }
+      }
+      const double scale = std::max(5.0, 5.0 * std::ceil(Percentile(all, 0.95) / 5.0));
+      html += fmt::format(
+          "<h2>Normal angular error</h2>\n<p class=\"note\">Angle between each "
+          "method's normals and the ground truth, per pixel, on one scale for all "
+          "methods (0 to {} degrees; larger errors show as red, pixels without "
+          "truth grey).</p>\n{}\n<div class=\"grid\">\n",
+          Number(scale), ColourBarSvg(scale));
+      for (std::size_t m = 0; m < evaluations.size(); ++m) {
+        if (!errors[m]) continue;
+        const std::string name = evaluations[m].method.Name();
+        const std::string file = fmt::format("images/normal-error-{}.png", name);
+        WriteDisplayCodes(temp / file, HeatMap(*errors[m], scale));
+        html += fmt::format(
+            "<figure><img class=\"pixels heat-map\" src=\"{}\" alt=\"normal error "
+            "of {}\"><figcaption>{}: mean {:.2f}&#176;, median {:.2f}&#176;"
+            "</figcaption></figure>\n",
+            file, EscapeHtml(name), EscapeHtml(name), evaluations[m].normals->mean_degrees,
+            evaluations[m].normals->median_degrees);
+      }
+      html += "</div>\n";
+    }
+
+    // Captured beside relit.
+    html +=
+        "<h2>Captured and relit</h2>\n<p class=\"note\">Each row: a captured image and every "
+        "method's relighting of its light by the fit of all images" +
+        std::string(prediction ? ", and below it the prediction by a fit without that image" : "") +
+        ". Values shown through the sRGB curve; a dark row is brightened by the stated "
+        "factor, the same for every image in it.</p>\n<table class=\"compare\">\n<tr><th>"
+        "</th><th>captured</th>";
+    for (const MethodEvaluation& e : evaluations)
+      html += "<th>" + EscapeHtml(e.method.Name()) + "</th>";
+    html += "</tr>\n";
+    progress.Start("report images", chosen.size());
+    for (int index : chosen) {
+      const LightDirection& light = set.light(index);
+      const double gain = DisplayGain(set.image(index), mask);
+      const std::string captured = fmt::format("images/captured-{}.png", index);
+      WriteDisplayImage(temp / captured, Scaled(set.image(index), gain));
+      html += fmt::format(
+          "<tr class=\"relit-row\"><th>image {}<br>{}<br>{}{}</th><td><img "
+          "class=\"pixels\" src=\"{}\" alt=\"captured image {}\"></td>",
+          index, EscapeHtml(fs::path(set.image_name(index)).filename().string()), LightText(light),
+          gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured, index);
+      std::vector<std::string> predicted_cells;
+      for (std::size_t m = 0; m < evaluations.size(); ++m) {
+        const std::string name = evaluations[m].method.Name();
+        const std::string relit = fmt::format("images/relit-{}-{}.png", name, index);
+        WriteDisplayImage(temp / relit, Scaled(fits[m].Relight(light), gain));
+        html += fmt::format(
+            "<td><img class=\"pixels\" src=\"{}\" alt=\"{} relit\"><br>"
+            "e/&#963; {}</td>",
+            relit, EscapeHtml(name), Number(evaluations[m].reconstruction_per_image[index]));
+        if (!prediction) continue;
+        std::vector<int> others;
+        for (int i = 0; i < set.size(); ++i) {
+          if (i != index) others.push_back(i);
+        }
+        const Representation fold = fit(evaluations[m].method, others);
+        const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
+        WriteDisplayImage(temp / predicted, Scaled(fold.Relight(light), gain));
+        predicted_cells.push_back(fmt::format(
+            "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}</td>",
+            predicted, EscapeHtml(name), Number(evaluations[m].prediction_per_image[index])));
+      }
+      html += "</tr>\n";
+      if (prediction) {
+        html += "<tr class=\"predicted-row\"><th>predicted</th><td></td>";
+        for (const std::string& cell : predicted_cells) html += cell;
+        html += "</tr>\n";
+      }
+      progress.Advance();
+    }
+    progress.Finish();
+    html +=
+        "</table>\n<p class=\"note\">Written by photomat. report.json holds the numbers.</p>\n"
+        "</body>\n</html>\n";
+    WriteTextFileAtomically(temp / "index.html", html);
+    WriteJsonFile(temp / kReportManifest, {{"format", kReportFormat},
+                                           {"version", 1},
+                                           {"title", options.title},
+                                           {"source", set.source().string()},
+                                           {"images_shown", chosen},
+                                           {"evaluation", EvaluationsToJson(evaluations)}});
+  });
+}
+
+}  // namespace photomat

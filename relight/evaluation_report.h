@@ -1,0 +1,81 @@
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "core/light_direction.h"
+#include "core/photometric_set.h"
+#include "core/progress.h"
+#include "represent/evaluation.h"
+#include "represent/robust_fit.h"
+
+namespace photomat {
+
+// The evaluation report of `photomat evaluate --report DIR` and the demo: a folder with
+// index.html (no scripts, no network access: opens from the file system), SVG charts inline and
+// PNG images beside it, and report.json ("format": "photomat-report", the evaluation as
+// `evaluate --json` writes it). It shows
+//  - the eta table: reconstruction and prediction per method, normal errors where truth exists;
+//  - a chart of eta per method, and one chart per method of its per-image errors
+//    (<svg class="method-chart" data-method="NAME">);
+//  - where ground truth normals exist, a heat map of each method's angular error, on one colour
+//    scale for all methods (up to the 95th percentile of all errors, rounded up to 5 degrees);
+//  - for chosen captured images, the photograph beside each method's relighting of its light
+//    (the fit of all images) and, when prediction was evaluated, its prediction (a fit without
+//    that image). Dark images are brightened for display by the same factor in a row (stated).
+
+struct EvaluationReportOptions {
+  std::string title = "photomat evaluation";
+  // Captured images to show beside their relighting (indices into the set); empty: up to three
+  // spread-out lights (ChooseReportImages).
+  std::vector<int> images;
+  // The fits the evaluation used: set when it evaluated robust fits (EvaluationOptions::robust), so
+  // that the relit images and normal maps are those of the same fits.
+  std::optional<RobustFitOptions> robust;
+  Progress* progress = nullptr;
+};
+
+// Writes the report into `folder`, whole or not at all (an existing folder is replaced only if it
+// is empty or a previous report). `evaluations` are EvaluateMethod's results on `set`; `truth` the
+// ground-truth normals or null. Throws Error naming the folder, or for image indices out of range.
+void WriteEvaluationReport(const std::filesystem::path& folder, const PhotometricSet& set,
+                           const std::vector<MethodEvaluation>& evaluations, const Image* truth,
+                           const EvaluationReportOptions& options = {});
+
+// `count` images whose lights are far apart (farthest-point order, starting from the light
+// nearest slant 45, tilt 0, the thesis's first 3I light), in the set's order.
+std::vector<int> ChooseReportImages(const std::vector<LightDirection>& lights, int count = 3);
+
+// Per-pixel angle in degrees between estimated and true normals (one channel), where the mask is
+// set and the truth is a normal (as CompareNormals counts pixels); -1 elsewhere.
+Image AngularErrorMap(const Image& estimated, const Image& truth, const Mask& mask);
+
+// The report's colour scale: dark blue (0) through cyan, green and yellow to red (1 and above).
+std::array<float, 3> HeatColour(double fraction);
+// Display colours (RGB in [0, 1], to be stored as 8-bit codes) of an AngularErrorMap; grey where
+// the error is undefined.
+Image HeatMap(const Image& errors, double max_degrees);
+
+// A grouped bar chart as inline SVG: one group of bars per category, one bar per series.
+struct BarChart {
+  struct Series {
+    std::string name;
+    std::vector<double> values;  // one per category; non-finite values draw no bar
+  };
+  std::string title;
+  std::string y_label;
+  std::vector<std::string> categories;
+  std::vector<Series> series;
+  std::string css_class = "chart";
+  std::string method;  // data-method attribute, for per-method charts
+};
+std::string BarChartSvg(const BarChart& chart);
+
+// Escapes &, <, >, " and ' for HTML text and attributes.
+std::string EscapeHtml(const std::string& text);
+
+}  // namespace photomat

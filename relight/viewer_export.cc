@@ -1,0 +1,427 @@
+#include "relight/viewer_export.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "relight/display_image.h"
+#include "relight/output_folder.h"
+#include "relight/viewer_assets.h"
+#include "represent/surface_integration.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kViewerFormat = "photomat-viewer";
+constexpr const char* kViewerManifest = "viewer.json";
+// Exact formulas are held to rounding: basis.js computes in double precision, as C++ does.
+constexpr double kExactTolerance = 1e-9;
+
+nlohmann::json MatrixRows(const Eigen::MatrixXd& matrix) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+nlohmann::json Vector(const Eigen::VectorXd& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
+
+nlohmann::json InterpolatedJson(const InterpolatedLightBasis& basis) {
+  const LightInterpolator& interpolator = basis.interpolator();
+  nlohmann::json nodes = nlohmann::json::array();
+  for (const LightDirection& l : interpolator.nodes()) nodes.push_back({l.x(), l.y(), l.z()});
+  nlohmann::json json = {{"kind", "interpolated"},
+                         {"scheme", ToString(interpolator.scheme())},
+                         {"nodes", std::move(nodes)},
+                         {"values", MatrixRows(basis.values().transpose())}};
+  if (interpolator.scheme() == LightInterpolator::Scheme::kSlantRings) {
+    nlohmann::json rings = nlohmann::json::array();
+    for (const LightInterpolator::Ring& ring : interpolator.rings()) {
+      nlohmann::json by_tilt = nlohmann::json::array();
+      for (const auto& [tilt, node] : ring.by_tilt) by_tilt.push_back({tilt, node});
+      rings.push_back({{"slant", ring.slant}, {"by_tilt", std::move(by_tilt)}});
+    }
+    json["rings"] = std::move(rings);
+    json["pole_slant_deg"] = LightInterpolator::kPoleSlantDegrees;
+  } else {
+    json["projection_scale"] = LightInterpolator::kProjectionScale;
+    json["projected"] = interpolator.projected();
+    json["triangles"] = interpolator.triangles();
+    json["boundary"] = interpolator.boundary();
+  }
+  return json;
+}
+
+// Golden-angle spiral: evenly spread over the disc of slant * (cos tilt, sin tilt), no randomness.
+std::vector<LightDirection> SpiralLights(int count) {
+  std::vector<LightDirection> lights;
+  const double golden_angle = 180.0 * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double slant = 89.5 * std::sqrt((i + 0.5) / count);
+    lights.push_back(LightDirection::FromSlantTilt(slant, std::fmod(i * golden_angle, 360.0)));
+  }
+  return lights;
+}
+
+std::string FileStem(const std::string& method) {
+  std::string stem;
+  for (char c : method) {
+    const bool safe = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                      c == '-' || c == '_';
+    stem += safe ? c : '_';
+  }
+  return stem.empty() ? "method" : stem;
+}
+
+void AppendFloat(std::string& bytes, float value) {
+  const auto bits = std::bit_cast<std::uint32_t>(value);
+  for (int b = 0; b < 4; ++b)
+    bytes += static_cast<char>((bits >> (8 * b)) & 0xff);  // little-endian
+}
+
+// The maps as ceil(n / 4) RGBA layers, layer-major, rows from the top (the texture's layout).
+std::string MapLayers(const Image& maps) {
+  const int n = maps.channels();
+  const int layers = (n + 3) / 4;
+  std::string bytes;
+  bytes.reserve(static_cast<std::size_t>(layers) * maps.pixel_count() * 16);
+  for (int layer = 0; layer < layers; ++layer) {
+    for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+      const auto values = maps.pixel(p);
+      for (int c = 0; c < 4; ++c) {
+        const int map = 4 * layer + c;
+        AppendFloat(bytes, map < n ? values[map] : 0.0f);
+      }
+    }
+  }
+  return bytes;
+}
+
+// Pixels where the fit wrote anything: maps are 0 outside the capture's mask.
+Mask FittedPixels(const Image& maps) {
+  Mask mask(maps.width(), maps.height(), false);
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    const auto values = maps.pixel(p);
+    mask.Set(p, std::any_of(values.begin(), values.end(), [](float v) { return v != 0.0f; }));
+  }
+  return mask;
+}
+
+// Normal, albedo and height for looking at, from `source`: the normal map as (n + 1) / 2, the
+// albedo as the relit colour with the light along each pixel's normal (exactly the albedo for
+// Gradient, whose relighting is albedo * n.l), the height by Poisson integration of the normals
+// over the fitted pixels, stretched to [0, 1] there.
+nlohmann::json WriteDisplayMaps(const fs::path& folder, const Representation& source) {
+  const std::optional<Image> normals = EstimateNormals(source);
+  if (!normals) return nlohmann::json::array();
+  const Mask mask = FittedPixels(source.maps());
+  const int channels = source.output_channels();
+
+  Image normal_colours(normals->width(), normals->height(), 3);
+  Image albedo(normals->width(), normals->height(), std::min(channels, 3));
+  tbb::parallel_for(std::size_t{0}, normals->pixel_count(), [&](std::size_t p) {
+    const auto n = normals->pixel(p);
+    for (int c = 0; c < 3; ++c) normal_colours.pixel(p)[c] = 0.5f * (n[c] + 1.0f);
+    if (!mask[p]) return;
+    const Eigen::VectorXf coefficients =
+        source.basis().Coefficients(LightDirection::FromVector(n[0], n[1], n[2])).cast<float>();
+    std::vector<float> out(channels);
+    source.RelightPixel(source.maps().pixel(p), coefficients, out);
+    for (int c = 0; c < albedo.channels(); ++c) albedo.pixel(p)[c] = std::max(out[c], 0.0f);
+  });
+
+  ImageWriteOptions srgb8;
+  srgb8.sample_type = SampleType::kUint8;
+  srgb8.encoding = ColourSpace::kSrgb;
+  nlohmann::json views = nlohmann::json::array();
+  const std::string from = source.method();
+  WriteDisplayCodes(folder / "maps" / "normal.png", normal_colours);
+  views.push_back({{"name", "normal"},
+                   {"label", "Normal"},
+                   {"file", "maps/normal.png"},
+                   {"source", from},
+                   {"encoding", "(n + 1) / 2"}});
+  WriteImage(folder / "maps" / "albedo.png", albedo, srgb8);
+  views.push_back({{"name", "albedo"},
+                   {"label", "Albedo"},
+                   {"file", "maps/albedo.png"},
+                   {"source", from},
+                   {"encoding", "sRGB"}});
+
+  if (mask.CountSet() > 0) {
+    const Image height = IntegratePoisson(GradientsFromNormals(*normals), mask);
+    double low = INFINITY, high = -INFINITY;
+    for (std::size_t p = 0; p < height.pixel_count(); ++p) {
+      if (!mask[p]) continue;
+      low = std::min(low, static_cast<double>(height.pixel(p)[0]));
+      high = std::max(high, static_cast<double>(height.pixel(p)[0]));
+    }
+    Image grey(height.width(), height.height(), 1);
+    for (std::size_t p = 0; p < height.pixel_count(); ++p) {
+      if (!mask[p]) continue;
+      grey.pixel(p)[0] =
+          high > low ? static_cast<float>((height.pixel(p)[0] - low) / (high - low)) : 0.5f;
+    }
+    WriteDisplayCodes(folder / "maps" / "height.png", grey);
+    views.push_back({{"name", "height"},
+                     {"label", "Height"},
+                     {"file", "maps/height.png"},
+                     {"source", from},
+                     {"encoding", "linear"},
+                     {"range_pixels", {low, high}}});
+  }
+  return views;
+}
+
+// Gradient gives the most direct normals; then the other methods whose normals are defined.
+const Representation* DisplayMapSource(const std::vector<Representation>& representations) {
+  for (const char* preferred : {"gradient", "3i", "ptm", "ptm-lrgb"}) {
+    for (const Representation& r : representations) {
+      if (r.method() == preferred) return &r;
+    }
+  }
+  for (const Representation& r : representations) {
+    if (r.basis().LinearInLight() || r.basis().kind() == "ptm") return &r;
+  }
+  return nullptr;
+}
+
+nlohmann::json CheckJson(const LightBasis& basis, const std::optional<CoefficientTable>& table) {
+  nlohmann::json lights = nlohmann::json::array();
+  nlohmann::json coefficients = nlohmann::json::array();
+  for (const LightDirection& light : ViewerCheckLights(basis)) {
+    lights.push_back({light.x(), light.y(), light.z()});
+    coefficients.push_back(Vector(table ? table->Coefficients(light) : basis.Coefficients(light)));
+  }
+  // Against the table the viewer must match the C++ table to float rounding; against the basis
+  // itself, to double rounding.
+  return {{"lights", std::move(lights)},
+          {"coefficients", std::move(coefficients)},
+          {"tolerance", table ? 1e-7 : kExactTolerance}};
+}
+
+void CheckSameSample(const std::vector<Representation>& representations) {
+  if (representations.empty()) throw Error("no representation to export to the viewer");
+  const Representation& first = representations.front();
+  for (const Representation& r : representations) {
+    if (r.width() != first.width() || r.height() != first.height()) {
+      throw Error(fmt::format("{} is {}x{} but {} is {}x{}: a viewer shows one sample", r.method(),
+                              r.width(), r.height(), first.method(), first.width(),
+                              first.height()));
+    }
+    if (r.width() > 8192 || r.height() > 8192) {
+      throw Error(fmt::format("{} is {}x{}: the viewer's textures hold at most 8192 pixels a side",
+                              r.method(), r.width(), r.height()));
+    }
+  }
+  for (std::size_t i = 0; i < representations.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (FileStem(representations[i].method()) == FileStem(representations[j].method())) {
+        throw Error(fmt::format("method \"{}\" is given twice", representations[i].method()));
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::string MethodLabel(const std::string& method) {
+  if (method == "3i") return "3I";
+  if (method == "gradient") return "Gradient";
+  if (method == "ptm") return "PTM";
+  if (method == "ptm-lrgb") return "PTM LRGB";
+  // fmt rather than "literal" + std::string: GCC 12 warns falsely (-Wrestrict) on the latter.
+  if (method.starts_with("eigen")) return fmt::format("Eigen-{}", method.substr(5));
+  if (method.starts_with("hsh")) {
+    return method.size() > 3 ? fmt::format("HSH {}", method.substr(3)) : std::string("HSH");
+  }
+  std::string label = method;
+  for (char& c : label) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return label;
+}
+
+CoefficientTable::CoefficientTable(const LightBasis& basis, double step_degrees)
+    : terms_(basis.size()), step_(step_degrees) {
+  const double slant_cells = 90.0 / step_, tilt_cells = 360.0 / step_;
+  if (!(step_ > 0.0) || std::abs(slant_cells - std::round(slant_cells)) > 1e-9 ||
+      std::abs(tilt_cells - std::round(tilt_cells)) > 1e-9) {
+    throw Error(fmt::format("coefficient table step {} must divide 90 degrees", step_degrees));
+  }
+  slant_steps_ = static_cast<int>(std::round(slant_cells)) + 1;
+  tilt_steps_ = static_cast<int>(std::round(tilt_cells)) + 1;
+  values_.resize(static_cast<std::size_t>(slant_steps_) * tilt_steps_ * terms_);
+  tbb::parallel_for(0, slant_steps_, [&](int s) {
+    for (int t = 0; t < tilt_steps_; ++t) {
+      // Tilt 360 is tilt 0 (the wrap column); at slant 0 every tilt is the same light.
+      const Eigen::VectorXd c = basis.Coefficients(
+          LightDirection::FromSlantTilt(s * step_, t + 1 == tilt_steps_ ? 0.0 : t * step_));
+      for (int j = 0; j < terms_; ++j) {
+        values_[(static_cast<std::size_t>(s) * tilt_steps_ + t) * terms_ + j] =
+            static_cast<float>(c[j]);
+      }
+    }
+  });
+  // Bilinear interpolation errs most inside cells: measure at every cell's centre and midpoints.
+  std::vector<double> worst(slant_steps_ - 1, 0.0);
+  tbb::parallel_for(0, slant_steps_ - 1, [&](int s) {
+    for (int t = 0; t + 1 < tilt_steps_; ++t) {
+      for (const auto& [ds, dt] : {std::pair{0.5, 0.0}, std::pair{0.0, 0.5}, std::pair{0.5, 0.5}}) {
+        const LightDirection light =
+            LightDirection::FromSlantTilt((s + ds) * step_, (t + dt) * step_);
+        const double error =
+            (Coefficients(light) - basis.Coefficients(light)).cwiseAbs().maxCoeff();
+        worst[s] = std::max(worst[s], error);
+      }
+    }
+  });
+  max_error_ = *std::max_element(worst.begin(), worst.end());
+}
+
+Eigen::VectorXd CoefficientTable::Coefficients(const LightDirection& light) const {
+  const double s = std::clamp(light.SlantDegrees() / step_, 0.0, slant_steps_ - 1.0);
+  const double t = std::clamp(light.TiltDegrees() / step_, 0.0, tilt_steps_ - 1.0);
+  const int s0 = std::min(static_cast<int>(s), slant_steps_ - 2);
+  const int t0 = std::min(static_cast<int>(t), tilt_steps_ - 2);
+  const double fs = s - s0, ft = t - t0;
+  const auto at = [&](int si, int ti, int j) {
+    return static_cast<double>(
+        values_[(static_cast<std::size_t>(si) * tilt_steps_ + ti) * terms_ + j]);
+  };
+  Eigen::VectorXd c(terms_);
+  for (int j = 0; j < terms_; ++j) {
+    c[j] = (1.0 - fs) * ((1.0 - ft) * at(s0, t0, j) + ft * at(s0, t0 + 1, j)) +
+           fs * ((1.0 - ft) * at(s0 + 1, t0, j) + ft * at(s0 + 1, t0 + 1, j));
+  }
+  return c;
+}
+
+nlohmann::json CoefficientTable::ToJson() const {
+  return {{"kind", "table"},           {"terms", terms_},
+          {"step_deg", step_},         {"slant_steps", slant_steps_},
+          {"tilt_steps", tilt_steps_}, {"max_error", max_error_}};
+}
+
+std::vector<LightDirection> ViewerCheckLights(const LightBasis& basis, int spiral_count) {
+  std::vector<LightDirection> lights = SpiralLights(spiral_count);
+  lights.push_back(LightDirection::FromVector(0.0, 0.0, 1.0));
+  if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
+    for (const LightDirection& node : interpolated->interpolator().nodes()) {
+      if (node.z() >= 0.0) lights.push_back(node);
+    }
+  }
+  return lights;
+}
+
+bool ViewerEvaluatesExactly(const LightBasis& basis) {
+  return dynamic_cast<const LinearLightBasis*>(&basis) ||
+         dynamic_cast<const PtmLightBasis*>(&basis) ||
+         dynamic_cast<const InterpolatedLightBasis*>(&basis) ||
+         (basis.kind() == "hsh" && basis.ToJson().contains("terms"));
+}
+
+nlohmann::json ViewerBasisJson(const LightBasis& basis) {
+  if (const auto* linear = dynamic_cast<const LinearLightBasis*>(&basis)) {
+    return {{"kind", "linear"}, {"matrix", MatrixRows(*linear->LinearInLight())}};
+  }
+  if (dynamic_cast<const PtmLightBasis*>(&basis)) return {{"kind", "ptm"}};
+  if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
+    return InterpolatedJson(*interpolated);
+  }
+  // Hemispherical harmonics: their own description, {"kind": "hsh", "terms": N}, is all basis.js
+  // needs (by kind, so that this module needs no HSH class).
+  if (ViewerEvaluatesExactly(basis)) return basis.ToJson();
+  throw Error(
+      fmt::format("the viewer has no formula for light bases of kind \"{}\"", basis.kind()));
+}
+
+void ExportViewer(const fs::path& folder, const std::vector<Representation>& representations,
+                  const ViewerExportOptions& options) {
+  CheckSameSample(representations);
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  WriteFolderAtomically(folder, kViewerManifest, kViewerFormat, [&](const fs::path& temp) {
+    progress.Start("viewer", representations.size() + 1);
+    for (const ViewerAsset& asset : ViewerAssets()) {
+      WriteTextFileAtomically(temp / asset.path, asset.contents);
+    }
+    fs::create_directories(temp / "maps");
+
+    nlohmann::json methods = nlohmann::json::array();
+    std::vector<LightDirection> capture_lights = options.capture_lights;
+    for (const Representation& r : representations) {
+      const std::string stem = FileStem(r.method());
+      const bool table =
+          options.table_methods.contains(r.method()) || !ViewerEvaluatesExactly(r.basis());
+      nlohmann::json basis;
+      std::optional<CoefficientTable> coefficient_table;
+      if (table) {
+        coefficient_table.emplace(r.basis());
+        const std::string file = fmt::format("maps/{}.coefficients.f32", stem);
+        std::string bytes;
+        for (float v : coefficient_table->values()) AppendFloat(bytes, v);
+        WriteTextFileAtomically(temp / file, bytes);
+        basis = coefficient_table->ToJson();
+        basis["source_kind"] = r.basis().kind();
+        basis["file"] = file;
+      } else {
+        basis = ViewerBasisJson(r.basis());
+      }
+      if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&r.basis());
+          interpolated && capture_lights.empty()) {
+        capture_lights = interpolated->interpolator().nodes();
+      }
+      const std::string data = fmt::format("maps/{}.f32", stem);
+      WriteTextFileAtomically(temp / data, MapLayers(r.maps()));
+      const auto encoding = options.value_encodings.find(r.method());
+      methods.push_back(
+          {{"name", r.method()},
+           {"label", MethodLabel(r.method())},
+           {"layout", r.layout().ToJson()},
+           {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
+                                                                         : encoding->second)},
+           {"channels", r.maps().channel_names()},
+           {"data",
+            {{"file", data}, {"type", "float32"}, {"layers", (r.maps().channels() + 3) / 4}}},
+           {"basis", std::move(basis)},
+           {"check", CheckJson(r.basis(), coefficient_table)}});
+      progress.Advance();
+    }
+
+    nlohmann::json views = nlohmann::json::array();
+    if (options.display_maps) {
+      if (const Representation* source = DisplayMapSource(representations)) {
+        views = WriteDisplayMaps(temp, *source);
+      }
+    }
+    nlohmann::json lights = nlohmann::json::array();
+    for (const LightDirection& l : capture_lights) lights.push_back({l.x(), l.y(), l.z()});
+    WriteJsonFile(temp / kViewerManifest, {{"format", kViewerFormat},
+                                           {"version", 1},
+                                           {"title", options.title},
+                                           {"width", representations.front().width()},
+                                           {"height", representations.front().height()},
+                                           {"capture_lights", std::move(lights)},
+                                           {"methods", std::move(methods)},
+                                           {"views", std::move(views)}});
+    progress.Advance();
+    progress.Finish();
+  });
+}
+
+}  // namespace photomat
