@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -65,6 +66,34 @@ TEST(RdCommandTest, MeshWritesColouredMeshesPreviewsAndFields) {
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh" / "preview_front.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh" / "fields.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh" / "history.csv"));
+}
+
+// --noise then --smooth-steps: the coupled loop smooths the sphere it grows the pattern on (the
+// written mesh is rounder than the noisy one written without smoothing, same seed).
+TEST(RdCommandTest, SmoothStepsDenoiseTheMeshTheyGrowOn) {
+  testing::TempDir dir;
+  const std::string common =
+      "rd --mesh sphere:1:3 --size 40 --model turk --steps 10 --noise 0.2 "
+      "--preview-size 32 --out ";
+  const RunResult noisy = RunPhotomat(common + (dir / "noisy").string());
+  ASSERT_EQ(noisy.exit_code, 0) << noisy.output;
+  const RunResult smoothed =
+      RunPhotomat(common + (dir / "smoothed").string() + " --smooth-steps 10");
+  ASSERT_EQ(smoothed.exit_code, 0) << smoothed.output;
+  auto radius_spread = [](const TriangleMesh& mesh) {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : mesh.positions) centre += p / mesh.vertex_count();
+    double sum = 0.0, sum2 = 0.0;
+    for (const auto& p : mesh.positions) {
+      sum += (p - centre).norm();
+      sum2 += (p - centre).squaredNorm();
+    }
+    const double n = mesh.vertex_count();
+    return std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  };
+  const double before = radius_spread(ReadMesh(dir / "noisy" / "pattern.ply"));
+  const double after = radius_spread(ReadMesh(dir / "smoothed" / "pattern.ply"));
+  EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
 }
 
 TEST(RdCommandTest, BadArgumentsAreOneLineErrors) {
