@@ -233,12 +233,8 @@ TriangleMesh MakeFacetedPolyhedron(Polyhedron shape, double circumradius, int su
       mesh.positions.push_back({i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0});
     }
     // Corner index = x + 2 y + 4 z (bits set for +1); each face counter-clockwise from outside.
-    const std::array<std::array<int, 4>, 6> faces = {{{0, 2, 3, 1},
-                                                      {4, 5, 7, 6},
-                                                      {0, 1, 5, 4},
-                                                      {2, 6, 7, 3},
-                                                      {0, 4, 6, 2},
-                                                      {1, 3, 7, 5}}};
+    const std::array<std::array<int, 4>, 6> faces = {
+        {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
     for (const auto& f : faces) {
       mesh.triangles.push_back({f[0], f[1], f[2]});
       mesh.triangles.push_back({f[0], f[2], f[3]});
