@@ -3,10 +3,6 @@
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-
-#include <array>
-#include <cstdio>
 
 #include "calibrate/light_list.h"
 #include "calibrate/near_light.h"
@@ -22,26 +18,12 @@
 namespace photomat {
 namespace {
 
+using testing::RunPhotomat;
+using testing::RunResult;
+
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using testing::TempDir;
-
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
-  }
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 // A folder of 16-bit sphere images (sphere_0.png .. sphere_N.png, so that natural order matters)
 // with an anti-aliased mask, and the true lights as a count + "x y z" list.

@@ -23,20 +23,12 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/progress.h"
+#include "represent/robust_intensities.h"
 
 namespace photomat::app {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool IsImageFile(const fs::path& path) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (const char* known : {".png", ".tif", ".tiff", ".exr", ".jpg", ".jpeg", ".pgm", ".ppm"}) {
-    if (extension == known) return true;
-  }
-  return false;
-}
 
 bool IsMaskName(const fs::path& path) {
   std::string stem = path.stem().string();
@@ -76,7 +68,7 @@ struct ImageFolder {
 ImageFolder ListImageFolder(const fs::path& folder) {
   ImageFolder listing;
   for (const auto& entry : fs::directory_iterator(folder)) {
-    if (!entry.is_regular_file() || !IsImageFile(entry.path())) continue;
+    if (!entry.is_regular_file() || !IsReadableImageFileName(entry.path())) continue;
     if (IsMaskName(entry.path())) {
       if (listing.mask) {
         throw Error(folder, fmt::format("two masks ({} and {}); give one with --mask",
@@ -350,7 +342,7 @@ void AddIntensitiesCommand(CLI::App& calibrate) {
     SemiCalibratedOptions semi;
     TerminalProgressBar bar;
     semi.progress = &bar;
-    const SemiCalibratedResult result = EstimateLightIntensities(loaded.set, semi);
+    const SemiCalibratedResult result = EstimateLightIntensitiesRobust(loaded.set, semi);
     WriteLightIntensities(options->out, result.intensities);
     fmt::print("{} intensities ({} iterations) -> {}\n", result.intensities.size(),
                result.iterations, options->out.string());
@@ -504,7 +496,7 @@ void AddApplyCommand(CLI::App& calibrate) {
       set.set_intensities(ReadLightIntensities(options->intensities));
       steps.push_back({{"intensities", fs::absolute(options->intensities).generic_string()}});
     } else if (options->semi_calibrated) {
-      set.set_intensities(EstimateLightIntensities(set).intensities);
+      set.set_intensities(EstimateLightIntensitiesRobust(set).intensities);
       steps.push_back({{"intensities", "semi-calibrated"}});
     } else if (options->ignore_intensities) {
       set.set_intensities({});

@@ -3,10 +3,7 @@
 // device is tested in capture/capture_session_test.cc.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 
 #include "capture/capture_session.h"
@@ -17,24 +14,10 @@
 namespace photomat {
 namespace {
 
+using testing::RunPhotomat;
+using testing::RunResult;
+
 using ::testing::HasSubstr;
-
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
-  }
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 TEST(CaptureCommandTest, DryRunKilledMidwayResumesToTheSameSet) {
   testing::TempDir dir;

@@ -1,10 +1,6 @@
 // End-to-end tests of the photomat command line: each runs the built executable.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-
-#include <array>
-#include <cstdio>
 
 #include "capture/load_photometric_set.h"
 #include "core/image_io.h"
@@ -15,50 +11,41 @@
 namespace photomat {
 namespace {
 
+using testing::RunPhotomat;
+using testing::RunResult;
+
 using ::testing::HasSubstr;
 using testing::TempDir;
-
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 TEST(PhotomatCliTest, GenerateFitRelightEvaluate) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 4").exit_code,
-            0);
+  ASSERT_EQ(
+      RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 4").exit_code,
+      0);
   EXPECT_EQ(LoadPhotometricSet(capture).set.size(), 36);
 
   const RunResult fit = RunPhotomat("fit " + capture + " --method gradient,ptm,eigen6 --out " +
-                            (dir / "stacks").string());
+                                    (dir / "stacks").string());
   ASSERT_EQ(fit.exit_code, 0) << fit.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "stacks" / "stacks.json"));
   const LoadedStack ptm = LoadRepresentation(dir / "stacks" / "ptm.exr");
   EXPECT_EQ(ptm.representation.maps().channels(), 18);
 
-  const RunResult one = RunPhotomat("relight " + (dir / "stacks").string() +
-                            " --method gradient --light 60,120 --out " + (dir / "g.png").string());
+  const RunResult one =
+      RunPhotomat("relight " + (dir / "stacks").string() +
+                  " --method gradient --light 60,120 --out " + (dir / "g.png").string());
   ASSERT_EQ(one.exit_code, 0) << one.output;
   EXPECT_EQ(ReadImage(dir / "g.png").image.width(), 40);
 
-  const RunResult sweep = RunPhotomat("relight " + (dir / "stacks" / "eigen6.exr").string() +
-                              " --sweep 5,45 --format exr --out " + (dir / "sweep").string());
+  const RunResult sweep =
+      RunPhotomat("relight " + (dir / "stacks" / "eigen6.exr").string() +
+                  " --sweep 5,45 --format exr --out " + (dir / "sweep").string());
   ASSERT_EQ(sweep.exit_code, 0) << sweep.output;
   EXPECT_EQ(LoadPhotometricSet(dir / "sweep").set.size(), 5);
 
-  const RunResult evaluate = RunPhotomat("evaluate " + capture + " --methods 3i,gradient,eigen3 --json " +
-                                 (dir / "e.json").string());
+  const RunResult evaluate = RunPhotomat(
+      "evaluate " + capture + " --methods 3i,gradient,eigen3 --json " + (dir / "e.json").string());
   ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
   EXPECT_THAT(evaluate.output, HasSubstr("eta_reconstr."));
   const nlohmann::json json = ReadJsonFile(dir / "e.json");
@@ -116,9 +103,8 @@ TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
   const std::string capture = (dir / "capture").string();
   const std::string stacks = (dir / "stacks").string();
   ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 3").exit_code, 0);
-  ASSERT_EQ(RunPhotomat("fit " + capture + " --method eigen3,ptm,gradient --out " + stacks)
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      RunPhotomat("fit " + capture + " --method eigen3,ptm,gradient --out " + stacks).exit_code, 0);
   // Every stack of the fit folder, in photomat's method order, linear values.
   const RunResult all = RunPhotomat("export " + stacks + " --viewer " + (dir / "v1").string());
   ASSERT_EQ(all.exit_code, 0) << all.output;
@@ -140,8 +126,8 @@ TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
   EXPECT_EQ(v2["methods"][0]["values"], "srgb");
 
   // A photometric set: the --method fit (or every method's).
-  const RunResult set = RunPhotomat("export " + capture + " --method gradient --viewer " +
-                                    (dir / "v3").string());
+  const RunResult set =
+      RunPhotomat("export " + capture + " --method gradient --viewer " + (dir / "v3").string());
   ASSERT_EQ(set.exit_code, 0) << set.output;
   EXPECT_EQ(ReadJsonFile(dir / "v3" / "viewer.json")["methods"].size(), 1u);
 }
@@ -163,9 +149,9 @@ TEST(PhotomatCliTest, EvaluateWritesAReportOfTheChosenImages) {
                                     "--report " + (dir / "r2").string() + " --report-images 1,x");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_THAT(bad.output, HasSubstr("expected image indices"));
-  const RunResult outside = RunPhotomat("evaluate " + capture + " --methods gradient " +
-                                        "--no-prediction --report " + (dir / "r3").string() +
-                                        " --report-images 36");
+  const RunResult outside =
+      RunPhotomat("evaluate " + capture + " --methods gradient " + "--no-prediction --report " +
+                  (dir / "r3").string() + " --report-images 36");
   EXPECT_EQ(outside.exit_code, 1);
   EXPECT_THAT(outside.output, HasSubstr("image 36 is not in the set"));
   EXPECT_FALSE(std::filesystem::exists(dir / "r3"));

@@ -2,10 +2,7 @@
 // step: each runs the built executable.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <set>
 #include <vector>
 
@@ -19,25 +16,11 @@
 namespace photomat {
 namespace {
 
+using testing::RunPhotomat;
+using testing::RunResult;
+
 using ::testing::HasSubstr;
 using testing::TempDir;
-
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
-  }
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 // A fitted 40 x 40 capture: DIR/stacks holds gradient and ptm.
 void MakeStacks(const TempDir& dir) {

@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/markup.h"
 
 namespace photomat {
 namespace {
@@ -15,29 +16,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 // Plot geometry (SVG user units): the hemisphere's centre and the radius of slant 90.
 constexpr double kCentreX = 300.0, kCentreY = 330.0, kRadius = 250.0;
-
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 // Plot position of a light: radius proportional to slant (capped at the rim), y up.
 std::pair<double, double> PlotPoint(const LightDirection& light) {
@@ -114,7 +92,7 @@ std::string LightCalibrationReport::ToSvg() const {
       "viewBox=\"0 0 1000 {0:.0f}\" font-family=\"sans-serif\" font-size=\"12\">\n"
       "<rect width=\"1000\" height=\"{0:.0f}\" fill=\"white\"/>\n",
       height);
-  svg += fmt::format("<text x=\"20\" y=\"30\" font-size=\"18\">{}</text>\n", Escape(title));
+  svg += fmt::format("<text x=\"20\" y=\"30\" font-size=\"18\">{}</text>\n", EscapeMarkup(title));
   if (has_reference) {
     const Summary s = DifferenceSummary();
     svg += fmt::format(

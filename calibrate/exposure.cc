@@ -13,15 +13,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool IsImageFile(const fs::path& path) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  for (const char* known : {".png", ".tif", ".tiff", ".exr", ".jpg", ".jpeg", ".pgm", ".ppm"}) {
-    if (extension == known) return true;
-  }
-  return false;
-}
-
 bool Clipped(std::span<const float> pixel, double level) {
   return std::any_of(pixel.begin(), pixel.end(), [&](float v) { return v >= level; });
 }
@@ -73,7 +64,8 @@ Image ReadDarkFrame(const fs::path& path) {
   std::vector<fs::path> files;
   if (fs::is_directory(path)) {
     for (const auto& entry : fs::directory_iterator(path)) {
-      if (entry.is_regular_file() && IsImageFile(entry.path())) files.push_back(entry.path());
+      if (entry.is_regular_file() && IsReadableImageFileName(entry.path()))
+        files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
     if (files.empty()) throw Error(path, "no dark-frame images in the folder");

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <numeric>
 
@@ -220,10 +221,76 @@ TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
   RecordProperty("mean_difference_deg", std::to_string(stats.mean));
   RecordProperty("max_difference_deg", std::to_string(stats.max));
   std::printf("uw-psm chrome: mean %.3f, max %.3f degrees\n", stats.mean, stats.max);
-  // The target is 2 degrees; the shipped lights.txt itself disagrees with the images'
-  // highlights by 1 to 8 degrees (data README), and this calibration measures 3.09 mean, 8.55 max
-  // (per-light highlights checked by eye). The bound guards against regressions.
+  // The target is 2 degrees; measured 3.09 mean, 8.55 max. The shortfall is the file's,
+  // not this calibration's (README "Calibration"): every highlight definition (this weighted
+  // centroid, the centroid of the clipped pixels, sRGB or linear decoding) agrees to 0.15 px,
+  // while lights.txt puts the highlights 1.2 to 8.9 px away, nearly all to the left; the
+  // orthographic sphere that agrees best with the file (1.25 degrees) has a radius of 130 px where
+  // the outline (mask and visible rim) measures 119.5; a perspective camera does not close the gap
+  // (2.9 degrees at best); and the matte grey sphere under the same lights (next test) agrees
+  // with these lights, not with the file's. The bound guards against regressions.
   EXPECT_LT(stats.mean, 3.5);
+}
+
+// Light directions from a matte (Lambertian) sphere of known outline, independent of any
+// highlight: per image, the least-squares b in I = n.b over the lit, unclipped pixels (orthographic
+// normals from the circle; the rim and the shadow terminator left out).
+std::vector<LightDirection> LightsFromMatteSphere(const std::vector<Image>& images,
+                                                  const SphereCircle& sphere) {
+  std::vector<LightDirection> lights;
+  for (const Image& image : images) {
+    const float peak = *std::max_element(image.values().begin(), image.values().end());
+    Eigen::Matrix3d normal_sums = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d value_sums = Eigen::Vector3d::Zero();
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x < image.width(); ++x) {
+        const Eigen::Vector2d d =
+            (Eigen::Vector2d(x + 0.5, y + 0.5) - sphere.centre) / sphere.radius;
+        if (d.norm() > 0.95) continue;
+        const Eigen::Vector3d n(d.x(), -d.y(), std::sqrt(1.0 - d.squaredNorm()));
+        double value = 0.0;
+        for (float v : image.pixel(x, y)) value += v / static_cast<double>(image.channels());
+        if (value < 0.25 * peak || value > 0.98) continue;
+        normal_sums += n * n.transpose();
+        value_sums += value * n;
+      }
+    }
+    lights.push_back(LightDirection::FromVector(normal_sums.ldlt().solve(value_sums)));
+  }
+  return lights;
+}
+
+// uw-psm's grey sphere was photographed under the same 12 lights: its shading measures them
+// without any highlight. The chrome calibration agrees with it better than the shipped lights.txt
+// does (measured: 1.87 against 3.36 degrees mean), most of all for the lights where the file and
+// the chrome disagree. The grey images are read as linear (course assignments built on this data
+// say so; decoded as sRGB the matte fit is 6.6 degrees from the chrome, 8.7 from the file).
+TEST(MirrorSphereRealTest, UwChromeLightsAgreeWithTheMatteSphereBetterThanTheShippedFile) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+  ImageReadOptions linear;
+  linear.colour_space = ColourSpace::kLinear;
+  std::vector<Image> chrome, grey;
+  for (int i = 0; i < 12; ++i) {
+    chrome.push_back(ReadImage(folder / "chrome" / fmt::format("chrome.{}.png", i)).image);
+    grey.push_back(ReadImage(folder / "gray" / fmt::format("gray.{}.png", i), linear).image);
+  }
+  const Image chrome_mask = ReadImage(folder / "chrome" / "chrome.mask.png", linear).image;
+  const Image grey_mask = ReadImage(folder / "gray" / "gray.mask.png", linear).image;
+  const std::vector<LightDirection> from_chrome =
+      CalibrateLightsFromMirrorSphere(chrome, Names(12), chrome_mask, {}).lights;
+  const std::vector<LightDirection> from_grey =
+      LightsFromMatteSphere(grey, FitSphereToMask(grey_mask));
+  const std::vector<LightDirection> shipped = ReadLightList(folder / "lights.txt");
+  const AngleStats chrome_to_grey = CompareLights(from_chrome, from_grey);
+  const AngleStats file_to_grey = CompareLights(shipped, from_grey);
+  std::printf(
+      "uw-psm matte sphere: chrome lights %.3f mean (%.3f max), lights.txt %.3f mean "
+      "(%.3f max) degrees from it\n",
+      chrome_to_grey.mean, chrome_to_grey.max, file_to_grey.mean, file_to_grey.max);
+  RecordProperty("chrome_to_matte_deg", std::to_string(chrome_to_grey.mean));
+  RecordProperty("file_to_matte_deg", std::to_string(file_to_grey.mean));
+  EXPECT_LT(chrome_to_grey.mean, 2.0);
+  EXPECT_LT(chrome_to_grey.mean, 0.7 * file_to_grey.mean);
 }
 
 }  // namespace

@@ -1,11 +1,11 @@
 #include "calibrate/semi_calibrated.h"
 
 #include <fmt/format.h>
-#include <tbb/enumerable_thread_specific.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -17,8 +17,15 @@
 namespace photomat {
 namespace {
 
-// The Cauchy scale of the per-pixel weights, in units of the median pixel's residual share.
+// The Cauchy scale of RankWindowWeights' pixel weights, in units of the median pixel's residual
+// share.
 constexpr double kShareScale = 2.0;
+// Pixels per block of the null-space sums: each block is one rank update of the n x n sums, and
+// the blocks are added in a fixed order (the same intensities on any number of threads).
+constexpr Eigen::Index kPixelBlock = 128;
+// A pixel's weighted lights must span 3 directions: the smallest pivot of their weighted Gram
+// matrix at least this fraction of the largest.
+constexpr double kMinimumRelativePivot = 1e-3;
 
 // The eigenvector of the smallest eigenvalue, signed to a positive sum (NaN if the solver fails).
 Eigen::VectorXd SmallestPositiveEigenvector(const Eigen::MatrixXd& matrix) {
@@ -30,7 +37,154 @@ Eigen::VectorXd SmallestPositiveEigenvector(const Eigen::MatrixXd& matrix) {
   return v.sum() < 0.0 ? (-v).eval() : v;
 }
 
+Eigen::Matrix3Xd LightMatrix(const PhotometricSet& set) {
+  Eigen::Matrix3Xd l(3, set.size());
+  for (int i = 0; i < set.size(); ++i) l.col(i) = set.light(i).vector();
+  return l;
+}
+
+// The current intensities of a set as an images x channels matrix (1 where the set has none).
+Eigen::MatrixXd IntensityMatrix(const PhotometricSet& set) {
+  Eigen::MatrixXd e = Eigen::MatrixXd::Ones(set.size(), set.channels());
+  const auto& rows = set.intensities();
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    for (int c = 0; c < set.channels(); ++c) {
+      e(static_cast<Eigen::Index>(i), c) = rows[i].size() == 1 ? rows[i][0] : rows[i][c];
+    }
+  }
+  return e;
+}
+
+// The sampled pixels of every image as one-row images (see ObservationWeigher).
+PhotometricSet SampleSet(const PhotometricSet& set, const std::vector<std::size_t>& pixels) {
+  std::vector<Image> images;
+  images.reserve(set.size());
+  const int m = static_cast<int>(pixels.size());
+  for (int i = 0; i < set.size(); ++i) {
+    Image strip(m, 1, set.image(i).channel_names());
+    for (int k = 0; k < m; ++k) {
+      const auto from = set.image(i).pixel(pixels[k]);
+      std::copy(from.begin(), from.end(), strip.pixel(k, 0).begin());
+    }
+    images.push_back(std::move(strip));
+  }
+  return PhotometricSet(std::move(images), set.lights(), set.image_names(), set.source());
+}
+
+// Per channel, M_c = sum_p diag(I_p,c) P_p diag(I_p,c) with P_p the weighted projector
+// W - W L^T (L W L^T)^-1 L W of pixel p's weighted lights. With L W L^T = C C^T (Cholesky),
+// entry (a, b) of pixel p's term is w_a I_a^2 [a = b] - z_a.z_b with z_a = I_a C^-1 (w_a l_a):
+// a diagonal plus a rank-3 downdate, accumulated per block of pixels.
+std::vector<Eigen::MatrixXd> NullSpaceSums(const PhotometricSet& samples, const Eigen::Matrix3Xd& l,
+                                           const Eigen::MatrixXf& weights) {
+  const Eigen::Index n = samples.size(), m = samples.width();
+  const int channels = samples.channels();
+  using Sums = std::vector<Eigen::MatrixXd>;
+  const Sums zero(channels, Eigen::MatrixXd::Zero(n, n));
+  const Eigen::Index blocks = (m + kPixelBlock - 1) / kPixelBlock;
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<Eigen::Index>(0, blocks, 1), zero,
+      [&](const tbb::blocked_range<Eigen::Index>& range, Sums sums) {
+        Eigen::Matrix3Xd scaled(3, n);
+        for (Eigen::Index block = range.begin(); block < range.end(); ++block) {
+          const Eigen::Index first = block * kPixelBlock;
+          const Eigen::Index count = std::min(kPixelBlock, m - first);
+          std::vector<Eigen::MatrixXd> z(channels, Eigen::MatrixXd::Zero(n, 3 * count));
+          std::vector<Eigen::VectorXd> diagonal(channels, Eigen::VectorXd::Zero(n));
+          for (Eigen::Index k = 0; k < count; ++k) {
+            const Eigen::Index p = first + k;
+            Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
+            int used = 0;
+            for (Eigen::Index i = 0; i < n; ++i) {
+              const double w = weights(p, i);
+              scaled.col(i) = w * l.col(i);
+              if (w <= 0.0) continue;
+              gram.noalias() += scaled.col(i) * l.col(i).transpose();
+              ++used;
+            }
+            if (used < 4) continue;
+            const Eigen::LDLT<Eigen::Matrix3d> ldlt(gram);
+            const auto d = ldlt.vectorD();
+            if (ldlt.info() != Eigen::Success ||
+                !(d.minCoeff() >= kMinimumRelativePivot * d.maxCoeff())) {
+              continue;
+            }
+            const Eigen::LLT<Eigen::Matrix3d> llt(gram);
+            const Eigen::Matrix3Xd whitened = llt.matrixL().solve(scaled);
+            for (Eigen::Index i = 0; i < n; ++i) {
+              const double w = weights(p, i);
+              if (w <= 0.0) continue;
+              const auto value = samples.image(static_cast<int>(i)).pixel(static_cast<int>(p), 0);
+              for (int c = 0; c < channels; ++c) {
+                const double v = value[c];
+                diagonal[c][i] += w * v * v;
+                z[c].block<1, 3>(i, 3 * k) = v * whitened.col(i).transpose();
+              }
+            }
+          }
+          for (int c = 0; c < channels; ++c) {
+            sums[c].diagonal() += diagonal[c];
+            sums[c].selfadjointView<Eigen::Lower>().rankUpdate(z[c], -1.0);
+          }
+        }
+        return sums;
+      },
+      [](Sums a, const Sums& b) {
+        for (std::size_t c = 0; c < a.size(); ++c) a[c] += b[c];
+        return a;
+      });
+}
+
 }  // namespace
+
+Eigen::MatrixXf RankWindowWeights(const PhotometricSet& samples, double dark_fraction,
+                                  double bright_fraction) {
+  const int n = samples.size(), m = samples.width(), channels = samples.channels();
+  const Eigen::Matrix3Xd l = LightMatrix(samples);
+  const Eigen::MatrixXd e = IntensityMatrix(samples);
+  Eigen::MatrixXf weights = Eigen::MatrixXf::Zero(m, n);
+  std::vector<double> shares(m, -1.0);  // -1: the pixel takes no part
+  const int first = static_cast<int>(std::floor(dark_fraction * n));
+  const int last = n - static_cast<int>(std::floor(bright_fraction * n));
+  tbb::parallel_for(0, m, [&](int p) {
+    // The pixel's window: its observations ranked by channel sum over the current intensities.
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
+    for (int i = 0; i < n; ++i) {
+      const auto value = samples.image(i).pixel(p, 0);
+      for (int c = 0; c < channels; ++c) y[i] += value[c] / e(i, c);
+    }
+    std::vector<int> order(n);
+    for (int i = 0; i < n; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return y[a] < y[b]; });
+    if (last - first < 4) return;
+    Eigen::Matrix3Xd lw(3, last - first);
+    Eigen::VectorXd yw(last - first);
+    for (int j = first; j < last; ++j) {
+      lw.col(j - first) = l.col(order[j]);
+      yw[j - first] = y[order[j]];
+    }
+    const double energy = yw.squaredNorm();
+    if (!(energy > 0.0)) return;
+    // The share of the window's values its lights cannot explain.
+    const Eigen::Vector3d b = (lw * lw.transpose()).ldlt().solve(lw * yw);
+    shares[p] = (yw - lw.transpose() * b).squaredNorm() / energy;
+    for (int j = first; j < last; ++j) weights(p, order[j]) = 1.0f;
+  });
+  std::vector<double> valid;
+  for (double share : shares) {
+    if (share >= 0.0) valid.push_back(share);
+  }
+  if (valid.empty()) return weights;
+  std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+  const double scale = kShareScale * kShareScale * valid[valid.size() / 2];
+  for (int p = 0; p < m; ++p) {
+    if (shares[p] < 0.0) continue;
+    // Pixels with highlights or shadows left in their window weigh less.
+    const double w = scale > 0.0 ? 1.0 / (1.0 + shares[p] / scale) : 1.0;
+    weights.row(p) *= static_cast<float>(w);
+  }
+  return weights;
+}
 
 SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
                                               const SemiCalibratedOptions& options) {
@@ -40,8 +194,7 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
     set.Fail(
         fmt::format("semi-calibrated photometric stereo needs at least 4 images; {} given", n));
   }
-  Eigen::Matrix3Xd l(3, n);
-  for (int i = 0; i < n; ++i) l.col(i) = set.light(i).vector();
+  const Eigen::Matrix3Xd l = LightMatrix(set);
   const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(l);
   if (svd.singularValues()[2] < 0.02 * svd.singularValues()[0]) {
     set.Fail("semi-calibrated photometric stereo: the lights are coplanar");
@@ -53,110 +206,53 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
   for (std::size_t k = 0; k < all.size(); k += stride) pixels.push_back(all[k]);
   const auto m = static_cast<Eigen::Index>(pixels.size());
   if (m < 10) set.Fail(fmt::format("semi-calibrated: only {} pixels to estimate from", m));
+  PhotometricSet samples = SampleSet(set, pixels);
 
   Eigen::MatrixXd e = Eigen::MatrixXd::Ones(n, channels);
   SemiCalibratedResult result;
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   progress.Start("semi-calibrated", static_cast<std::size_t>(options.max_iterations));
-  using Matrices = std::vector<Eigen::MatrixXd>;
-  struct Accumulator {
-    Matrices sums;
-    std::vector<std::vector<double>> shares;  // per channel, per pixel
-  };
-  std::vector<double> median_share(channels, 0.0);
+  double smallest_change = std::numeric_limits<double>::infinity();
+  int stalled = 0;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    tbb::enumerable_thread_specific<Accumulator> accumulators([&] {
-      return Accumulator{Matrices(channels, Eigen::MatrixXd::Zero(n, n)),
-                         std::vector<std::vector<double>>(channels)};
-    });
-    tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index p) {
-      // The pixel's window: its observations ranked by channel sum over the current intensities.
-      std::vector<double> y(n, 0.0);
-      for (int i = 0; i < n; ++i) {
-        const auto pixel = set.image(i).pixel(pixels[p]);
-        for (int c = 0; c < channels; ++c) y[i] += pixel[c] / e(i, c);
-      }
-      std::vector<int> order(n);
-      for (int i = 0; i < n; ++i) order[i] = i;
-      std::sort(order.begin(), order.end(), [&](int a, int b) { return y[a] < y[b]; });
-      const int first = static_cast<int>(std::floor(options.dark_fraction * n));
-      const int last = n - static_cast<int>(std::floor(options.bright_fraction * n));
-      std::vector<int> window(order.begin() + first, order.begin() + last);
-      const auto k = static_cast<Eigen::Index>(window.size());
-      if (k < 4) return;
-      Eigen::Matrix3Xd lw(3, k);
-      for (Eigen::Index j = 0; j < k; ++j) lw.col(j) = l.col(window[j]);
-      const Eigen::Matrix3d gram = lw * lw.transpose();
-      const Eigen::LDLT<Eigen::Matrix3d> ldlt(gram);
-      if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() < 1e-3) return;
-      // The projector onto what the window's lights cannot explain.
-      const Eigen::MatrixXd projector =
-          Eigen::MatrixXd::Identity(k, k) - lw.transpose() * ldlt.solve(lw);
-      Accumulator& accumulator = accumulators.local();
-      for (int c = 0; c < channels; ++c) {
-        Eigen::VectorXd values(k);
-        for (Eigen::Index j = 0; j < k; ++j) {
-          values[j] = set.image(window[j]).pixel(pixels[p])[c];
-        }
-        // How far the pixel's window is from Lambertian under the current intensities: the share
-        // of its (intensity-corrected) values the lights cannot explain. Pixels with highlights
-        // or shadows left in their window weigh less (Cauchy weight on that share).
-        Eigen::VectorXd corrected(k);
-        for (Eigen::Index j = 0; j < k; ++j) corrected[j] = values[j] / e(window[j], c);
-        const double total_energy = corrected.squaredNorm();
-        if (!(total_energy > 0.0)) continue;
-        const double share = (projector * corrected).squaredNorm() / total_energy;
-        const double scale = kShareScale * kShareScale * median_share[c];
-        const double weight = scale > 0.0 ? 1.0 / (1.0 + share / scale) : 1.0;
-        accumulator.shares[c].push_back(share);
-        // w diag(v) P diag(v), scattered into the images' rows and columns (lower triangle;
-        // the matrix is symmetric).
-        Eigen::MatrixXd& sum = accumulator.sums[c];
-        for (Eigen::Index b = 0; b < k; ++b) {
-          const double vb = weight * values[b];
-          for (Eigen::Index a = 0; a < k; ++a) {
-            const int row = window[a], column = window[b];
-            if (row >= column) sum(row, column) += values[a] * projector(a, b) * vb;
-          }
-        }
-      }
-    });
-    Matrices total(channels, Eigen::MatrixXd::Zero(n, n));
-    std::vector<std::vector<double>> shares(channels);
-    for (const Accumulator& accumulator : accumulators) {
-      for (int c = 0; c < channels; ++c) {
-        total[c] += accumulator.sums[c].selfadjointView<Eigen::Lower>().toDenseMatrix();
-        shares[c].insert(shares[c].end(), accumulator.shares[c].begin(),
-                         accumulator.shares[c].end());
-      }
+    std::vector<std::vector<float>> rows(n, std::vector<float>(channels));
+    for (int i = 0; i < n; ++i) {
+      for (int c = 0; c < channels; ++c) rows[i][c] = static_cast<float>(e(i, c));
     }
-    for (int c = 0; c < channels; ++c) {
-      if (shares[c].empty()) continue;
-      std::nth_element(shares[c].begin(), shares[c].begin() + shares[c].size() / 2,
-                       shares[c].end());
-      median_share[c] = shares[c][shares[c].size() / 2];
+    samples.set_intensities(std::move(rows));
+    const Eigen::MatrixXf weights =
+        options.weigher
+            ? options.weigher(samples)
+            : RankWindowWeights(samples, options.dark_fraction, options.bright_fraction);
+    if (weights.rows() != m || weights.cols() != n || !weights.allFinite() ||
+        weights.minCoeff() < 0.0f) {
+      set.Fail(
+          fmt::format("semi-calibrated: the observation weights are {}x{} (want {}x{}, "
+                      "finite and not negative)",
+                      weights.rows(), weights.cols(), m, n));
     }
+    const std::vector<Eigen::MatrixXd> sums = NullSpaceSums(samples, l, weights);
     Eigen::MatrixXd next(n, channels);
     for (int c = 0; c < channels; ++c) {
+      const Eigen::MatrixXd total = sums[c].selfadjointView<Eigen::Lower>();
       // u = 1 / e spans the (near) null space of the sum: its smallest eigenvector. If that is
-      // not positive (an image rarely in any window attracts it), the same after scaling each
-      // image's row and column to a unit diagonal.
-      Eigen::VectorXd u = SmallestPositiveEigenvector(total[c]);
+      // not positive (an image with few weighted observations attracts it), the same after
+      // scaling each image's row and column to a unit diagonal.
+      Eigen::VectorXd u = SmallestPositiveEigenvector(total);
       if (!(u.minCoeff() > 0.0)) {
-        const Eigen::VectorXd diagonal = total[c].diagonal();
+        const Eigen::VectorXd diagonal = total.diagonal();
         for (int i = 0; i < n; ++i) {
           if (!(diagonal[i] > 0.0)) {
             set.Fail(
-                fmt::format("{}: semi-calibrated: no pixel's rank window holds this image "
-                            "(it is the darkest or brightest everywhere); lower "
-                            "dark_fraction or bright_fraction",
+                fmt::format("{}: semi-calibrated: no sampled observation of this image "
+                            "takes part (it is dark, clipped or an outlier everywhere)",
                             set.image_name(i)));
           }
         }
         const Eigen::VectorXd scale = diagonal.cwiseSqrt().cwiseInverse();
         u = scale.asDiagonal() *
-            SmallestPositiveEigenvector(scale.asDiagonal() * total[c] * scale.asDiagonal());
+            SmallestPositiveEigenvector(scale.asDiagonal() * total * scale.asDiagonal());
       }
       if (!(u.minCoeff() > 0.0)) {
         set.Fail(
@@ -172,6 +268,14 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
     result.iterations = iteration + 1;
     progress.Advance();
     if (result.last_change < options.tolerance) break;
+    // Re-weighing can settle into a cycle between nearly equal weight sets, where the change
+    // stops falling: stop once it has not reached a new low for `stall_iterations`.
+    if (result.last_change < smallest_change) {
+      smallest_change = result.last_change;
+      stalled = 0;
+    } else if (++stalled >= options.stall_iterations) {
+      break;
+    }
   }
   progress.Finish();
   result.intensities.assign(n, std::vector<float>(channels));

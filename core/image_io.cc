@@ -1,13 +1,18 @@
 #include "core/image_io.h"
 
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <fmt/format.h>
 #include <limits>
+#include <set>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -100,11 +105,11 @@ LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {
       throw Error(path, fmt::format("cannot decode image: {}", OiioError(input->geterror())));
     }
   };
-  if (!info.floating_point && (format.basetype == OIIO::TypeDesc::UINT8 ||
-                               format.basetype == OIIO::TypeDesc::UINT16)) {
+  if (!info.floating_point &&
+      (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::UINT16)) {
     const bool eight_bit = format.basetype == OIIO::TypeDesc::UINT8;
-    info.colour_space = options.colour_space.value_or(eight_bit ? ColourSpace::kSrgb
-                                                                : ColourSpace::kLinear);
+    info.colour_space =
+        options.colour_space.value_or(eight_bit ? ColourSpace::kSrgb : ColourSpace::kLinear);
     if (eight_bit) {
       std::vector<std::uint8_t> samples(pixels * spec.nchannels);
       read(OIIO::TypeDesc::UINT8, samples.data());
@@ -205,8 +210,8 @@ std::vector<float> PrepareForQuantising(const fs::path& path, const Image& image
 
 void WriteImage(const fs::path& path, const Image& image, const ImageWriteOptions& options) {
   if (image.empty()) throw Error(path, "cannot write an empty image");
-  const bool integer = options.sample_type == SampleType::kUint8 ||
-                       options.sample_type == SampleType::kUint16;
+  const bool integer =
+      options.sample_type == SampleType::kUint8 || options.sample_type == SampleType::kUint16;
   const std::vector<float> quantisable =
       integer ? PrepareForQuantising(path, image, options.encoding) : std::vector<float>{};
   const float* data = integer ? quantisable.data() : image.values().data();
@@ -223,8 +228,7 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     spec.alpha_channel = -1;
     spec.attribute("compression", "zip");
     if (integer) {
-      spec.attribute("oiio:ColorSpace",
-                     options.encoding == ColourSpace::kSrgb ? "sRGB" : "Linear");
+      spec.attribute("oiio:ColorSpace", options.encoding == ColourSpace::kSrgb ? "sRGB" : "Linear");
     }
     for (const auto& [name, value] : options.attributes) spec.attribute(name, value);
     if (!output->open(temp.string(), spec)) {
@@ -242,6 +246,35 @@ void WriteMask(const fs::path& path, const Mask& mask) {
   ImageWriteOptions options;
   options.sample_type = SampleType::kUint8;
   WriteImage(path, image, options);
+}
+
+namespace {
+
+// OpenImageIO's "extension_list": "tiff:tif,tiff;png:png;...". The "null" plugin's extension
+// names no image format.
+std::set<std::string> ReadableExtensions() {
+  std::string list;
+  OIIO::getattribute("extension_list", list);
+  std::set<std::string> extensions;
+  for (std::string_view format_entry : OIIO::Strutil::splitsv(list, ";")) {
+    const std::size_t colon = format_entry.find(':');
+    if (colon == std::string_view::npos || format_entry.substr(0, colon) == "null") continue;
+    for (std::string_view extension : OIIO::Strutil::splitsv(format_entry.substr(colon + 1), ",")) {
+      std::string dotted = ".";  // (not "." + ...: GCC 12 warns falsely, -Wrestrict)
+      dotted += OIIO::Strutil::lower(extension);
+      extensions.insert(std::move(dotted));
+    }
+  }
+  return extensions;
+}
+
+}  // namespace
+
+bool IsReadableImageFileName(const std::filesystem::path& path) {
+  // Parsed on every call (microseconds; no process-wide cache): folder scans call it per entry.
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ReadableExtensions().count(extension) > 0;
 }
 
 }  // namespace photomat

@@ -43,6 +43,11 @@ struct LoadedImage {
 // holds non-finite values.
 LoadedImage ReadImage(const std::filesystem::path& path, const ImageReadOptions& options = {});
 
+// Whether `path`'s extension (any case) names an image format the installed OpenImageIO reads
+// (PNG, TIFF, JPEG, EXR, PNM, camera RAW such as .dng/.cr2/.nef, ...): how photomat picks the
+// images out of a folder of frames. OpenImageIO's own list, so RAW and other plugins count.
+bool IsReadableImageFileName(const std::filesystem::path& path);
+
 // A mask image: a pixel is set where any channel is above half of full scale (thresholding the
 // anti-aliased masks of real data sets at 50 %).
 Mask ReadMask(const std::filesystem::path& path);

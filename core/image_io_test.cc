@@ -194,5 +194,16 @@ TEST(ImageIoTest, ReadsRealSixteenBitDiligentImage) {
   EXPECT_GT(loaded.info.saturated_pixels, 0u);  // the README: highlights reach 65535
 }
 
+TEST(ImageIoTest, ReadableImageFileNamesComeFromOpenImageIoPlugins) {
+  for (const char* name :
+       {"a.png", "b.TIF", "c.tiff", "d.exr", "e.JPG", "f.jpeg", "g.pgm", "dir/with space/h.Png"}) {
+    EXPECT_TRUE(IsReadableImageFileName(name)) << name;
+  }
+  for (const char* name :
+       {"lights.lp", "manifest.json", "notes.txt", "png", "a.png.bak", "x.null", "no_extension"}) {
+    EXPECT_FALSE(IsReadableImageFileName(name)) << name;
+  }
+}
+
 }  // namespace
 }  // namespace photomat

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/markup.h"
 #include "relight/display_image.h"
 #include "relight/output_folder.h"
 #include "represent/fit.h"
@@ -144,32 +145,6 @@ img.pixels { image-rendering: pixelated; min-width: 200px; max-width: 280px; hei
 
 }  // namespace
 
-std::string EscapeHtml(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::array<float, 3> HeatColour(double fraction) {
   const double f = std::clamp(std::isfinite(fraction) ? fraction : 1.0, 0.0, 1.0);
   const double position = f * (kHeatAnchors.size() - 1);
@@ -250,10 +225,10 @@ std::string BarChartSvg(const BarChart& chart) {
   std::string svg = fmt::format(
       "<svg class=\"{}\" viewBox=\"0 0 {} {}\" width=\"{}\" height=\"{}\" role=\"img\" "
       "aria-label=\"{}\"{}>\n",
-      EscapeHtml(chart.css_class), kWidth, kHeight, kWidth, kHeight, EscapeHtml(chart.title),
-      chart.method.empty() ? "" : fmt::format(" data-method=\"{}\"", EscapeHtml(chart.method)));
+      EscapeMarkup(chart.css_class), kWidth, kHeight, kWidth, kHeight, EscapeMarkup(chart.title),
+      chart.method.empty() ? "" : fmt::format(" data-method=\"{}\"", EscapeMarkup(chart.method)));
   svg += fmt::format("<text class=\"title\" x=\"{}\" y=\"20\">{}</text>\n", kLeft,
-                     EscapeHtml(chart.title));
+                     EscapeMarkup(chart.title));
   // Legend, right-aligned in the title row.
   double legend_x = kWidth - kRight;
   for (std::size_t s = chart.series.size(); s-- > 0;) {
@@ -262,7 +237,7 @@ std::string BarChartSvg(const BarChart& chart) {
         "<rect x=\"{:.1f}\" y=\"10\" width=\"12\" height=\"12\" fill=\"{}\"/>"
         "<text x=\"{:.1f}\" y=\"20\">{}</text>\n",
         legend_x, kSeriesColours[s % kSeriesColours.size()], legend_x + 16,
-        EscapeHtml(chart.series[s].name));
+        EscapeMarkup(chart.series[s].name));
   }
   // Axes and grid.
   for (double tick = 0.0; tick <= top + 1e-9 * top; tick += step) {
@@ -275,7 +250,7 @@ std::string BarChartSvg(const BarChart& chart) {
   svg += fmt::format(
       "<text x=\"14\" y=\"{:.1f}\" transform=\"rotate(-90 14 {:.1f})\" "
       "text-anchor=\"middle\">{}</text>\n",
-      kTop + plot_height / 2, kTop + plot_height / 2, EscapeHtml(chart.y_label));
+      kTop + plot_height / 2, kTop + plot_height / 2, EscapeMarkup(chart.y_label));
   svg +=
       fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2:.1f}\" y2=\"{2:.1f}\" stroke=\"#333\"/>\n",
                   kLeft, kWidth - kRight, kTop + plot_height);
@@ -295,13 +270,13 @@ std::string BarChartSvg(const BarChart& chart) {
           "<rect class=\"bar\" x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
           "fill=\"{}\" data-value=\"{}\"><title>{}, {}: {}</title></rect>\n",
           group_x + s * bar, y, std::max(bar - 0.5, 0.5), kTop + plot_height - y,
-          kSeriesColours[s % kSeriesColours.size()], v, EscapeHtml(chart.categories[c]),
-          EscapeHtml(chart.series[s].name), Number(v));
+          kSeriesColours[s % kSeriesColours.size()], v, EscapeMarkup(chart.categories[c]),
+          EscapeMarkup(chart.series[s].name), Number(v));
     }
     if (c % label_every == 0) {
       svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
                          kLeft + (c + 0.5) * group, kTop + plot_height + 16,
-                         EscapeHtml(chart.categories[c]));
+                         EscapeMarkup(chart.categories[c]));
     }
   }
   return svg + "</svg>";
@@ -367,7 +342,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
         "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
         "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
-        EscapeHtml(options.title), kStyle, EscapeHtml(set.source().string()), set.size(),
+        EscapeMarkup(options.title), kStyle, EscapeMarkup(set.source().string()), set.size(),
         set.width(), set.height(), set.channels(), mask.CountSet(),
         options.robust ? "robust" : "least-squares");
 
@@ -387,8 +362,8 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
     }
     html += "</tr></thead>\n<tbody>\n";
     for (const MethodEvaluation& e : evaluations) {
-      html += fmt::format("<tr><td>{}</td><td>{:.5f}</td><td>{}</td>", EscapeHtml(e.method.Name()),
-                          e.eta_reconstruction,
+      html += fmt::format("<tr><td>{}</td><td>{:.5f}</td><td>{}</td>",
+                          EscapeMarkup(e.method.Name()), e.eta_reconstruction,
                           e.eta_prediction ? fmt::format("{:.5f}", *e.eta_prediction) : "–");
       if (any_normals) {
         if (e.normals) {
@@ -462,7 +437,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
             "<figure><img class=\"pixels heat-map\" src=\"{}\" alt=\"normal error "
             "of {}\"><figcaption>{}: mean {:.2f}&#176;, median {:.2f}&#176;"
             "</figcaption></figure>\n",
-            file, EscapeHtml(name), EscapeHtml(name), evaluations[m].normals->mean_degrees,
+            file, EscapeMarkup(name), EscapeMarkup(name), evaluations[m].normals->mean_degrees,
             evaluations[m].normals->median_degrees);
       }
       html += "</div>\n";
@@ -477,7 +452,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "factor, the same for every image in it.</p>\n<table class=\"compare\">\n<tr><th>"
         "</th><th>captured</th>";
     for (const MethodEvaluation& e : evaluations)
-      html += "<th>" + EscapeHtml(e.method.Name()) + "</th>";
+      html += "<th>" + EscapeMarkup(e.method.Name()) + "</th>";
     html += "</tr>\n";
     progress.Start("report images", chosen.size());
     for (int index : chosen) {
@@ -488,8 +463,9 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
       html += fmt::format(
           "<tr class=\"relit-row\"><th>image {}<br>{}<br>{}{}</th><td><img "
           "class=\"pixels\" src=\"{}\" alt=\"captured image {}\"></td>",
-          index, EscapeHtml(fs::path(set.image_name(index)).filename().string()), LightText(light),
-          gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured, index);
+          index, EscapeMarkup(fs::path(set.image_name(index)).filename().string()),
+          LightText(light), gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured,
+          index);
       std::vector<std::string> predicted_cells;
       for (std::size_t m = 0; m < evaluations.size(); ++m) {
         const std::string name = evaluations[m].method.Name();
@@ -498,7 +474,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         html += fmt::format(
             "<td><img class=\"pixels\" src=\"{}\" alt=\"{} relit\"><br>"
             "e/&#963; {}</td>",
-            relit, EscapeHtml(name), Number(evaluations[m].reconstruction_per_image[index]));
+            relit, EscapeMarkup(name), Number(evaluations[m].reconstruction_per_image[index]));
         if (!prediction) continue;
         std::vector<int> others;
         for (int i = 0; i < set.size(); ++i) {
@@ -509,7 +485,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         WriteDisplayImage(temp / predicted, Scaled(fold.Relight(light), gain));
         predicted_cells.push_back(fmt::format(
             "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}</td>",
-            predicted, EscapeHtml(name), Number(evaluations[m].prediction_per_image[index])));
+            predicted, EscapeMarkup(name), Number(evaluations[m].prediction_per_image[index])));
       }
       html += "</tr>\n";
       if (prediction) {

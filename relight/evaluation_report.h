@@ -75,7 +75,4 @@ struct BarChart {
 };
 std::string BarChartSvg(const BarChart& chart);
 
-// Escapes &, <, >, " and ' for HTML text and attributes.
-std::string EscapeHtml(const std::string& text);
-
 }  // namespace photomat

@@ -1,5 +1,6 @@
 #include "represent/fit.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
@@ -7,7 +8,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fmt/format.h>
 #include <numeric>
 
 #include "core/error.h"
@@ -56,17 +56,6 @@ struct FitContext {
   std::size_t PixelIndex(Eigen::Index k) const { return observations.pixel_indices()[k]; }
 };
 
-std::vector<std::string> TermNames(const std::string& prefix, int terms,
-                                   const std::vector<std::string>& channel_names) {
-  std::vector<std::string> names;
-  for (int j = 0; j < terms; ++j) {
-    for (const std::string& channel : channel_names) {
-      names.push_back(fmt::format("{}{}.{}", prefix, j, channel));
-    }
-  }
-  return names;
-}
-
 // Copies a (C*m) x k coefficient matrix, channel-major rows, into per-pixel maps j * C + c.
 void StorePerChannelTerms(const FitContext& fit, const Eigen::MatrixXf& terms, Image& maps) {
   const int channels = fit.channels();
@@ -102,8 +91,8 @@ Representation FitGradient(const FitContext& fit) {
         lights.size(), s[0], s[1], s[2]));
   }
   // N_a = I L+ (eq. 4.4.8), one albedo-scaled normal per channel.
-  const Eigen::MatrixXf scaled = ParallelProduct(fit.observations.matrix(),
-                                                 fit.Scatter(PseudoInverseTransposed(svd)));
+  const Eigen::MatrixXf scaled =
+      ParallelProduct(fit.observations.matrix(), fit.Scatter(PseudoInverseTransposed(svd)));
   const int channels = fit.channels();
   const auto channel_names = OutputChannelNames(channels);
   std::vector<std::string> names = {"normal.X", "normal.Y", "normal.Z"};
@@ -144,7 +133,7 @@ Eigen::MatrixXd PtmPseudoInverse(const FitContext& fit) {
 Representation FitPtm(const FitContext& fit) {
   const Eigen::MatrixXf coefficients =
       ParallelProduct(fit.observations.matrix(), fit.Scatter(PtmPseudoInverse(fit)));
-  Image maps = fit.NewMaps(TermNames("ptm.a", 6, OutputChannelNames(fit.channels())));
+  Image maps = fit.NewMaps(CoefficientMapNames("ptm.a", 6, OutputChannelNames(fit.channels())));
   StorePerChannelTerms(fit, coefficients, maps);
   return Representation("ptm", std::move(maps), {6, true, false, fit.channels()},
                         std::make_shared<PtmLightBasis>());
@@ -158,7 +147,8 @@ Representation FitPtmLrgb(const FitContext& fit) {
   Eigen::MatrixXf luminance = fit.observations.Channel(0);
   for (int c = 1; c < channels; ++c) luminance += fit.observations.Channel(c);
   luminance /= static_cast<float>(channels);
-  const Eigen::MatrixXf coefficients = ParallelProduct(luminance, fit.Scatter(PtmPseudoInverse(fit)));
+  const Eigen::MatrixXf coefficients =
+      ParallelProduct(luminance, fit.Scatter(PtmPseudoInverse(fit)));
   const Eigen::MatrixXf terms = PtmTerms(fit.lights).cast<float>();
   Eigen::VectorXf in_fit = Eigen::VectorXf::Zero(fit.observations.images());
   for (int i : fit.selected) in_fit[i] = 1.0f;
@@ -196,7 +186,7 @@ Representation FitHsh(const FitContext& fit, int terms) {
   }
   const Eigen::MatrixXf coefficients =
       ParallelProduct(fit.observations.matrix(), fit.Scatter(PseudoInverseTransposed(svd)));
-  Image maps = fit.NewMaps(TermNames("hsh.h", terms, OutputChannelNames(fit.channels())));
+  Image maps = fit.NewMaps(CoefficientMapNames("hsh.h", terms, OutputChannelNames(fit.channels())));
   StorePerChannelTerms(fit, coefficients, maps);
   return Representation(fmt::format("hsh{}", terms), std::move(maps),
                         {terms, true, false, fit.channels()},
@@ -218,7 +208,7 @@ Representation FitThreeImage(const FitContext& fit) {
                     {"slant_deg", light.SlantDegrees()},
                     {"tilt_deg", light.TiltDegrees()}});
   }
-  Image maps = fit.NewMaps(TermNames("image", 3, OutputChannelNames(channels)));
+  Image maps = fit.NewMaps(CoefficientMapNames("image", 3, OutputChannelNames(channels)));
   StorePerChannelTerms(fit, images, maps);
   return Representation("3i", std::move(maps), {3, true, false, channels},
                         std::make_shared<LinearLightBasis>(inverse), {{"images", used}});
@@ -252,7 +242,7 @@ Representation FitEigen(const FitContext& fit, int k) {
       v.col(j) *= -1.0;
     }
   }
-  Image maps = fit.NewMaps(TermNames("eigen.", k, OutputChannelNames(fit.channels())));
+  Image maps = fit.NewMaps(CoefficientMapNames("eigen.", k, OutputChannelNames(fit.channels())));
   StorePerChannelTerms(fit, bases, maps);
   const double total = singular.squaredNorm();
   nlohmann::json cumulative = nlohmann::json::array();

@@ -1,9 +1,9 @@
 #include "represent/representation.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <fmt/format.h>
 
 #include "core/error.h"
 
@@ -21,6 +21,17 @@ std::vector<std::string> OutputChannelNames(int channels) {
   if (channels == 3) return {"R", "G", "B"};
   std::vector<std::string> names;
   for (int c = 0; c < channels; ++c) names.push_back(fmt::format("C{}", c));
+  return names;
+}
+
+std::vector<std::string> CoefficientMapNames(const std::string& prefix, int terms,
+                                             const std::vector<std::string>& channel_names) {
+  std::vector<std::string> names;
+  for (int j = 0; j < terms; ++j) {
+    for (const std::string& channel : channel_names) {
+      names.push_back(fmt::format("{}{}.{}", prefix, j, channel));
+    }
+  }
   return names;
 }
 

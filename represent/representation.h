@@ -24,10 +24,10 @@ namespace photomat {
 // (Gradient's albedo, LRGB's chroma) are optional (gain = 1 without). Map order: basis maps
 // j-major (j * B + b, B = C or 1), then the C gain maps.
 struct MapLayout {
-  int basis_size = 0;              // k
-  bool basis_per_channel = true;   // B_j,o per output channel, or one B_j shared
-  bool has_gain = false;           // C gain maps follow the basis maps
-  int output_channels = 0;         // C
+  int basis_size = 0;             // k
+  bool basis_per_channel = true;  // B_j,o per output channel, or one B_j shared
+  bool has_gain = false;          // C gain maps follow the basis maps
+  int output_channels = 0;        // C
 
   int BasisMapsPerTerm() const { return basis_per_channel ? output_channels : 1; }
   int MapCount() const {
@@ -82,6 +82,11 @@ class Representation {
 
 // Names of C output channels: "Y" for 1, "R","G","B" for 3, "C0".. otherwise.
 std::vector<std::string> OutputChannelNames(int channels);
+
+// Names of per-channel coefficient maps, term-major: "<prefix><j>.<channel>" for j < terms (e.g.
+// "ptm.a0.R", "ptm.a0.G", ...), the order the fitters store and the map stacks name layers by.
+std::vector<std::string> CoefficientMapNames(const std::string& prefix, int terms,
+                                             const std::vector<std::string>& channel_names);
 
 // Unit normals (3 channels "normal.X/Y/Z") where the method defines them: any representation whose
 // light basis is linear in l (Gradient, 3I: the albedo-scaled normal is sum_j A_j B_j,o, summed

@@ -181,17 +181,6 @@ class PixelSolver {
   std::vector<double> residuals_;
 };
 
-std::vector<std::string> TermNames(const std::string& prefix, int terms,
-                                   const std::vector<std::string>& channel_names) {
-  std::vector<std::string> names;
-  for (int j = 0; j < terms; ++j) {
-    for (const std::string& channel : channel_names) {
-      names.push_back(fmt::format("{}{}.{}", prefix, j, channel));
-    }
-  }
-  return names;
-}
-
 // A^T A over the rows of a tall float matrix, in double (blocks of float products).
 Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix) {
   constexpr Eigen::Index kRowBlock = 4096;
@@ -469,7 +458,7 @@ Representation RobustFit::FitBasisTerms(std::shared_ptr<const LightBasis> basis,
     for (int j = 0; j < size; ++j) names.push_back(fmt::format("{}{}", prefix, j));
     for (const auto& c : channel_names) names.push_back("rgb." + c);
   } else {
-    names = TermNames(prefix, size, channel_names);
+    names = CoefficientMapNames(prefix, size, channel_names);
   }
   Image maps(observations_.width(), observations_.height(), names);
   const Eigen::MatrixXf& matrix = observations_.matrix();
@@ -584,7 +573,7 @@ Representation RobustFit::FitEigen(int k) const {
     }
   }
   Image maps(observations_.width(), observations_.height(),
-             TermNames("eigen.", k, OutputChannelNames(channels)));
+             CoefficientMapNames("eigen.", k, OutputChannelNames(channels)));
   tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index p) {
     const auto pixel = maps.pixel(observations_.pixel_indices()[p]);
     for (int j = 0; j < k; ++j) {

@@ -4,7 +4,9 @@
 #include <tbb/global_control.h>
 
 #include <map>
+#include <ostream>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "capture/synthetic_capture.h"
@@ -78,7 +80,10 @@ struct EqualityCase {
   bool tileable;
   bool coherence;
   int stride;
+  const char* name;  // test name suffix (see overlap_search_test.cc)
 };
+
+void PrintTo(const EqualityCase& test, std::ostream* out) { *out << test.name; }
 
 class QuiltSearchTest : public ::testing::TestWithParam<EqualityCase> {};
 
@@ -104,11 +109,15 @@ TEST_P(QuiltSearchTest, FastSearchChoosesTheBruteForceBlocks) {
   EXPECT_EQ(fast, brute);  // cuts included
 }
 
-INSTANTIATE_TEST_SUITE_P(Modes, QuiltSearchTest,
-                         ::testing::Values(EqualityCase{ErrorMetric::kSsd, false, true, 1},
-                                           EqualityCase{ErrorMetric::kSsd, true, false, 1},
-                                           EqualityCase{ErrorMetric::kSad, false, false, 1},
-                                           EqualityCase{ErrorMetric::kSad, true, true, 2}));
+INSTANTIATE_TEST_SUITE_P(
+    Modes, QuiltSearchTest,
+    ::testing::Values(EqualityCase{ErrorMetric::kSsd, false, true, 1, "SsdCoherence"},
+                      EqualityCase{ErrorMetric::kSsd, true, false, 1, "SsdTileable"},
+                      EqualityCase{ErrorMetric::kSad, false, false, 1, "Sad"},
+                      EqualityCase{ErrorMetric::kSad, true, true, 2, "SadTileableStride2"}),
+    [](const ::testing::TestParamInfo<EqualityCase>& case_info) {
+      return std::string(case_info.param.name);
+    });
 
 TEST(ImageQuiltingTest, SameSeedSameOutputOnAnyNumberOfThreads) {
   const Image sample = MaterialMaps(SurfacePattern::kBricks, 48);

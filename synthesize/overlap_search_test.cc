@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <ostream>
+#include <string>
+
 #include "core/error.h"
 #include "core/random.h"
 
@@ -73,7 +76,11 @@ struct SearchCase {
   double tolerance;
   double floor;
   bool periodic;
+  const char* name;  // the test's name suffix (gtest names value-parameterised cases by index or
+                     // by the parameter's bytes otherwise, which include padding)
 };
+
+void PrintTo(const SearchCase& test, std::ostream* out) { *out << test.name; }
 
 class FastSearchTest : public ::testing::TestWithParam<SearchCase> {};
 
@@ -108,15 +115,18 @@ TEST_P(FastSearchTest, QualifiesExactlyTheBruteForceCandidates) {
 INSTANTIATE_TEST_SUITE_P(
     Shapes, FastSearchTest,
     ::testing::Values(
-        SearchCase{ErrorMetric::kSsd, 1, {8, 2, 0, 0, 0}, 0.05, 0.1, 0.0, false},
-        SearchCase{ErrorMetric::kSsd, 1, {8, 2, 2, 0, 0}, 0.05, 0.1, 0.0, false},
-        SearchCase{ErrorMetric::kSsd, 3, {9, 3, 2, 2, 1}, 0.2, 0.0, 0.0, false},
-        SearchCase{ErrorMetric::kSsd, 1, {8, 2, 2, 0, 0}, 0.0, 0.1, 0.0, true},  // exact ties
-        SearchCase{ErrorMetric::kSsd, 1, {8, 0, 3, 0, 0}, 0.0, 0.1, 2.0, true},  // floor
-        SearchCase{ErrorMetric::kSad, 1, {8, 2, 2, 0, 0}, 0.05, 0.1, 0.0, false},
-        SearchCase{ErrorMetric::kSad, 2, {7, 2, 1, 1, 2}, 0.1, 0.5, 0.0, false},
-        SearchCase{ErrorMetric::kSad, 1, {8, 2, 2, 0, 0}, 0.0, 0.1, 0.0, true},
-        SearchCase{ErrorMetric::kSad, 1, {8, 2, 0, 0, 0}, 0.0, 0.1, 3.0, true}));
+        SearchCase{ErrorMetric::kSsd, 1, {8, 2, 0, 0, 0}, 0.05, 0.1, 0.0, false, "SsdLeft"},
+        SearchCase{ErrorMetric::kSsd, 1, {8, 2, 2, 0, 0}, 0.05, 0.1, 0.0, false, "SsdLeftTop"},
+        SearchCase{ErrorMetric::kSsd, 3, {9, 3, 2, 2, 1}, 0.2, 0.0, 0.0, false, "SsdStride3"},
+        SearchCase{ErrorMetric::kSsd, 1, {8, 2, 2, 0, 0}, 0.0, 0.1, 0.0, true, "SsdExactTies"},
+        SearchCase{ErrorMetric::kSsd, 1, {8, 0, 3, 0, 0}, 0.0, 0.1, 2.0, true, "SsdFloor"},
+        SearchCase{ErrorMetric::kSad, 1, {8, 2, 2, 0, 0}, 0.05, 0.1, 0.0, false, "SadLeftTop"},
+        SearchCase{ErrorMetric::kSad, 2, {7, 2, 1, 1, 2}, 0.1, 0.5, 0.0, false, "SadStride2"},
+        SearchCase{ErrorMetric::kSad, 1, {8, 2, 2, 0, 0}, 0.0, 0.1, 0.0, true, "SadExactTies"},
+        SearchCase{ErrorMetric::kSad, 1, {8, 2, 0, 0, 0}, 0.0, 0.1, 3.0, true, "SadFloor"}),
+    [](const ::testing::TestParamInfo<SearchCase>& case_info) {
+      return std::string(case_info.param.name);
+    });
 
 TEST(OverlapSearchTest, FindsACopiedBlockWithZeroError) {
   const Image maps = RandomMaps(30, 30, 3, 4);

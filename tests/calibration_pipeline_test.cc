@@ -16,6 +16,7 @@
 #include "represent/evaluation.h"
 #include "represent/fit.h"
 #include "represent/robust_fit.h"
+#include "represent/robust_intensities.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {
@@ -64,11 +65,12 @@ TEST(NearLightPipelineTest, FlatFieldCutsTheGradientNormalErrorFiveTimes) {
 }
 
 // DiLiGenT cat with light_intensities.txt ignored: the intensities estimated jointly with the
-// normals give a least-squares normal error within 1 degree of the calibrated one. (The normals
-// themselves differ from the calibrated ones by about 2.6 degrees mean: the remaining intensity
-// error is a smooth function of the light direction, the near-ambiguity of semi-calibrated
-// photometric stereo for lights within a cone, which the cat's non-Lambertian shading pulls on.)
-TEST(SemiCalibratedDiligentTest, CatNormalErrorWithinOneDegreeOfTheCalibratedOne) {
+// normals, weighted by the robust fit's outlier weights (represent/robust_intensities.h), give
+// least-squares normals within 1 degree mean of the calibrated ones (the target). The
+// rank-window weights alone leave 2.5 degrees: the cat's shadows and broad specular lobes pull on
+// the intensity error that is a smooth function of the light direction, the near-ambiguity of
+// semi-calibrated photometric stereo for lights within a cone.
+TEST(SemiCalibratedDiligentTest, CatNormalsWithinOneDegreeOfTheCalibratedOnes) {
   PHOTOMAT_TEST_DATA_OR_SKIP(folder, "diligent/cat");
   LoadOptions raw;
   raw.apply_intensities = false;
@@ -77,7 +79,7 @@ TEST(SemiCalibratedDiligentTest, CatNormalErrorWithinOneDegreeOfTheCalibratedOne
   PhotometricSet calibrated = loaded.set;
   calibrated.ApplyIntensities();
 
-  const SemiCalibratedResult estimate = EstimateLightIntensities(loaded.set);
+  const SemiCalibratedResult estimate = EstimateLightIntensitiesRobust(loaded.set);
   PhotometricSet semi = loaded.set;
   semi.set_intensities(estimate.intensities);
   semi.ApplyIntensities();
@@ -106,8 +108,8 @@ TEST(SemiCalibratedDiligentTest, CatNormalErrorWithinOneDegreeOfTheCalibratedOne
   RecordProperty("semi_calibrated_error_deg", std::to_string(semi_error));
   RecordProperty("calibrated_error_deg", std::to_string(calibrated_error));
   RecordProperty("normal_difference_deg", std::to_string(between.mean_degrees));
-  EXPECT_LT(std::abs(semi_error - calibrated_error), 1.0);
-  EXPECT_LT(between.mean_degrees, 3.0);
+  EXPECT_LT(std::abs(semi_error - calibrated_error), 0.2);
+  EXPECT_LT(between.mean_degrees, 1.0);
   EXPECT_LT(worst, 0.1);
 }
 

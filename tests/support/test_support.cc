@@ -1,12 +1,16 @@
 #include "tests/support/test_support.h"
 
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
-#include <csignal>
-
+#include <array>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 
 namespace photomat::testing {
@@ -46,6 +50,22 @@ void LimitFileSize(std::size_t bytes) {
 std::filesystem::path PhotomatExecutable() {
   const char* dir = std::getenv("PHOTOMAT_BINARY_DIR");
   return std::filesystem::path(dir ? dir : ".") / "bin" / "photomat";
+}
+
+RunResult RunPhotomat(const std::string& arguments) {
+  const std::string command = PhotomatExecutable().string() + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) {
+    ADD_FAILURE() << "cannot start `" << command << "`: " << std::strerror(errno);
+    return {-1, ""};
+  }
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
+    output.append(buffer.data(), n);
+  }
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
 
 }  // namespace photomat::testing

@@ -15,14 +15,14 @@ constexpr const char* kTestDataVariable = "PHOTOMAT_TEST_DATA";
 std::optional<std::filesystem::path> TestDataDir();
 
 // Resolves `relative` under the data folder, or skips/fails the current test as described above.
-#define PHOTOMAT_TEST_DATA_OR_SKIP(var, relative)                                               \
-  const auto var##_root = ::photomat::testing::TestDataDir();                                    \
-  if (!var##_root) {                                                                             \
-    GTEST_SKIP() << ::photomat::testing::kTestDataVariable                                       \
-                 << " is not set: this test needs the real datasets (shared/data)";               \
-  }                                                                                              \
-  const std::filesystem::path var = *var##_root / (relative);                                    \
-  ASSERT_TRUE(std::filesystem::exists(var))                                                      \
+#define PHOTOMAT_TEST_DATA_OR_SKIP(var, relative)                                   \
+  const auto var##_root = ::photomat::testing::TestDataDir();                       \
+  if (!var##_root) {                                                                \
+    GTEST_SKIP() << ::photomat::testing::kTestDataVariable                          \
+                 << " is not set: this test needs the real datasets (shared/data)"; \
+  }                                                                                 \
+  const std::filesystem::path var = *var##_root / (relative);                       \
+  ASSERT_TRUE(std::filesystem::exists(var))                                         \
       << var << " is missing but " << ::photomat::testing::kTestDataVariable << " is set"
 
 // A fresh folder under the system temp folder, removed with its contents on destruction.
@@ -49,5 +49,13 @@ void LimitFileSize(std::size_t bytes);
 
 // The built photomat executable (for command-line tests).
 std::filesystem::path PhotomatExecutable();
+
+struct RunResult {
+  int exit_code;       // -1 when the process did not exit normally (e.g. killed by a signal)
+  std::string output;  // stdout and stderr, interleaved as written
+};
+// Runs the built photomat with `arguments` (passed through the shell, so quote paths with
+// spaces) and collects what it prints.
+RunResult RunPhotomat(const std::string& arguments);
 
 }  // namespace photomat::testing
