@@ -1,11 +1,8 @@
 // End-to-end tests of `photomat rd` (runs the built binary).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include "core/image_io.h"
@@ -18,22 +15,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
-  }
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using testing::RunPhotomat;
+using testing::RunResult;
 
 TEST(RdCommandTest, GridWritesATileableRelightableMapStack) {
   testing::TempDir dir;
