@@ -1,10 +1,8 @@
 // End-to-end tests of `photomat rd` (runs the built binary).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
+#include <cmath>
 #include <string>
 
 #include "core/image_io.h"
@@ -17,22 +15,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
-  }
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using testing::RunPhotomat;
+using testing::RunResult;
 
 TEST(RdCommandTest, GridWritesATileableRelightableMapStack) {
   testing::TempDir dir;
@@ -65,6 +49,34 @@ TEST(RdCommandTest, MeshWritesColouredMeshesPreviewsAndFields) {
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh" / "preview_front.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh" / "fields.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "mesh" / "history.csv"));
+}
+
+// --noise then --smooth-steps: the coupled loop smooths the sphere it grows the pattern on (the
+// written mesh is rounder than the noisy one written without smoothing, same seed).
+TEST(RdCommandTest, SmoothStepsDenoiseTheMeshTheyGrowOn) {
+  testing::TempDir dir;
+  const std::string common =
+      "rd --mesh sphere:1:3 --size 40 --model turk --steps 10 --noise 0.2 "
+      "--preview-size 32 --out ";
+  const RunResult noisy = RunPhotomat(common + (dir / "noisy").string());
+  ASSERT_EQ(noisy.exit_code, 0) << noisy.output;
+  const RunResult smoothed =
+      RunPhotomat(common + (dir / "smoothed").string() + " --smooth-steps 10");
+  ASSERT_EQ(smoothed.exit_code, 0) << smoothed.output;
+  auto radius_spread = [](const TriangleMesh& mesh) {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (const auto& p : mesh.positions) centre += p / mesh.vertex_count();
+    double sum = 0.0, sum2 = 0.0;
+    for (const auto& p : mesh.positions) {
+      sum += (p - centre).norm();
+      sum2 += (p - centre).squaredNorm();
+    }
+    const double n = mesh.vertex_count();
+    return std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  };
+  const double before = radius_spread(ReadMesh(dir / "noisy" / "pattern.ply"));
+  const double after = radius_spread(ReadMesh(dir / "smoothed" / "pattern.ply"));
+  EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
 }
 
 TEST(RdCommandTest, BadArgumentsAreOneLineErrors) {

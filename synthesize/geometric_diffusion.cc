@@ -4,7 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -77,6 +79,76 @@ double EdgeStopping(double curvature, double lambda) {
   return 1.0 / (1.0 + excess * excess);
 }
 
+std::vector<Eigen::Vector3d> FilterFaceNormals(const TriangleMesh& mesh,
+                                               const NormalFilterOptions& options) {
+  if (options.iterations < 0 || !(options.spatial_factor > 0.0) || !(options.range_sigma >= 0.02) ||
+      !(options.noise_factor >= 0.0)) {
+    throw Error(
+        "normal filter: iterations and the noise factor must not be negative, the spatial "
+        "sigma positive and the range sigma at least 0.02");
+  }
+  const int faces = mesh.triangle_count();
+  std::vector<Eigen::Vector3d> normals = FaceNormals(mesh);
+  std::vector<Eigen::Vector3d> centroids(faces);
+  std::vector<double> areas(faces);
+  std::vector<std::vector<int>> vertex_faces(mesh.vertex_count());
+  for (int f = 0; f < faces; ++f) {
+    const auto& t = mesh.triangles[f];
+    centroids[f] = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.0;
+    areas[f] = TriangleArea(mesh, f);
+    for (int v : t) vertex_faces[v].push_back(f);
+  }
+  // Neighbourhood: the faces sharing at least a vertex (the face itself included).
+  std::vector<std::vector<int>> neighbourhood(faces);
+  tbb::parallel_for(0, faces, [&](int f) {
+    auto& near = neighbourhood[f];
+    for (int v : mesh.triangles[f])
+      near.insert(near.end(), vertex_faces[v].begin(), vertex_faces[v].end());
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+  });
+  const auto adjacency = EdgeFaceAdjacency(mesh);
+  double spacing = 0.0;
+  int pairs = 0;
+  for (const auto& edge : adjacency) {
+    if (edge.faces[1] < 0) continue;
+    spacing += (centroids[edge.faces[0]] - centroids[edge.faces[1]]).norm();
+    ++pairs;
+  }
+  if (pairs == 0 || !(spacing > 0.0)) return normals;  // no two faces share an edge
+  const double sigma_s = options.spatial_factor * spacing / pairs;
+  const double spatial = 1.0 / (2.0 * sigma_s * sigma_s);
+  double sigma_r = options.range_sigma;
+  if (options.noise_factor > 0.0) {
+    std::vector<double> differences;
+    for (const auto& edge : adjacency) {
+      if (edge.faces[1] >= 0) {
+        differences.push_back((normals[edge.faces[0]] - normals[edge.faces[1]]).norm());
+      }
+    }
+    const auto middle = differences.begin() + differences.size() / 2;
+    std::nth_element(differences.begin(), middle, differences.end());
+    constexpr double kSmallestRangeSigma = 0.02;  // about 1 degree
+    sigma_r = std::clamp(options.noise_factor * *middle, kSmallestRangeSigma, sigma_r);
+  }
+  const double range = 1.0 / (2.0 * sigma_r * sigma_r);
+  std::vector<Eigen::Vector3d> next(faces);
+  for (int pass = 0; pass < options.iterations; ++pass) {
+    tbb::parallel_for(0, faces, [&](int f) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int g : neighbourhood[f]) {
+        const double weight =
+            areas[g] * std::exp(-spatial * (centroids[f] - centroids[g]).squaredNorm() -
+                                range * (normals[f] - normals[g]).squaredNorm());
+        sum += weight * normals[g];
+      }
+      next[f] = sum.norm() > 0.0 ? Eigen::Vector3d(sum.normalized()) : normals[f];
+    });
+    normals.swap(next);
+  }
+  return normals;
+}
+
 namespace {
 
 // Per-element diffusion tensors D from the vertex curvature frames.
@@ -130,10 +202,124 @@ std::vector<Eigen::Matrix3d> DiffusionTensors(const TriangleMesh& mesh,
   return tensors;
 }
 
+// Per triangle: the direction across the feature d1 and along it d2 (in the triangle's plane),
+// their edge-stopping weights, and the filtered normal n.
+struct ElementFrame {
+  Eigen::Vector3d across, along, normal;
+  double g_across = 1.0, g_along = 1.0;
+};
+
+std::vector<ElementFrame> FilteredNormalFrames(const TriangleMesh& mesh,
+                                               const GeometricDiffusionOptions& options) {
+  const int elements = mesh.triangle_count();
+  const auto filtered = FilterFaceNormals(mesh, options.normal_filter);
+  const auto face_normals = FaceNormals(mesh);
+  std::vector<Eigen::Vector3d> vertex_normals(mesh.vertex_count(), Eigen::Vector3d::Zero());
+  for (int e = 0; e < elements; ++e) {
+    const double area = TriangleArea(mesh, e);
+    for (int v : mesh.triangles[e]) vertex_normals[v] += area * filtered[e];
+  }
+  for (auto& n : vertex_normals) {
+    if (n.norm() > 0.0) n.normalize();
+  }
+  const double lambda = options.crease_curvature / MeanEdgeLength(mesh);
+  std::vector<ElementFrame> frames(elements);
+  tbb::parallel_for(0, elements, [&](int e) {
+    const auto& t = mesh.triangles[e];
+    const Eigen::Vector3d& n = face_normals[e];
+    const Eigen::Vector3d u = n.unitOrthogonal();
+    const Eigen::Vector3d w = n.cross(u);
+    // Shape operator S (symmetric 2 x 2 in the basis u, w) fitted by least squares to the change
+    // of the filtered vertex normals along the three edges: dn = S de.
+    Eigen::Matrix<double, 6, 3> lhs;
+    Eigen::Matrix<double, 6, 1> rhs;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d de = mesh.positions[t[(k + 1) % 3]] - mesh.positions[t[k]];
+      const Eigen::Vector3d dn = vertex_normals[t[(k + 1) % 3]] - vertex_normals[t[k]];
+      lhs.row(2 * k) << de.dot(u), de.dot(w), 0.0;
+      lhs.row(2 * k + 1) << 0.0, de.dot(u), de.dot(w);
+      rhs(2 * k) = dn.dot(u);
+      rhs(2 * k + 1) = dn.dot(w);
+    }
+    const Eigen::Vector3d form = lhs.colPivHouseholderQr().solve(rhs);
+    Eigen::Matrix2d shape;
+    shape << form[0], form[1], form[1], form[2];
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(shape);
+    const int first = std::abs(eigen.eigenvalues()[1]) >= std::abs(eigen.eigenvalues()[0]) ? 1 : 0;
+    const Eigen::Vector2d c = eigen.eigenvectors().col(first);
+    ElementFrame& frame = frames[e];
+    frame.across = (c.x() * u + c.y() * w).normalized();
+    frame.along = n.cross(frame.across);
+    frame.g_across = options.alpha * EdgeStopping(eigen.eigenvalues()[first], lambda);
+    frame.g_along = options.beta * EdgeStopping(eigen.eigenvalues()[1 - first], lambda);
+    frame.normal = filtered[e];
+  });
+  return frames;
+}
+
+// One step of the default method: (M + tau K) x^{n+1} = M x^n on the 3 n coordinates together,
+// K_(ia)(jb) = sum over elements of area sum_k (grad phi_i . d_k)(grad phi_j . d_k) C_k(a, b),
+// C_k = n n^T + w g_k (I - n n^T); M lumped.
+int FilteredNormalStep(TriangleMesh& mesh, double tau, const GeometricDiffusionOptions& options) {
+  const FemDomain domain = FemDomain::FromMesh(mesh);
+  const auto frames = FilteredNormalFrames(mesh, options);
+  const int n = mesh.vertex_count();
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(static_cast<std::size_t>(mesh.triangle_count()) * 84);
+  Eigen::VectorXd mass = Eigen::VectorXd::Zero(3 * n);
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  for (int e = 0; e < mesh.triangle_count(); ++e) {
+    const auto& t = mesh.triangles[e];
+    const ElementFrame& frame = frames[e];
+    const double area = domain.area(e);
+    const Eigen::Matrix3d normal_part = frame.normal * frame.normal.transpose();
+    const Eigen::Matrix3d membrane = options.tangential_weight * (identity - normal_part);
+    const Eigen::Matrix3d across = normal_part + frame.g_across * membrane;
+    const Eigen::Matrix3d along = normal_part + frame.g_along * membrane;
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d& gi = domain.gradient(e, i);
+      for (int j = 0; j < 3; ++j) {
+        const Eigen::Vector3d& gj = domain.gradient(e, j);
+        const Eigen::Matrix3d block = area * (gi.dot(frame.across) * gj.dot(frame.across) * across +
+                                              gi.dot(frame.along) * gj.dot(frame.along) * along);
+        for (int a = 0; a < 3; ++a) {
+          for (int b = 0; b < 3; ++b)
+            triplets.emplace_back(3 * t[i] + a, 3 * t[j] + b, block(a, b));
+        }
+      }
+      mass.segment<3>(3 * t[i]).array() += area / 3.0;
+    }
+  }
+  SparseMatrixD system(3 * n, 3 * n);
+  for (int k = 0; k < 3 * n; ++k) triplets.emplace_back(k, k, mass[k] / tau);
+  system.setFromTriplets(triplets.begin(), triplets.end());
+  system *= tau;
+  Eigen::VectorXd x(3 * n);
+  for (int v = 0; v < n; ++v) x.segment<3>(3 * v) = mesh.positions[v];
+  const Eigen::VectorXd rhs = mass.cwiseProduct(x);
+  Eigen::ConjugateGradient<SparseMatrixD, Eigen::Lower | Eigen::Upper,
+                           Eigen::IncompleteCholesky<double>>
+      solver;
+  solver.setTolerance(options.solver.tolerance);
+  solver.setMaxIterations(options.solver.max_iterations);
+  solver.compute(system);
+  if (solver.info() != Eigen::Success) {
+    throw Error("geometric diffusion: the incomplete Cholesky factorisation failed");
+  }
+  const Eigen::VectorXd next = solver.solveWithGuess(rhs, x);
+  if (!next.allFinite())
+    throw Error("geometric diffusion: the solve produced non-finite positions");
+  for (int v = 0; v < n; ++v) mesh.positions[v] = next.segment<3>(3 * v);
+  return static_cast<int>(solver.iterations());
+}
+
 }  // namespace
 
 int GeometricDiffusionStep(TriangleMesh& mesh, double tau,
                            const GeometricDiffusionOptions& options) {
+  if (!options.isotropic && options.detection == FeatureDetection::kFilteredNormals) {
+    return FilteredNormalStep(mesh, tau, options);
+  }
   const FemDomain domain = FemDomain::FromMesh(mesh);
   const FemOperators operators(domain);
   const SparseMatrixD stiffness = operators.TensorStiffness(DiffusionTensors(mesh, options));

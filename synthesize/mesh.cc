@@ -221,6 +221,33 @@ TriangleMesh MakeIcosphere(double radius, int subdivisions) {
   return mesh;
 }
 
+TriangleMesh MakeFacetedPolyhedron(Polyhedron shape, double circumradius, int subdivisions) {
+  if (!(circumradius > 0.0) || subdivisions < 0 || subdivisions > 9) {
+    throw Error(fmt::format(
+        "polyhedron: circumradius must be positive and subdivisions in 0..9 (got {}, {})",
+        circumradius, subdivisions));
+  }
+  TriangleMesh mesh;
+  if (shape == Polyhedron::kCube) {
+    for (int i = 0; i < 8; ++i) {
+      mesh.positions.push_back({i & 1 ? 1.0 : -1.0, i & 2 ? 1.0 : -1.0, i & 4 ? 1.0 : -1.0});
+    }
+    // Corner index = x + 2 y + 4 z (bits set for +1); each face counter-clockwise from outside.
+    const std::array<std::array<int, 4>, 6> faces = {
+        {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
+    for (const auto& f : faces) {
+      mesh.triangles.push_back({f[0], f[1], f[2]});
+      mesh.triangles.push_back({f[0], f[2], f[3]});
+    }
+  } else {
+    mesh = MakeIcosphere(1.0, 0);
+  }
+  const double scale = circumradius / mesh.positions[0].norm();
+  for (auto& p : mesh.positions) p *= scale;
+  for (int i = 0; i < subdivisions; ++i) mesh = SplitMidpoints(mesh);
+  return mesh;
+}
+
 TriangleMesh MakeTorus(double major_radius, double minor_radius, int major_segments,
                        int minor_segments) {
   if (!(major_radius > minor_radius) || !(minor_radius > 0.0) || major_segments < 3 ||

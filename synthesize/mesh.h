@@ -78,6 +78,13 @@ TriangleMesh MakeIcosphere(double radius, int subdivisions);
 TriangleMesh MakeTorus(double major_radius, double minor_radius, int major_segments,
                        int minor_segments);
 
+// Flat-faced polyhedra centred at the origin with vertices on the sphere of `circumradius`, every
+// triangle split into four at its edge midpoints `subdivisions` times but kept flat: meshes with
+// exactly known sharp edges (a cube's 90 degree normal angle, an icosahedron's 41.8) for feature-
+// preserving smoothing. A cube's square faces are two triangles each before subdivision.
+enum class Polyhedron { kCube, kIcosahedron };
+TriangleMesh MakeFacetedPolyhedron(Polyhedron shape, double circumradius, int subdivisions);
+
 // Moves every vertex along its normal by Gaussian noise of standard deviation `sigma` (seeded): the
 // noisy scans that geometric diffusion removes.
 void AddNormalNoise(TriangleMesh& mesh, double sigma, std::uint64_t seed);

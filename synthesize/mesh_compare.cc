@@ -94,7 +94,7 @@ std::vector<EdgeFaces> FeatureEdges(const TriangleMesh& mesh, double threshold_d
 }
 
 AngleChange FeatureAngleChange(const TriangleMesh& mesh, const TriangleMesh& reference,
-                               const std::vector<EdgeFaces>& edges) {
+                               const std::vector<EdgeFaces>& edges, double tolerance_degrees) {
   AngleChange change;
   if (edges.empty()) return change;
   std::vector<double> differences;
@@ -105,16 +105,25 @@ AngleChange FeatureAngleChange(const TriangleMesh& mesh, const TriangleMesh& ref
     signed_sum += delta;
     differences.push_back(std::abs(delta));
   }
-  change.mean_signed = signed_sum / differences.size();
+  const double count = static_cast<double>(differences.size());
+  change.mean_signed = signed_sum / count;
   double sum = 0.0;
+  int within = 0;
   for (double d : differences) {
     sum += d;
-    change.max = std::max(change.max, d);
+    within += d <= tolerance_degrees ? 1 : 0;
   }
-  change.mean = sum / differences.size();
-  std::nth_element(differences.begin(), differences.begin() + differences.size() / 2,
-                   differences.end());
-  change.median = differences[differences.size() / 2];
+  change.mean = sum / count;
+  change.within_tolerance = within / count;
+  std::sort(differences.begin(), differences.end());
+  // Nearest-rank percentiles.
+  auto percentile = [&](double p) {
+    const auto rank = static_cast<std::size_t>(std::ceil(p * count));
+    return differences[std::clamp<std::size_t>(rank, 1, differences.size()) - 1];
+  };
+  change.median = percentile(0.5);
+  change.percentile90 = percentile(0.9);
+  change.max = differences.back();
   return change;
 }
 

@@ -33,12 +33,16 @@ struct AngleChange {
   // mean of angle(mesh) - angle(reference) over the edges, degrees: negative when the edges are
   // rounded off, the bias feature-preserving smoothing must avoid
   double mean_signed = 0.0;
-  double mean = 0.0;  // mean |angle(mesh) - angle(reference)| over the edges, degrees
-  double median = 0.0;
+  double mean = 0.0;    // mean |angle(mesh) - angle(reference)| over the edges, degrees
+  double median = 0.0;  // per-edge |change|, degrees
+  double percentile90 = 0.0;
   double max = 0.0;
+  // Fraction of the edges whose |change| is at most the tolerance asked for.
+  double within_tolerance = 0.0;
 };
-// How much the normal angles across `edges` (found on the reference) differ on `mesh`.
+// How much the normal angles across `edges` (found on the reference) differ on `mesh`, edge by
+// edge (an average hides rounded and sharpened edges that cancel).
 AngleChange FeatureAngleChange(const TriangleMesh& mesh, const TriangleMesh& reference,
-                               const std::vector<EdgeFaces>& edges);
+                               const std::vector<EdgeFaces>& edges, double tolerance_degrees = 5.0);
 
 }  // namespace photomat
