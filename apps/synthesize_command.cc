@@ -106,7 +106,7 @@ void AddSynthesizeCommand(CLI::App& app) {
                    "same")
       ->capture_default_str();
   command->add_flag("--quality", options->quality,
-                    "quilt: favour fewer, better seams over variety and speed: blocks a third "
+                    "quilt: fewer, closer seams at some cost in variety: blocks a third "
                     "of the sample (8..64), tolerance 0, error floor 0.5 (--block, --overlap, "
                     "--tolerance and --error-floor still override)");
   command->add_flag("--no-coherence", options->no_coherence,
