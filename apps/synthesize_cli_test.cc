@@ -83,6 +83,27 @@ TEST(SynthesizeCliTest, GrowsAStackAndReappliesItsSourceMapToAnother) {
   EXPECT_GT(quality["seams"]["pairs"].get<double>(), 0.0);
 }
 
+TEST(SynthesizeCliTest, QualityPresetTakesLargerBlocksAndTheBestMatches) {
+  TempDir dir;
+  MakeStacks(dir);
+  const std::string stacks = (dir / "stacks").string();
+  auto quilt = [&](const std::string& flags) {
+    const RunResult run = RunPhotomat("synthesize " + stacks + " --stack ptm --size 64x64 " +
+                                      flags + " --out " + (dir / "out.exr").string());
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return LoadRepresentation(dir / "out.exr").representation.details()["synthesis"]["quilt"];
+  };
+  const nlohmann::json preset = quilt("--quality");
+  EXPECT_EQ(preset["block"], 13);  // a third of the 40-pixel sample (default: a quarter, 10)
+  EXPECT_EQ(preset["tolerance"], 0.0);
+  EXPECT_EQ(preset["error_floor"], 0.5);
+  EXPECT_EQ(quilt("")["block"], 10);
+  const nlohmann::json overridden = quilt("--quality --block 16 --tolerance 0.05");
+  EXPECT_EQ(overridden["block"], 16);
+  EXPECT_EQ(overridden["tolerance"], 0.05);
+  EXPECT_EQ(overridden["error_floor"], 0.5);
+}
+
 TEST(SynthesizeCliTest, GrowsPlainImagesPixelByPixel) {
   TempDir dir;
   Image image(30, 24, std::vector<std::string>{"R", "G", "B"});

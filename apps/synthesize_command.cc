@@ -45,6 +45,7 @@ void AddSynthesizeCommand(CLI::App& app) {
     QuiltOptions quilt;
     std::string search = "fast";
     bool no_coherence = false;
+    bool quality = false;
     PixelSynthesisOptions pixel;
     std::optional<double> force_search;
     std::filesystem::path guide;
@@ -104,6 +105,10 @@ void AddSynthesizeCommand(CLI::App& app) {
                    "for pixels) or brute (every candidate summed in full); both choose the "
                    "same")
       ->capture_default_str();
+  command->add_flag("--quality", options->quality,
+                    "quilt: fewer, closer seams at some cost in variety: blocks a third "
+                    "of the sample (8..64), tolerance 0, error floor 0.5 (--block, --overlap, "
+                    "--tolerance and --error-floor still override)");
   command->add_flag("--no-coherence", options->no_coherence,
                     "quilt: search every block (no neighbour-block reuse)");
   command->add_option("--force-search", options->force_search,
@@ -133,7 +138,7 @@ void AddSynthesizeCommand(CLI::App& app) {
                     "field");
   command->add_option("--height", options->height,
                       "Also write the height (Frankot-Chellappa) of the grown normals (EXR)");
-  command->callback([options] {
+  command->callback([options, command] {
     const auto [width, height] = ParseSize(options->size);
     const std::optional<std::string> stack_name =
         options->stack.empty() ? std::nullopt : std::optional(options->stack);
@@ -154,6 +159,14 @@ void AddSynthesizeCommand(CLI::App& app) {
     synthesis.method = ParseSynthesisMethod(options->method);
     synthesis.target = {width, height, options->tileable, options->seed};
     synthesis.quilt = options->quilt;
+    if (options->quality) {
+      const QuiltOptions preset =
+          SeamQualityQuiltOptions(input.image.width(), input.image.height());
+      auto given = [&](const char* name) { return command->get_option(name)->count() > 0; };
+      if (!given("--block")) synthesis.quilt.block_size = preset.block_size;
+      if (!given("--tolerance")) synthesis.quilt.tolerance = preset.tolerance;
+      if (!given("--error-floor")) synthesis.quilt.error_floor = preset.error_floor;
+    }
     synthesis.pixel = options->pixel;
     synthesis.quilt.search = synthesis.pixel.search = ParseSearchMode(options->search);
     synthesis.quilt.coherence = !options->no_coherence;

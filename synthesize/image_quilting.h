@@ -37,6 +37,17 @@ struct QuiltOptions {
   MatchingOptions matching;
 };
 
+// The seam-quality preset for a sample of this size (`photomat synthesize --quality`;
+// IMPLEMENTER CHOICE, measured in bench/synthesis_table): it trades some variety for fewer,
+// closer seams (and, with fewer blocks, runs faster). Blocks a third of the sample's smaller side
+// (clamped to [8, 64]) instead of a quarter: the seams per output area fall by about a quarter, and
+// 2/3 of the sample's offsets per axis remain candidates. Tolerance 0 (the thesis found 0..0.1
+// alike) and error floor 0.5 (blocks compete when their overlap differs half as much as
+// neighbouring sample pixels, not as much): the best-matching blocks are taken. The SSD metric is
+// kept, so the search stays FFT-fast. The same for every input; the quilt's nearest-patch
+// distance comes from its seams.
+QuiltOptions SeamQualityQuiltOptions(int sample_width, int sample_height);
+
 // min(sample) / 4, clamped to [8, 64] and to the sample (IMPLEMENTER CHOICE: a quarter of the
 // sample keeps its structures whole while leaving 3/4 of the sample's offsets as candidates).
 int DefaultBlockSize(int sample_width, int sample_height);

@@ -259,6 +259,27 @@ TEST(ImageQuiltingTest, DefaultsFollowTheThesis) {
   EXPECT_EQ(placement.overlap, 4);
 }
 
+TEST(ImageQuiltingTest, SeamQualityPresetMakesFewerAndCloserSeams) {
+  EXPECT_EQ(SeamQualityQuiltOptions(150, 160).block_size, 50);
+  EXPECT_EQ(SeamQualityQuiltOptions(12, 40).block_size, 8);
+  EXPECT_EQ(SeamQualityQuiltOptions(300, 300).block_size, 64);
+  for (SurfacePattern pattern : {SurfacePattern::kGrooves, SurfacePattern::kBumps}) {
+    const Image sample = MaterialMaps(pattern, 72, 5);
+    double default_distance = 0.0;
+    double preset_distance = 0.0;
+    for (std::uint64_t seed : {1, 2}) {
+      const SynthesisTarget target{160, 160, false, seed};
+      const SourceMap plain = PlanQuilt(sample, target, {}).RenderSourceMap();
+      const SourceMap preset =
+          PlanQuilt(sample, target, SeamQualityQuiltOptions(72, 72)).RenderSourceMap();
+      default_distance += MeanNearestPatchDistance(sample, plain.Apply(sample));
+      preset_distance += MeanNearestPatchDistance(sample, preset.Apply(sample));
+    }
+    EXPECT_LT(preset_distance, default_distance)
+        << static_cast<int>(pattern) << ": " << preset_distance << " vs " << default_distance;
+  }
+}
+
 TEST(ImageQuiltingTest, RejectsParametersOutOfRange) {
   const Image sample = MaterialMaps(SurfacePattern::kBumps, 32);
   const SynthesisTarget target{64, 64, false, 1};
