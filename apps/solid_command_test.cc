@@ -2,11 +2,8 @@
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <algorithm>
-#include <array>
-#include <cstdio>
 #include <cstring>
 
 #include "core/atomic_file.h"
@@ -21,24 +18,9 @@ namespace photomat {
 namespace {
 
 using ::testing::HasSubstr;
+using testing::RunPhotomat;
+using testing::RunResult;
 using testing::TempDir;
-
-struct RunResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = testing::PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
-  }
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
 
 bool SameBytes(const Volume& a, const Volume& b) {
   return a.SameShape(b) &&

@@ -2,10 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
-
 #include "capture/synthetic_capture.h"
 #include "core/error.h"
+#include "tests/support/synthetic_sets.h"
 
 namespace photomat {
 namespace {
@@ -19,19 +18,8 @@ TEST(SemiCalibratedTest, RecoversUnequalLightIntensities) {
   SyntheticRenderOptions render;
   render.shadows = true;
   const PhotometricSet equal = RenderSyntheticCapture(material, ThesisLightGrid(), render);
-  std::vector<Image> images;
-  std::vector<std::vector<float>> truth;
-  for (int i = 0; i < equal.size(); ++i) {
-    const std::vector<float> rgb = {1.0f + 0.4f * std::sin(1.3f * i), 0.8f + 0.05f * (i % 5),
-                                    1.2f - 0.3f * std::cos(0.7f * i)};
-    Image image = equal.image(i);
-    for (std::size_t p = 0; p < image.pixel_count(); ++p) {
-      for (int c = 0; c < 3; ++c) image.pixel(p)[c] *= rgb[c];
-    }
-    images.push_back(std::move(image));
-    truth.push_back(rgb);
-  }
-  const PhotometricSet set(std::move(images), equal.lights());
+  const std::vector<std::vector<float>> truth = testing::UnequalRgbIntensities(equal.size());
+  const PhotometricSet set = testing::ScaleByIntensities(equal, truth);
   const SemiCalibratedResult result = EstimateLightIntensities(set);
   ASSERT_EQ(result.intensities.size(), truth.size());
   for (int c = 0; c < 3; ++c) {

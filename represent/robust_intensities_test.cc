@@ -38,19 +38,8 @@ UnequalCapture MakeUnequalCapture() {
   UnequalCapture capture{testing::ShadowedSpecularSet(48),
                          PhotometricSet({Image(1, 1, 3)}, {LightDirection::FromSlantTilt(0, 0)}),
                          {}};
-  const PhotometricSet& equal = capture.synthetic.set;
-  std::vector<Image> images;
-  for (int i = 0; i < equal.size(); ++i) {
-    const std::vector<float> rgb = {1.0f + 0.4f * std::sin(1.3f * i), 0.8f + 0.05f * (i % 5),
-                                    1.2f - 0.3f * std::cos(0.7f * i)};
-    Image image = equal.image(i);
-    for (std::size_t p = 0; p < image.pixel_count(); ++p) {
-      for (int c = 0; c < 3; ++c) image.pixel(p)[c] *= rgb[c];
-    }
-    images.push_back(std::move(image));
-    capture.truth.push_back(rgb);
-  }
-  capture.set = PhotometricSet(std::move(images), equal.lights());
+  capture.truth = testing::UnequalRgbIntensities(capture.synthetic.set.size());
+  capture.set = testing::ScaleByIntensities(capture.synthetic.set, capture.truth);
   return capture;
 }
 
@@ -90,16 +79,12 @@ TEST(RobustIntensitiesTest, ShadowsAndHighlightsStayOutOfTheIntensities) {
 // Lambertian data: both weighings give the intensities exactly.
 TEST(RobustIntensitiesTest, LambertianDataGiveTheIntensitiesExactly) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 32);
-  std::vector<Image> images;
   std::vector<std::vector<float>> truth;
   for (int i = 0; i < synthetic.set.size(); ++i) {
     const float gain = 0.6f + 0.02f * static_cast<float>(i);
-    Image image = synthetic.set.image(i);
-    for (float& v : image.values()) v *= gain;
-    images.push_back(std::move(image));
     truth.push_back({gain, gain, gain});
   }
-  const PhotometricSet set(std::move(images), synthetic.set.lights());
+  const PhotometricSet set = testing::ScaleByIntensities(synthetic.set, truth);
   EXPECT_LT(WorstRelativeError(EstimateLightIntensitiesRobust(set).intensities, truth), 1e-4);
   EXPECT_LT(WorstRelativeError(EstimateLightIntensities(set).intensities, truth), 1e-4);
 }

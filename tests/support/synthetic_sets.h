@@ -1,5 +1,7 @@
 #pragma once
 
+#include <vector>
+
 #include "capture/synthetic_capture.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
@@ -19,5 +21,14 @@ SyntheticSet LambertianSet(SurfacePattern pattern = SurfacePattern::kBricks, int
 // The thesis grid over a steep material (55 degrees) with attached and cast shadows and
 // Blinn-Phong highlights: what Lambertian methods cannot represent.
 SyntheticSet ShadowedSpecularSet(int size = 64);
+
+// Known, unequal RGB intensities for `count` lights (smooth in the light index, different per
+// channel, all positive): the truth of semi-calibrated tests.
+std::vector<std::vector<float>> UnequalRgbIntensities(int count);
+
+// `set` with every image's channels multiplied by its light's `intensities` (3 channels): a
+// capture under lights of those intensities, with no intensity recorded.
+PhotometricSet ScaleByIntensities(const PhotometricSet& set,
+                                  const std::vector<std::vector<float>>& intensities);
 
 }  // namespace photomat::testing
