@@ -1,7 +1,8 @@
 #include "core/json_file.h"
 
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -19,6 +20,10 @@ nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
     const std::size_t line_start = text.rfind('\n', offset == 0 ? 0 : offset - 1);
     const std::size_t column = offset - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
     throw Error(path, fmt::format("invalid JSON at line {}, column {}", line, column));
+  } catch (const nlohmann::json::exception& error) {
+    // Well-formed JSON the parser still cannot hold, e.g. a number beyond double's range
+    // (out_of_range 406): the fuzzer found that this escaped as a foreign exception.
+    throw Error(path, fmt::format("unreadable JSON: {}", error.what()));
   }
 }
 

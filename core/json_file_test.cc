@@ -22,6 +22,19 @@ TEST(JsonFileTest, SyntaxErrorNamesFileLineAndColumn) {
   }
 }
 
+// Syntactically valid, but the number does not fit a double: an Error naming the file, not
+// nlohmann's own exception (found by the manifest fuzzer).
+TEST(JsonFileTest, NumberBeyondDoubleRangeIsAnErrorNamingTheFile) {
+  testing::TempDir dir;
+  testing::WriteFile(dir / "m.json", "{\"light\": 1e99999}\n");
+  try {
+    ReadJsonFile(dir / "m.json");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("m.json: unreadable JSON"));
+  }
+}
+
 TEST(JsonFileTest, ReaderNamesTheJsonPathOfAFault) {
   const auto doc = nlohmann::json::parse(R"({"images": [{"light": [1, 2]}, {"light": "up"}]})");
   JsonReader reader(doc, "m.json");
