@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <ostream>
 #include <vector>
 
 #include "core/error.h"
@@ -20,6 +21,10 @@ struct Corpus {
   const char* folder;
   FuzzTarget target;
 };
+
+// gtest would otherwise print (and ctest name) the struct by its bytes, a function pointer among
+// them, which differ between builds.
+void PrintTo(const Corpus& corpus, std::ostream* out) { *out << corpus.folder; }
 
 class FuzzCorpusTest : public ::testing::TestWithParam<Corpus> {};
 
