@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 
 #include "core/atomic_file.h"
@@ -13,7 +14,7 @@
 namespace photomat {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = std::numbers::pi;
 // Plot geometry (SVG user units): the hemisphere's centre and the radius of slant 90.
 constexpr double kCentreX = 300.0, kCentreY = 330.0, kRadius = 250.0;
 

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/error.h"
 #include "core/random.h"
@@ -13,7 +14,7 @@
 namespace photomat {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = std::numbers::pi;
 
 void AddNoise(Image& image, double sigma, std::uint64_t seed) {
   if (sigma <= 0.0) return;
