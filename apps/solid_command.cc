@@ -273,7 +273,8 @@ void AddGrow(CLI::App& solid) {
                     "Gaussian stack");
   command
       ->add_option("--histogram-matching", options->synthesis.histogram_matching,
-                   "Weight lambda of the histogram matching (Kopf et al. 2007; 0: off)")
+                   "First step of the colour-bin prices that keep the result's per-channel "
+                   "histograms at the exemplar's (after Kopf et al. 2007; 0: off)")
       ->capture_default_str();
   command
       ->add_option("--occupancy-matching", options->synthesis.occupancy_matching,
@@ -366,6 +367,7 @@ void AddGrow(CLI::App& solid) {
             NeighbourhoodMatchError(result.volume, exemplar, prepared.appearance)},
            {"coherent_fraction", CoherentFraction(result.coordinates, prepared.appearance.domain)},
            {"histogram_distance", HistogramDistance(result.volume, exemplar)},
+           {"earth_mover_distance", EarthMoverDistance(result.volume, exemplar)},
            {"spectrum_distance_db", LogSpectralDistance(RadialPowerSpectrum(result.volume, 8),
                                                         RadialPowerSpectrum(exemplar, 8))}});
     }

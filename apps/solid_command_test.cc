@@ -52,6 +52,8 @@ TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
   EXPECT_GT(report["passes"].size(), 0u);
   EXPECT_GE(report["histogram_distance"].get<double>(), 0.0);
   EXPECT_LE(report["histogram_distance"].get<double>(), 2.0);  // L1 of two distributions
+  EXPECT_GE(report["earth_mover_distance"].get<double>(), 0.0);
+  EXPECT_LE(report["earth_mover_distance"].get<double>(), 1.0);  // in units of the range
   EXPECT_GE(report["spectrum_distance_db"].get<double>(), 0.0);
 }
 

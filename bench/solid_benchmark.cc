@@ -62,8 +62,8 @@ void BM_GrowExemplar(benchmark::State& state, ProceduralPattern pattern) {
 // and jitter only (correction off): colour histogram L1, radially averaged spectrum (dB),
 // neighbourhood-match error, and the largest coherent patch as a share of the output. An output
 // of 64^3 is a whole number of periods of 16^3 and 32^3 exemplars and not of 24^3 ones. The third
-// argument picks the settings: 0 the defaults, 1 occupancy matching off, 2 the defaults plus
-// histogram matching (lambda 1).
+// argument picks the settings: 0 the defaults, 1 histogram matching off, 2 occupancy matching
+// off.
 void MeasureGrowth(benchmark::State& state, const Volume& exemplar, int output_size, int settings) {
   const auto spectrum = [&exemplar](const Volume& solid) {
     return LogSpectralDistance(RadialPowerSpectrum(solid, 8), RadialPowerSpectrum(exemplar, 8));
@@ -72,13 +72,15 @@ void MeasureGrowth(benchmark::State& state, const Volume& exemplar, int output_s
     const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
     ExemplarSolidOptions options;
     options.size = VolumeSize::Cube(output_size);
-    if (settings == 1) options.occupancy_matching = 0.0;
-    if (settings == 2) options.histogram_matching = 1.0;
+    if (settings == 1) options.histogram_matching = 0.0;
+    if (settings == 2) options.occupancy_matching = 0.0;
     const ExemplarSolidResult corrected = SynthesizeExemplarSolid(exemplar, prepared, options);
     options.correction_passes = 0;
     const Volume jitter = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
     state.counters["histogram"] = HistogramDistance(corrected.volume, exemplar);
     state.counters["jitter_histogram"] = HistogramDistance(jitter, exemplar);
+    state.counters["emd"] = EarthMoverDistance(corrected.volume, exemplar);
+    state.counters["jitter_emd"] = EarthMoverDistance(jitter, exemplar);
     state.counters["spectrum_db"] = spectrum(corrected.volume);
     state.counters["jitter_spectrum_db"] = spectrum(jitter);
     state.counters["match_error"] =
@@ -174,18 +176,26 @@ BENCHMARK_CAPTURE(BM_GrowExemplar, cells, ProceduralPattern::kCells)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, marble, ProceduralPattern::kMarble)
     ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
+    ->Args({16, 32, 0})
+    ->Args({16, 32, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, cells, ProceduralPattern::kCells)
     ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
+    ->Args({16, 32, 0})
+    ->Args({16, 32, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, wood, ProceduralPattern::kWood)
     ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
+    ->Args({16, 32, 0})
+    ->Args({16, 32, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowQuality, stripes, ProceduralPattern::kStripes)
     ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
+    ->Args({16, 32, 0})
+    ->Args({16, 32, 1})
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
 BENCHMARK_CAPTURE(BM_GrowRealQuality, Exemplar_14, "Exemplar_14.jpg")

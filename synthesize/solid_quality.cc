@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <limits>
@@ -89,6 +90,38 @@ double HistogramDistance(const Volume& solid, const Volume& reference, int bins)
     const std::vector<double> a = histogram(solid), b = histogram(reference);
     for (int k = 0; k < bins; ++k)
       total += std::abs(a[static_cast<std::size_t>(k)] - b[static_cast<std::size_t>(k)]);
+  }
+  return total / reference.channels();
+}
+
+double EarthMoverDistance(const Volume& solid, const Volume& reference) {
+  if (solid.channels() != reference.channels() || solid.voxel_count() == 0 ||
+      reference.voxel_count() == 0) {
+    throw Error("earth mover's distance needs the same channels and non-empty volumes");
+  }
+  const auto sorted_channel = [](const Volume& volume, std::size_t c) {
+    std::vector<float> values(volume.voxel_count());
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = volume.voxel(i)[c];
+    std::sort(values.begin(), values.end());
+    return values;
+  };
+  double total = 0;
+  for (std::size_t c = 0; c < static_cast<std::size_t>(reference.channels()); ++c) {
+    const std::vector<float> a = sorted_channel(solid, c), b = sorted_channel(reference, c);
+    // Walk the merged values; between two consecutive ones both distribution functions are flat.
+    const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.size());
+    std::size_t i = 0, j = 0;
+    double area = 0, previous = std::min(a.front(), b.front());
+    while (i < a.size() || j < b.size()) {
+      const double next = j == b.size() || (i < a.size() && a[i] <= b[j]) ? a[i] : b[j];
+      area +=
+          std::abs(static_cast<double>(i) / na - static_cast<double>(j) / nb) * (next - previous);
+      previous = next;
+      while (i < a.size() && a[i] == next) ++i;
+      while (j < b.size() && b[j] == next) ++j;
+    }
+    const double range = static_cast<double>(b.back()) - b.front();
+    total += range > 0 ? area / range : area;
   }
   return total / reference.channels();
 }

@@ -25,6 +25,12 @@ double NeighbourhoodMatchError(const Volume& solid, const Volume& exemplar,
 // `reference` on `bins` bins over the reference's range of that channel (0 to 2).
 double HistogramDistance(const Volume& solid, const Volume& reference, int bins = 32);
 
+// Mean over channels of the earth mover's (Wasserstein-1) distance between the value distributions
+// of `solid` and `reference`, the integral of |F_solid - F_reference| over the values, in units of
+// the reference's range of that channel (0 to 1). Unlike HistogramDistance it has no bins, so it
+// also sees differences within a bin.
+double EarthMoverDistance(const Volume& solid, const Volume& reference);
+
 // Radially averaged 3D power spectrum, averaged over channels (each channel's mean removed): the
 // mean |F|^2 / voxel count in `bins` rings of frequency radius (cycles per voxel) over (0, 1/2],
 // comparable between volumes of different sizes. A ring holding no frequency of this size is NaN.
