@@ -50,7 +50,8 @@ TEST(ExemplarSolidTest, IdentityReproduction) {
   options.jitter = 0.0;
   for (int passes : {0, 2, 3}) {
     options.correction_passes = passes;
-    options.histogram_matching = passes == 3 ? 1.0 : 0.0;  // perfect matches stay put
+    // Histogram matching is on by default; with a large first step too, perfect matches stay.
+    if (passes == 3) options.histogram_matching = 1.0;
     const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
     for (int z = 0; z < 16; ++z) {
       for (int y = 0; y < 16; ++y) {
@@ -415,7 +416,6 @@ TEST(ExemplarSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
   const FrameField field = MakeFrameField(FieldKind::kCircular, options.size, {});
   for (const FrameField* control : {static_cast<const FrameField*>(nullptr), &field}) {
     options.field = control;
-    options.histogram_matching = control ? 1.0 : 0.0;
     ExemplarSolidResult one, two;
     {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
