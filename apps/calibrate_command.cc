@@ -36,29 +36,6 @@ bool IsMaskName(const fs::path& path) {
   return stem.find("mask") != std::string::npos;
 }
 
-// "img.2.png" before "img.10.png": digit runs compare as numbers.
-bool NaturalLess(const std::string& a, const std::string& b) {
-  std::size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) &&
-        std::isdigit(static_cast<unsigned char>(b[j]))) {
-      std::size_t i_end = i, j_end = j;
-      while (i_end < a.size() && std::isdigit(static_cast<unsigned char>(a[i_end]))) ++i_end;
-      while (j_end < b.size() && std::isdigit(static_cast<unsigned char>(b[j_end]))) ++j_end;
-      const std::string x = a.substr(i, i_end - i), y = b.substr(j, j_end - j);
-      const std::string xs = x.substr(std::min(x.find_first_not_of('0'), x.size()));
-      const std::string ys = y.substr(std::min(y.find_first_not_of('0'), y.size()));
-      if (xs.size() != ys.size()) return xs.size() < ys.size();
-      if (xs != ys) return xs < ys;
-      i = i_end, j = j_end;
-      continue;
-    }
-    if (a[i] != b[j]) return a[i] < b[j];
-    ++i, ++j;
-  }
-  return a.size() - i < b.size() - j;
-}
-
 // The image files of a folder in natural order, and the mask among them (a name with "mask").
 struct ImageFolder {
   std::vector<fs::path> images;
@@ -67,22 +44,16 @@ struct ImageFolder {
 
 ImageFolder ListImageFolder(const fs::path& folder) {
   ImageFolder listing;
-  for (const auto& entry : fs::directory_iterator(folder)) {
-    if (!entry.is_regular_file() || !IsReadableImageFileName(entry.path())) continue;
-    if (IsMaskName(entry.path())) {
-      if (listing.mask) {
-        throw Error(folder, fmt::format("two masks ({} and {}); give one with --mask",
-                                        listing.mask->filename().string(),
-                                        entry.path().filename().string()));
-      }
-      listing.mask = entry.path();
+  for (const fs::path& file : ListImageFiles(folder)) {
+    if (!IsMaskName(file)) {
+      listing.images.push_back(file);
+    } else if (listing.mask) {
+      throw Error(folder, fmt::format("two masks ({} and {}); give one with --mask",
+                                      listing.mask->filename().string(), file.filename().string()));
     } else {
-      listing.images.push_back(entry.path());
+      listing.mask = file;
     }
   }
-  std::sort(listing.images.begin(), listing.images.end(), [](const fs::path& a, const fs::path& b) {
-    return NaturalLess(a.filename().string(), b.filename().string());
-  });
   if (listing.images.empty()) throw Error(folder, "no images in the folder");
   return listing;
 }

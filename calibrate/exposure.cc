@@ -61,16 +61,10 @@ ExposureCounts CountExposureFaults(const PhotometricSet& set, const ExposureLimi
 }
 
 Image ReadDarkFrame(const fs::path& path) {
-  std::vector<fs::path> files;
+  std::vector<fs::path> files{path};
   if (fs::is_directory(path)) {
-    for (const auto& entry : fs::directory_iterator(path)) {
-      if (entry.is_regular_file() && IsReadableImageFileName(entry.path()))
-        files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
+    files = ListImageFiles(path);
     if (files.empty()) throw Error(path, "no dark-frame images in the folder");
-  } else {
-    files.push_back(path);
   }
   Image sum = ReadImage(files.front()).image;
   for (std::size_t i = 1; i < files.size(); ++i) {

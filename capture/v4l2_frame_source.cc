@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "core/image_io.h"
 
 namespace photomat {
 namespace {
@@ -396,8 +397,7 @@ std::vector<DeviceDescription> ListV4l2Devices(V4l2Syscalls& syscalls, const fs:
     if (name.rfind("video", 0) == 0) paths.push_back(entry.path());
   }
   std::sort(paths.begin(), paths.end(), [](const fs::path& a, const fs::path& b) {
-    const std::string x = a.filename().string(), y = b.filename().string();
-    return x.size() != y.size() ? x.size() < y.size() : x < y;
+    return NaturalLess(a.filename().string(), b.filename().string());  // video2 before video10
   });
   std::vector<DeviceDescription> devices;
   for (const fs::path& path : paths) {

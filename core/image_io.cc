@@ -268,13 +268,58 @@ std::set<std::string> ReadableExtensions() {
   return extensions;
 }
 
+// Whether `path`'s extension, in lower case, is one of `extensions` (".png", ...).
+bool HasExtensionIn(const std::filesystem::path& path, const std::set<std::string>& extensions) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extensions.count(extension) > 0;
+}
+
 }  // namespace
 
 bool IsReadableImageFileName(const std::filesystem::path& path) {
-  // Parsed on every call (microseconds; no process-wide cache): folder scans call it per entry.
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ReadableExtensions().count(extension) > 0;
+  return HasExtensionIn(path, ReadableExtensions());
+}
+
+bool NaturalLess(std::string_view a, std::string_view b) {
+  const auto is_digit = [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; };
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (is_digit(a[i]) && is_digit(b[j])) {
+      std::size_t i_end = i, j_end = j;
+      while (i_end < a.size() && is_digit(a[i_end])) ++i_end;
+      while (j_end < b.size() && is_digit(b[j_end])) ++j_end;
+      // Without leading zeros, a shorter run is a smaller number; equal lengths compare as text.
+      std::string_view x = a.substr(i, i_end - i), y = b.substr(j, j_end - j);
+      x.remove_prefix(std::min(x.find_first_not_of('0'), x.size()));
+      y.remove_prefix(std::min(y.find_first_not_of('0'), y.size()));
+      if (x.size() != y.size()) return x.size() < y.size();
+      if (x != y) return x < y;
+      i = i_end, j = j_end;
+      continue;
+    }
+    if (a[i] != b[j]) return a[i] < b[j];
+    ++i, ++j;
+  }
+  return a.size() - i < b.size() - j;
+}
+
+std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& folder) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) throw Error(folder, "not a folder");
+  const std::set<std::string> extensions = ReadableExtensions();  // parsed once per listing
+  std::vector<std::filesystem::path> files;
+  for (std::filesystem::directory_iterator entry(folder, error), end; !error && entry != end;
+       entry.increment(error)) {
+    if (entry->is_regular_file(error) && HasExtensionIn(entry->path(), extensions)) {
+      files.push_back(entry->path());
+    }
+  }
+  if (error) throw Error(folder, fmt::format("cannot list the folder: {}", error.message()));
+  std::sort(files.begin(), files.end(), [](const auto& x, const auto& y) {
+    return NaturalLess(x.filename().string(), y.filename().string());
+  });
+  return files;
 }
 
 }  // namespace photomat

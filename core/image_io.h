@@ -5,6 +5,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "core/colour.h"
 #include "core/image.h"
@@ -47,6 +49,15 @@ LoadedImage ReadImage(const std::filesystem::path& path, const ImageReadOptions&
 // (PNG, TIFF, JPEG, EXR, PNM, camera RAW such as .dng/.cr2/.nef, ...): how photomat picks the
 // images out of a folder of frames. OpenImageIO's own list, so RAW and other plugins count.
 bool IsReadableImageFileName(const std::filesystem::path& path);
+
+// "img.2.png" before "img.10.png": runs of digits compare as numbers (leading zeros aside), the
+// rest character by character; the order of numbered frames however they are padded.
+bool NaturalLess(std::string_view a, std::string_view b);
+
+// The image files (IsReadableImageFileName) directly inside `folder`, in NaturalLess order of
+// their names; subfolders and other files are skipped. Throws Error naming the folder when it is
+// not a readable folder (an empty list is not an error here: callers say what they expected).
+std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& folder);
 
 // A mask image: a pixel is set where any channel is above half of full scale (thresholding the
 // anti-aliased masks of real data sets at 50 %).

@@ -14,6 +14,7 @@ namespace {
 
 using ::testing::HasSubstr;
 using testing::TempDir;
+using testing::WriteFile;
 
 std::string MessageOf(const std::function<void()>& f) {
   try {
@@ -203,6 +204,33 @@ TEST(ImageIoTest, ReadableImageFileNamesComeFromOpenImageIoPlugins) {
        {"lights.lp", "manifest.json", "notes.txt", "png", "a.png.bak", "x.null", "no_extension"}) {
     EXPECT_FALSE(IsReadableImageFileName(name)) << name;
   }
+}
+
+TEST(ImageIoTest, NaturalOrderComparesDigitRunsAsNumbers) {
+  EXPECT_TRUE(NaturalLess("img.2.png", "img.10.png"));
+  EXPECT_FALSE(NaturalLess("img.10.png", "img.2.png"));
+  EXPECT_TRUE(NaturalLess("img_002.png", "img_10.png"));  // padding does not matter
+  EXPECT_TRUE(NaturalLess("a9b", "a10a"));
+  EXPECT_TRUE(NaturalLess("a", "b"));
+  EXPECT_TRUE(NaturalLess("img", "img1"));               // a prefix first
+  EXPECT_FALSE(NaturalLess("img.png", "img.png"));       // strict
+  EXPECT_FALSE(NaturalLess("img10.png", "img010.png"));  // equal numbers: neither is less...
+  EXPECT_FALSE(NaturalLess("img010.png", "img10.png"));  // ...either way
+}
+
+TEST(ImageIoTest, ListsTheImageFilesOfAFolderInNaturalOrder) {
+  TempDir dir;
+  for (const char* name : {"frame10.png", "frame2.PNG", "frame1.exr", "lights.lp", "notes.txt"}) {
+    WriteFile(dir / name, "x");  // listing looks at names only
+  }
+  std::filesystem::create_directory(dir / "sub.png");  // a folder, whatever its name
+  std::vector<std::string> names;
+  for (const auto& file : ListImageFiles(dir.path())) names.push_back(file.filename().string());
+  EXPECT_EQ(names, (std::vector<std::string>{"frame1.exr", "frame2.PNG", "frame10.png"}));
+  std::filesystem::create_directory(dir / "empty");
+  EXPECT_TRUE(ListImageFiles(dir / "empty").empty());
+  EXPECT_THROW(ListImageFiles(dir / "missing"), Error);
+  EXPECT_THROW(ListImageFiles(dir / "lights.lp"), Error);
 }
 
 }  // namespace
