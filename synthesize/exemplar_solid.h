@@ -34,17 +34,17 @@ struct ExemplarSolidOptions {
   // on the finest level each candidate pays a price for the bins (64 per exemplar channel, over
   // the exemplar's range) its value falls in: its distance (weighted by occupancy matching), plus
   // a floor of 2 % of the exemplar neighbourhoods' mean squared norm (so that a perfect match
-  // pays too), is multiplied by e^(mean over channels of its bins' log-prices). Per subpass, 16
-  // rounds: every voxel of the class picks its cheapest candidate at the current prices, and the
-  // log-price of each bin the level's resulting histogram over-fills rises, of each it
-  // under-fills falls, by a step that starts at this value, grows by 1.5 while the sign holds
-  // and halves when it flips (Rprop); the round whose picks bring the level's histogram closest
-  // to the exemplar's is kept (plain matching included) and the prices carry over to the next
-  // subpass. The finest level only: it decides the output's colours, and a coarse level's
-  // coordinates are a lattice subsample whose histogram differs from the exemplar's even for a
-  // perfect copy. Without it the result over-uses some colours (wood 16^3 grown to 64^3:
-  // histogram L1 0.072, against 0.011 for the scrambled jitter-only result; with it 0.002) at
-  // no cost in neighbourhood-match error (README, solid textures).
+  // pays too), is multiplied by e^(mean over channels of its bins' log-prices), each bounded by
+  // +-1. Per subpass, 16 rounds: every voxel of the class picks its cheapest candidate at the
+  // current prices, and the log-price of each bin the level's resulting histogram over-fills
+  // rises, of each it under-fills falls, by a step that starts at this value, grows by 1.5 while
+  // the sign holds and halves when it flips (Rprop); the round whose picks bring the level's
+  // histogram closest to the exemplar's is kept (plain matching included) and the prices carry
+  // over to the next subpass. The finest level only: it decides the output's colours, and a
+  // coarse level's coordinates are a lattice subsample whose histogram differs from the
+  // exemplar's even for a perfect copy. Without it the result over-uses some colours (wood 16^3
+  // grown to 64^3: histogram L1 0.072, against 0.011 for the scrambled jitter-only result; with
+  // it 0.002); the cost is a neighbourhood-match error 0 to 40 % higher (README, solid textures).
   double histogram_matching = 0.05;
   // Occupancy matching, lambda of the weight below; 0 turns it off (the thesis has none).
   // IMPLEMENTER CHOICE, on by default: at the start of every subpass the level's coordinates are
