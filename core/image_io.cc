@@ -311,7 +311,8 @@ std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& f
   std::vector<std::filesystem::path> files;
   for (std::filesystem::directory_iterator entry(folder, error), end; !error && entry != end;
        entry.increment(error)) {
-    if (entry->is_regular_file(error) && HasExtensionIn(entry->path(), extensions)) {
+    std::error_code entry_error;  // a dangling link is not an image, nor a reason to stop
+    if (entry->is_regular_file(entry_error) && HasExtensionIn(entry->path(), extensions)) {
       files.push_back(entry->path());
     }
   }

@@ -224,6 +224,7 @@ TEST(ImageIoTest, ListsTheImageFilesOfAFolderInNaturalOrder) {
     WriteFile(dir / name, "x");  // listing looks at names only
   }
   std::filesystem::create_directory(dir / "sub.png");  // a folder, whatever its name
+  std::filesystem::create_symlink(dir / "gone.png", dir / "dangling.png");
   std::vector<std::string> names;
   for (const auto& file : ListImageFiles(dir.path())) names.push_back(file.filename().string());
   EXPECT_EQ(names, (std::vector<std::string>{"frame1.exr", "frame2.PNG", "frame10.png"}));
