@@ -138,7 +138,7 @@ class CandidateTable {
 constexpr int kHistogramBins = 64;
 // Bound of a log-price: a candidate's cost is at most multiplied (or divided) by e. With e^4, the
 // prices forced single voxels onto candidates of another colour, a speckle inside the cells that
-// shows in the slices, and the match error of cells 16^3 grown to 32^3 rose from 0.0122 to
+// shows in the slices, and the match error of cells 16^3 grown to 32^3 rose from 0.0125 to
 // 0.0158 (0.0088 without histogram matching), with no better histogram.
 constexpr float kMaximumLogPrice = 1.0f;
 // Bound of a log-price's step in one round.
