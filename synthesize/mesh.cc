@@ -201,6 +201,12 @@ TriangleMesh SplitMidpoints(const TriangleMesh& mesh) {
 
 }  // namespace
 
+TriangleMesh SubdivideMidpoints(const TriangleMesh& mesh, int levels) {
+  TriangleMesh current = mesh;
+  for (int level = 0; level < levels; ++level) current = SplitMidpoints(current);
+  return current;
+}
+
 TriangleMesh MakeIcosphere(double radius, int subdivisions) {
   if (!(radius > 0.0) || subdivisions < 0 || subdivisions > 9) {
     throw Error(
@@ -216,7 +222,7 @@ TriangleMesh MakeIcosphere(double radius, int subdivisions) {
                     {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                     {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
                     {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  for (int i = 0; i < subdivisions; ++i) mesh = SplitMidpoints(mesh);
+  mesh = SubdivideMidpoints(mesh, subdivisions);
   for (auto& p : mesh.positions) p = p.normalized() * radius;
   return mesh;
 }
@@ -244,8 +250,7 @@ TriangleMesh MakeFacetedPolyhedron(Polyhedron shape, double circumradius, int su
   }
   const double scale = circumradius / mesh.positions[0].norm();
   for (auto& p : mesh.positions) p *= scale;
-  for (int i = 0; i < subdivisions; ++i) mesh = SplitMidpoints(mesh);
-  return mesh;
+  return SubdivideMidpoints(mesh, subdivisions);
 }
 
 TriangleMesh MakeTorus(double major_radius, double minor_radius, int major_segments,

@@ -70,6 +70,12 @@ void NormalizeMesh(TriangleMesh& mesh, MeshNormalization normalization, double s
 // "bbox" or "area"; Error otherwise.
 MeshNormalization ParseMeshNormalization(const std::string& text);
 
+// Splits every triangle into four at its edge midpoints, `levels` times (a midpoint shared by two
+// triangles is one vertex). Positions of existing vertices are kept (they stay the first
+// vertex_count() vertices), new ones lie on the edges: unlike Loop subdivision the surface does
+// not move, so sharp features stay sharp.
+TriangleMesh SubdivideMidpoints(const TriangleMesh& mesh, int levels);
+
 // An icosahedron subdivided `subdivisions` times (each time 4 triangles per triangle), projected
 // onto the sphere of `radius` around the origin: 10 * 4^n + 2 vertices of nearly equal spacing.
 TriangleMesh MakeIcosphere(double radius, int subdivisions);

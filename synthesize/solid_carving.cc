@@ -6,8 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
-#include <utility>
 
 #include "core/error.h"
 #include "synthesize/volume_io.h"
@@ -77,35 +75,6 @@ void SampleTrilinear(const Volume& volume, const Eigen::Vector3d& at, bool tilea
     const auto voxel = volume.voxel(ux ? x.high : x.low, uy ? y.high : y.low, uz ? z.high : z.low);
     for (std::size_t c = 0; c < out.size(); ++c) out[c] += weight * voxel[c];
   }
-}
-
-TriangleMesh SubdivideMidpoints(const TriangleMesh& mesh, int levels) {
-  TriangleMesh current = mesh;
-  for (int level = 0; level < levels; ++level) {
-    TriangleMesh next;
-    next.positions = current.positions;
-    next.triangles.reserve(current.triangles.size() * 4);
-    // One new vertex per undirected edge, shared by the triangles on either side.
-    std::map<std::pair<int, int>, int> midpoint;
-    const auto split = [&](int a, int b) {
-      const std::pair<int, int> key = std::minmax(a, b);
-      const auto [it, inserted] = midpoint.try_emplace(key, next.vertex_count());
-      if (inserted) {
-        next.positions.push_back(0.5 * (current.positions[static_cast<std::size_t>(a)] +
-                                        current.positions[static_cast<std::size_t>(b)]));
-      }
-      return it->second;
-    };
-    for (const auto& [a, b, c] : current.triangles) {
-      const int ab = split(a, b), bc = split(b, c), ca = split(c, a);
-      next.triangles.push_back({a, ab, ca});
-      next.triangles.push_back({ab, b, bc});
-      next.triangles.push_back({ca, bc, c});
-      next.triangles.push_back({ab, bc, ca});
-    }
-    current = std::move(next);
-  }
-  return current;
 }
 
 CarvedMesh CarveMesh(const TriangleMesh& mesh, const Volume& volume, const CarveOptions& options,

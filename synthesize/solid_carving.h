@@ -59,11 +59,6 @@ CarveMapping PlaceMesh(const TriangleMesh& mesh, const VolumeSize& volume,
 void SampleTrilinear(const Volume& volume, const Eigen::Vector3d& at, bool tileable,
                      std::span<float> out);
 
-// Splits every triangle into four at its edge midpoints, `levels` times. Positions of existing
-// vertices are kept (they stay the first vertex_count() vertices), new ones lie on the edges:
-// unlike Loop subdivision the surface does not move, so sharp features stay sharp.
-TriangleMesh SubdivideMidpoints(const TriangleMesh& mesh, int levels);
-
 struct CarvedMesh {
   TriangleMesh mesh;  // the input mesh, subdivided as needed (positions in the mesh's units)
   int subdivision_levels = 0;
