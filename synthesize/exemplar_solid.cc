@@ -112,6 +112,15 @@ class CandidateTable {
     costs_[i * stride_ + slot] = cost;
   }
 
+  // Every voxel's slot of the lowest cost (plain matching, no prices).
+  std::vector<std::size_t> CheapestSlots() const {
+    std::vector<std::size_t> slots(size(), 0);
+    tbb::parallel_for(std::size_t{0}, size(), [&](std::size_t i) {
+      slots[i] = Cheapest(i, [](float cost, std::size_t) { return cost; });
+    });
+    return slots;
+  }
+
   // The slot of the lowest cost times `weight(voxel)` (the first of equals).
   template <typename Weight>
   std::size_t Cheapest(std::size_t i, Weight weight) const {
@@ -230,10 +239,7 @@ class HistogramControl {
       }
       return error;
     };
-    std::vector<std::size_t> picks(table.size(), 0);
-    tbb::parallel_for(std::size_t{0}, table.size(), [&](std::size_t i) {
-      picks[i] = table.Cheapest(i, [](float cost, std::size_t) { return cost; });
-    });
+    std::vector<std::size_t> picks = table.CheapestSlots();
     std::vector<std::size_t> best_picks = picks;
     double best_error = histogram_error(counts_with(picks));
     std::vector<float> weights(bins_.size() / channels_, 1.0f);
@@ -390,8 +396,8 @@ class Synthesizer {
         appearance_ = &prepared_.AppearanceAt(spacing);
         similarity_ = &prepared_.SimilarityAt(spacing);
         const std::vector<float> exemplar_neighbourhoods = ExemplarNeighbourhoods(spacing);
-        cost_floor_ = CostFloor(exemplar_neighbourhoods);
         histogram_active_ = histogram_.enabled() && spacing <= kHistogramCoarsestSpacing;
+        if (histogram_active_) cost_floor_ = CostFloor(exemplar_neighbourhoods);
         for (int pass = 0; pass < options_.correction_passes; ++pass) {
           const double objective =
               Correct(coordinates, side, spacing, field, exemplar_neighbourhoods);
@@ -530,15 +536,10 @@ class Synthesizer {
                                                : OccupancyPenalties();
       const CandidateTable table =
           ScoreClass(members, side, spacing, field, snapshot, exemplar_neighbourhoods, occupancy);
-      std::vector<std::size_t> picks(members.size(), 0);
-      if (histogram_active_) {
-        picks = histogram_.Balance(table, histogram_.Count(snapshot, lookup), snapshot.size() / 3,
-                                   cost_floor_);
-      } else {
-        for (std::size_t i = 0; i < members.size(); ++i) {
-          picks[i] = table.Cheapest(i, [](float cost, std::size_t) { return cost; });
-        }
-      }
+      const std::vector<std::size_t> picks =
+          histogram_active_ ? histogram_.Balance(table, histogram_.Count(snapshot, lookup),
+                                                 snapshot.size() / 3, cost_floor_)
+                            : table.CheapestSlots();
       for (std::size_t i = 0; i < members.size(); ++i) {
         const Int3& p = members[i];
         const std::size_t index = Index(side, p[0], p[1], p[2]);
