@@ -294,7 +294,6 @@ TEST(ExemplarSolidTest, GaussianStackRemovesTheHistogramDriftOfASingleResolution
   const PreparedExemplar stack = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   EXPECT_TRUE(flat.stack.empty());
   ASSERT_EQ(stack.stack.size(), 2u);  // spacing 2 and 4 (8 is half the exemplar: jitter only)
-  EXPECT_EQ(stack.stack[1].spacing, 4);
   EXPECT_EQ(stack.stack[1].appearance.spacing, 4);
   ExemplarSolidOptions options;
   options.size = VolumeSize::Cube(32);
@@ -528,7 +527,7 @@ TEST(SimilaritySetTest, CacheIsReusedAndSurvivesDamage) {
   EXPECT_TRUE(second.appearance.feature_basis.isApprox(first.appearance.feature_basis, 0.0f));
   ASSERT_EQ(first.stack.size(), 2u);  // spacings 2 and 4 (twice 8 is not below 12)
   ASSERT_EQ(second.stack.size(), 2u);
-  EXPECT_EQ(second.stack[1].spacing, 4);
+  EXPECT_EQ(second.stack[1].appearance.spacing, 4);
   EXPECT_EQ(second.stack[1].appearance.values, first.stack[1].appearance.values);
   EXPECT_EQ(second.stack[1].similarity.indices, first.stack[1].similarity.indices);
 

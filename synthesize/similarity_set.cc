@@ -301,18 +301,21 @@ std::size_t AppearanceIndex::Nearest(std::span<const float> query) const {
   return result.voxel();
 }
 
-const AppearanceSpace& PreparedExemplar::AppearanceAt(int spacing) const {
+const PreparedLevel* PreparedExemplar::StackLevel(int spacing) const {
   for (const PreparedLevel& level : stack) {
-    if (level.spacing == spacing) return level.appearance;
+    if (level.appearance.spacing == spacing) return &level;
   }
-  return appearance;
+  return nullptr;
+}
+
+const AppearanceSpace& PreparedExemplar::AppearanceAt(int spacing) const {
+  const PreparedLevel* level = StackLevel(spacing);
+  return level ? level->appearance : appearance;
 }
 
 const SimilaritySet& PreparedExemplar::SimilarityAt(int spacing) const {
-  for (const PreparedLevel& level : stack) {
-    if (level.spacing == spacing) return level.similarity;
-  }
-  return similarity;
+  const PreparedLevel* level = StackLevel(spacing);
+  return level ? level->similarity : similarity;
 }
 
 int ChebyshevDistance(const ExemplarDomain& domain, std::size_t a, std::size_t b) {
@@ -469,7 +472,6 @@ PreparedExemplar LoadPreparedExemplar(const std::filesystem::path& path, const s
         level.appearance.domain.border != prepared.appearance.domain.border) {
       in.Fail("a stack level that does not fit the exemplar");
     }
-    level.spacing = spacing;
     prepared.stack.push_back(std::move(level));
   }
   if (!in.AtEnd()) in.Fail("trailing bytes");
@@ -510,7 +512,6 @@ PreparedExemplar PrepareExemplar(const Volume& exemplar, const AppearanceOptions
       AppearanceOptions options = appearance;
       options.spacing = spacing;
       PreparedLevel level;
-      level.spacing = spacing;
       level.appearance = ComputeAppearanceSpace(
           GaussianBlur(exemplar, GaussianStackSigma(spacing), edge), options, &level_progress);
       level.similarity = BuildSimilaritySet(level.appearance, similarity, &level_progress);

@@ -63,8 +63,7 @@ int ChebyshevDistance(const ExemplarDomain& domain, std::size_t a, std::size_t b
 // One coarser level of a Gaussian stack: the appearance space of the exemplar blurred by
 // GaussianStackSigma(spacing), with neighbourhood samples `spacing` apart, and its similarity set.
 struct PreparedLevel {
-  int spacing = 2;
-  AppearanceSpace appearance;
+  AppearanceSpace appearance;  // its `spacing` is the level's
   SimilaritySet similarity;
 };
 
@@ -81,6 +80,9 @@ struct PreparedExemplar {
   // exemplar itself when there is none.
   const AppearanceSpace& AppearanceAt(int spacing) const;
   const SimilaritySet& SimilarityAt(int spacing) const;
+
+ private:
+  const PreparedLevel* StackLevel(int spacing) const;  // nullptr when there is none
 };
 
 // The cache key: a hash (XXH3, 64 bits) of the exemplar's size, channel names and values and of
