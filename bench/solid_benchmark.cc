@@ -94,6 +94,16 @@ void MeasureGrowth(benchmark::State& state, const Volume& exemplar, int output_s
   }
 }
 
+// Exemplar side, output side, settings: 16^3, 24^3 and 32^3 grown to 64^3 in every setting, and
+// 16^3 to 32^3 (the tests' size) with and without histogram matching.
+void GrowQualityCases(benchmark::internal::Benchmark* cases) {
+  cases->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
+      ->Args({16, 32, 0})
+      ->Args({16, 32, 1})
+      ->Unit(benchmark::kSecond)
+      ->Iterations(1);
+}
+
 void BM_GrowQuality(benchmark::State& state, ProceduralPattern pattern) {
   MeasureGrowth(state, MakeProceduralExemplar(pattern, static_cast<int>(state.range(0)), 3),
                 static_cast<int>(state.range(1)), static_cast<int>(state.range(2)));
@@ -174,30 +184,10 @@ BENCHMARK_CAPTURE(BM_GrowExemplar, cells, ProceduralPattern::kCells)
     ->Unit(benchmark::kSecond)
     ->UseRealTime()
     ->Iterations(1);
-BENCHMARK_CAPTURE(BM_GrowQuality, marble, ProceduralPattern::kMarble)
-    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
-    ->Args({16, 32, 0})
-    ->Args({16, 32, 1})
-    ->Unit(benchmark::kSecond)
-    ->Iterations(1);
-BENCHMARK_CAPTURE(BM_GrowQuality, cells, ProceduralPattern::kCells)
-    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
-    ->Args({16, 32, 0})
-    ->Args({16, 32, 1})
-    ->Unit(benchmark::kSecond)
-    ->Iterations(1);
-BENCHMARK_CAPTURE(BM_GrowQuality, wood, ProceduralPattern::kWood)
-    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
-    ->Args({16, 32, 0})
-    ->Args({16, 32, 1})
-    ->Unit(benchmark::kSecond)
-    ->Iterations(1);
-BENCHMARK_CAPTURE(BM_GrowQuality, stripes, ProceduralPattern::kStripes)
-    ->ArgsProduct({{32, 24, 16}, {64}, {0, 1, 2}})
-    ->Args({16, 32, 0})
-    ->Args({16, 32, 1})
-    ->Unit(benchmark::kSecond)
-    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_GrowQuality, marble, ProceduralPattern::kMarble)->Apply(GrowQualityCases);
+BENCHMARK_CAPTURE(BM_GrowQuality, cells, ProceduralPattern::kCells)->Apply(GrowQualityCases);
+BENCHMARK_CAPTURE(BM_GrowQuality, wood, ProceduralPattern::kWood)->Apply(GrowQualityCases);
+BENCHMARK_CAPTURE(BM_GrowQuality, stripes, ProceduralPattern::kStripes)->Apply(GrowQualityCases);
 BENCHMARK_CAPTURE(BM_GrowRealQuality, Exemplar_14, "Exemplar_14.jpg")
     ->ArgsProduct({{32, 24}, {64}, {0, 1}})
     ->Unit(benchmark::kSecond)
