@@ -4,12 +4,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibrate/light_list.h"
-#include "calibrate/near_light.h"
-#include "calibrate/synthetic_calibration.h"
-#include "capture/capture_manifest.h"
-#include "capture/load_photometric_set.h"
-#include "capture/lp_file.h"
+#include "calibrate/lights/light_list.h"
+#include "calibrate/radiometry/near_light.h"
+#include "calibrate/testing/synthetic_calibration.h"
+#include "capture/io/capture_manifest.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/io/lp_file.h"
 #include "core/atomic_file.h"
 #include "core/image_io.h"
 #include "core/json_file.h"

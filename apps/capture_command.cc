@@ -6,12 +6,12 @@
 #include <sstream>
 
 #include "apps/commands.h"
-#include "capture/capture_session.h"
-#include "capture/libcamera_frame_source.h"
-#include "capture/light_controller.h"
-#include "capture/light_plan.h"
-#include "capture/open_frame_source.h"
-#include "capture/v4l2_frame_source.h"
+#include "capture/live/capture_session.h"
+#include "capture/live/libcamera_frame_source.h"
+#include "capture/live/light_controller.h"
+#include "capture/live/light_plan.h"
+#include "capture/live/open_frame_source.h"
+#include "capture/live/v4l2_frame_source.h"
 #include "core/error.h"
 #include "core/progress.h"
 

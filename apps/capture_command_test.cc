@@ -6,8 +6,8 @@
 
 #include <filesystem>
 
-#include "capture/capture_session.h"
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/live/capture_session.h"
 #include "core/atomic_file.h"
 #include "tests/support/test_support.h"
 

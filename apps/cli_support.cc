@@ -5,16 +5,15 @@
 
 #include <algorithm>
 
-#include "capture/text_parsing.h"
 #include "core/error.h"
-#include "relight/relight.h"
+#include "core/text_parsing.h"
+#include "relight/render/relight.h"
 
 namespace photomat::app {
 
 LightDirection ParseSlantTilt(const std::string& text) {
   const auto comma = text.find(',');
-  const auto slant = comma == std::string::npos ? std::nullopt
-                                                : ParseNumber(text.substr(0, comma));
+  const auto slant = comma == std::string::npos ? std::nullopt : ParseNumber(text.substr(0, comma));
   const auto tilt = comma == std::string::npos ? std::nullopt : ParseNumber(text.substr(comma + 1));
   if (!slant || !tilt) throw Error(fmt::format("\"{}\": expected SLANT,TILT in degrees", text));
   if (*slant < 0.0 || *slant > 90.0) {
@@ -26,8 +25,8 @@ LightDirection ParseSlantTilt(const std::string& text) {
 std::vector<LightDirection> ParseSweep(const std::string& text) {
   const auto comma = text.find(',');
   const auto count = ParseNumber(text.substr(0, comma));
-  const auto slant = comma == std::string::npos ? std::optional(60.0)
-                                                : ParseNumber(text.substr(comma + 1));
+  const auto slant =
+      comma == std::string::npos ? std::optional(60.0) : ParseNumber(text.substr(comma + 1));
   if (!count || *count != static_cast<int>(*count) || !slant) {
     throw Error(fmt::format("\"{}\": expected COUNT[,SLANT], e.g. 36,60", text));
   }
@@ -57,9 +56,10 @@ LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOption
     if (loaded.saturated_pixels[i] > worst) worst = loaded.saturated_pixels[i], worst_index = i;
   }
   if (images > 0) {
-    spdlog::warn("{} of {} images have clipped pixels (most: {} in {}); clipped values are not "
-                 "measurements and bias least-squares fits",
-                 images, loaded.set.size(), worst, loaded.set.image_name(worst_index));
+    spdlog::warn(
+        "{} of {} images have clipped pixels (most: {} in {}); clipped values are not "
+        "measurements and bias least-squares fits",
+        images, loaded.set.size(), worst, loaded.set.image_name(worst_index));
   }
   return loaded;
 }
@@ -73,10 +73,10 @@ void CreateFolder(const std::filesystem::path& folder) {
 std::string FormatEvaluationTable(const std::vector<MethodEvaluation>& evaluations) {
   const bool normals = std::any_of(evaluations.begin(), evaluations.end(),
                                    [](const auto& e) { return e.normals.has_value(); });
-  std::string table = fmt::format("{:<10} {:>14} {:>14}", "method", "eta_reconstr.",
-                                  "eta_predict.");
-  if (normals) table += fmt::format(" {:>10} {:>10} {:>7} {:>7}", "mean_deg", "median_deg",
-                                    "<5deg", "<10deg");
+  std::string table =
+      fmt::format("{:<10} {:>14} {:>14}", "method", "eta_reconstr.", "eta_predict.");
+  if (normals)
+    table += fmt::format(" {:>10} {:>10} {:>7} {:>7}", "mean_deg", "median_deg", "<5deg", "<10deg");
   table += "\n";
   for (const MethodEvaluation& e : evaluations) {
     table += fmt::format("{:<10} {:>14.6f} {:>14}", e.method.Name(), e.eta_reconstruction,

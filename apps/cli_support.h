@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "capture/load_photometric_set.h"
-#include "capture/synthetic_capture.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/light_direction.h"
-#include "represent/evaluation.h"
+#include "represent/evaluation/evaluation.h"
 
 namespace photomat::app {
 

@@ -2,16 +2,16 @@
 
 #include "apps/cli_support.h"
 #include "apps/commands.h"
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "relight/evaluation_report.h"
-#include "relight/relight.h"
-#include "relight/viewer_export.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
-#include "represent/map_stack.h"
-#include "synthesize/synthesis.h"
+#include "relight/render/relight.h"
+#include "relight/web/evaluation_report.h"
+#include "relight/web/viewer_export.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
+#include "represent/stack/map_stack.h"
+#include "synthesize/texture/synthesis.h"
 
 namespace photomat::app {
 

@@ -9,8 +9,8 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "relight/evaluation_report.h"
-#include "represent/evaluation.h"
+#include "relight/web/evaluation_report.h"
+#include "represent/evaluation/evaluation.h"
 
 namespace photomat::app {
 namespace {
@@ -111,9 +111,9 @@ void AddEvaluateCommand(CLI::App& app) {
                                                         : std::optional(options->gt_normals);
     if (truth_path) truth = ReadImage(*truth_path).image;
     if (truth && (truth->width() != loaded.set.width() || truth->height() != loaded.set.height())) {
-      throw Error(*truth_path, fmt::format("normals are {}x{} but the images are {}x{}",
-                                           truth->width(), truth->height(), loaded.set.width(),
-                                           loaded.set.height()));
+      throw Error(*truth_path,
+                  fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
+                              truth->height(), loaded.set.width(), loaded.set.height()));
     }
     // Checked before the evaluation, which can take minutes.
     const std::vector<int> report_images = ParseIndexList(options->report_images);
@@ -134,8 +134,8 @@ void AddEvaluateCommand(CLI::App& app) {
     }
     std::vector<MethodEvaluation> results;
     for (const Method& method : methods) {
-      results.push_back(EvaluateMethod(loaded.set, observations, method,
-                                       truth ? &*truth : nullptr, evaluation));
+      results.push_back(
+          EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr, evaluation));
     }
     fmt::print("{} images, {} pixels{}\n{}", loaded.set.size(), observations.pixels(),
                truth ? fmt::format(", ground truth {}", truth_path->string()) : "",

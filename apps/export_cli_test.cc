@@ -5,13 +5,13 @@
 #include <cmath>
 #include <cstdio>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/colour.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "relight/ptm_file.h"
-#include "relight/rti_file.h"
-#include "represent/map_stack.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/rti_file.h"
+#include "represent/stack/map_stack.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -7,14 +7,14 @@
 #include "apps/commands.h"
 #include "core/colour.h"
 #include "core/error.h"
-#include "relight/export.h"
-#include "relight/interchange.h"
-#include "relight/ptm_file.h"
-#include "relight/rti_file.h"
-#include "relight/stack_file.h"
-#include "relight/viewer_export.h"
-#include "represent/fit.h"
-#include "represent/map_stack.h"
+#include "relight/export/export.h"
+#include "relight/formats/interchange.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/rti_file.h"
+#include "relight/formats/stack_file.h"
+#include "relight/web/viewer_export.h"
+#include "represent/fitting/fit.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat::app {
 namespace {
@@ -98,9 +98,10 @@ void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedSt
   TerminalProgressBar bar;
   viewer.progress = &bar;
   ExportViewer(options.viewer, representations, viewer);
-  fmt::print("wrote the web viewer ({} method(s)) to {}: serve that folder with any static file "
-             "server (e.g. python3 -m http.server --directory {} 8000) and open it\n",
-             representations.size(), options.viewer.string(), options.viewer.string());
+  fmt::print(
+      "wrote the web viewer ({} method(s)) to {}: serve that folder with any static file "
+      "server (e.g. python3 -m http.server --directory {} 8000) and open it\n",
+      representations.size(), options.viewer.string(), options.viewer.string());
 }
 
 // Every stack of a fit folder (in photomat's method order), or the one `method` or the file names.
@@ -121,8 +122,7 @@ std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
 }
 
 void RunExport(const ExportCommandOptions& options) {
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty() &&
-      options.viewer.empty()) {
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty()) {
     throw Error(
         "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE and/or --viewer DIR");
   }

@@ -8,8 +8,8 @@
 #include "apps/robust_support.h"
 #include "core/colour.h"
 #include "core/error.h"
-#include "represent/fit.h"
-#include "represent/map_stack.h"
+#include "represent/fitting/fit.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat::app {
 
@@ -28,12 +28,14 @@ void AddFitCommand(CLI::App& app) {
       "fit",
       "Fit relightable representations to a photometric set; writes one multi-layer EXR map "
       "stack per method and stacks.json into --out.");
-  command->add_option("input", options->input,
-                      "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")
+  command
+      ->add_option("input", options->input,
+                   "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")
       ->required();
-  command->add_option("--method", options->methods,
-                      "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), a "
-                      "comma-separated list, or all")
+  command
+      ->add_option("--method", options->methods,
+                   "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), a "
+                   "comma-separated list, or all")
       ->capture_default_str();
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_flag("--ignore-intensities", options->raw_intensities,

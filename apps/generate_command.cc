@@ -23,22 +23,25 @@ void AddGenerateCommand(CLI::App& app) {
   command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   command->add_option("--pattern", options->pattern, "Material: bricks, bumps or grooves")
       ->capture_default_str();
-  command->add_option("--relief", options->generate.material.max_slope_degrees,
-                      "Steepest surface slope in degrees (25 casts no shadow on the default "
-                      "lights; 50+ makes shadows)")
+  command
+      ->add_option("--relief", options->generate.material.max_slope_degrees,
+                   "Steepest surface slope in degrees (25 casts no shadow on the default "
+                   "lights; 50+ makes shadows)")
       ->capture_default_str();
   command->add_flag("--shadows", options->generate.render.shadows,
                     "Attached and cast shadows (off: the linear Lambertian model)");
-  command->add_option("--specular", options->generate.render.specular,
-                      "Blinn-Phong specular coefficient k_s (0: Lambertian)")
+  command
+      ->add_option("--specular", options->generate.render.specular,
+                   "Blinn-Phong specular coefficient k_s (0: Lambertian)")
       ->capture_default_str();
   command->add_option("--shininess", options->generate.render.shininess, "Blinn-Phong exponent")
       ->capture_default_str();
-  command->add_option("--noise", options->generate.render.noise_sigma,
-                      "Gaussian noise sigma, in units of full scale")
+  command
+      ->add_option("--noise", options->generate.render.noise_sigma,
+                   "Gaussian noise sigma, in units of full scale")
       ->capture_default_str();
-  command->add_option("--seed", options->generate.material.seed,
-                      "Seed of the material and the noise")
+  command
+      ->add_option("--seed", options->generate.material.seed, "Seed of the material and the noise")
       ->capture_default_str();
   command->add_option("--lights", options->lights,
                       "Light file (.lp, manifest.json, DiLiGenT folder); default: the thesis grid "

@@ -1,9 +1,9 @@
 // photomat: relightable material maps from photographs under many lights.
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <exception>
-#include <fmt/format.h>
 
 #include "apps/commands.h"
 #include "core/error.h"

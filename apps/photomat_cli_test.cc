@@ -2,10 +2,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "represent/map_stack.h"
+#include "represent/stack/map_stack.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

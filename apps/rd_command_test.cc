@@ -6,8 +6,8 @@
 #include <string>
 
 #include "core/image_io.h"
-#include "represent/map_stack.h"
-#include "synthesize/mesh_io.h"
+#include "represent/stack/map_stack.h"
+#include "synthesize/mesh/mesh_io.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

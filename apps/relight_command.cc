@@ -3,9 +3,9 @@
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "core/error.h"
-#include "relight/relight.h"
-#include "relight/stack_file.h"
-#include "represent/map_stack.h"
+#include "relight/formats/stack_file.h"
+#include "relight/render/relight.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat::app {
 

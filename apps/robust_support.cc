@@ -3,7 +3,7 @@
 #include <fmt/format.h>
 
 #include "apps/cli_support.h"
-#include "calibrate/exposure.h"
+#include "calibrate/radiometry/exposure.h"
 #include "core/error.h"
 
 namespace photomat::app {

@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/image.h"
-#include "represent/robust_fit.h"
+#include "represent/fitting/robust_fit.h"
 
 namespace photomat::app {
 

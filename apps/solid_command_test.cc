@@ -9,9 +9,9 @@
 #include "core/atomic_file.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "synthesize/mesh_io.h"
-#include "synthesize/volume_io.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/mesh/mesh_io.h"
+#include "synthesize/volume/volume_io.h"
+#include "synthesize/volume/voxel_hash.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

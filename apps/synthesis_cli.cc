@@ -7,7 +7,7 @@
 
 #include "core/error.h"
 #include "core/json_file.h"
-#include "synthesize/synthesis_quality.h"
+#include "synthesize/texture/synthesis_quality.h"
 
 namespace photomat::app {
 namespace {

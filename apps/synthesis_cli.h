@@ -6,7 +6,7 @@
 
 #include "core/image.h"
 #include "core/image_io.h"
-#include "represent/map_stack.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat::app {
 

@@ -6,11 +6,11 @@
 #include <set>
 #include <vector>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "represent/map_stack.h"
-#include "synthesize/source_map.h"
+#include "represent/stack/map_stack.h"
+#include "synthesize/texture/source_map.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -5,12 +5,12 @@
 #include "apps/cli_support.h"
 #include "apps/commands.h"
 #include "apps/synthesis_cli.h"
-#include "capture/text_parsing.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/map_stack.h"
-#include "synthesize/integrable_projection.h"
-#include "synthesize/synthesis.h"
+#include "core/text_parsing.h"
+#include "represent/stack/map_stack.h"
+#include "synthesize/texture/integrable_projection.h"
+#include "synthesize/texture/synthesis.h"
 
 namespace photomat::app {
 namespace {

@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <string>
 
-#include "capture/load_photometric_set.h"
-#include "represent/fit.h"
+#include "capture/io/load_photometric_set.h"
+#include "represent/fitting/fit.h"
 
 namespace photomat {
 namespace {
@@ -45,11 +45,17 @@ void BM_LoadAndFit(benchmark::State& state, const std::string& method) {
 
 BENCHMARK(BM_Load)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 BENCHMARK_CAPTURE(BM_LoadAndFit, gradient, std::string("gradient"))
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
 BENCHMARK_CAPTURE(BM_LoadAndFit, ptm, std::string("ptm"))
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
 BENCHMARK_CAPTURE(BM_LoadAndFit, eigen6, std::string("eigen6"))
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
 
 }  // namespace
 }  // namespace photomat

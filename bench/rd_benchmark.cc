@@ -7,9 +7,9 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "synthesize/mesh.h"
-#include "synthesize/mesh_io.h"
-#include "synthesize/reaction_diffusion.h"
+#include "synthesize/mesh/mesh.h"
+#include "synthesize/mesh/mesh_io.h"
+#include "synthesize/surface/reaction_diffusion.h"
 
 namespace photomat {
 namespace {

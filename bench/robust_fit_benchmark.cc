@@ -16,11 +16,11 @@
 #include <numeric>
 #include <optional>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/image_io.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
-#include "represent/robust_fit.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
+#include "represent/fitting/robust_fit.h"
 
 namespace photomat {
 namespace {

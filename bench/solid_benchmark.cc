@@ -12,10 +12,10 @@
 #include <string>
 
 #include "core/image_io.h"
-#include "synthesize/exemplar_solid.h"
-#include "synthesize/procedural_exemplars.h"
-#include "synthesize/solid_quality.h"
-#include "synthesize/spectral_solid.h"
+#include "synthesize/solid/exemplar_solid.h"
+#include "synthesize/solid/procedural_exemplars.h"
+#include "synthesize/solid/solid_quality.h"
+#include "synthesize/solid/spectral_solid.h"
 
 namespace photomat {
 namespace {

@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/fit.h"
-#include "synthesize/synthesis.h"
-#include "synthesize/synthesis_quality.h"
+#include "represent/fitting/fit.h"
+#include "synthesize/texture/synthesis.h"
+#include "synthesize/texture/synthesis_quality.h"
 
 namespace photomat {
 namespace {

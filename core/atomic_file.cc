@@ -1,12 +1,12 @@
 #include "core/atomic_file.h"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
 #include <cstring>
-#include <fmt/format.h>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -23,9 +23,8 @@ fs::path TemporarySibling(const fs::path& path) {
   // in the same nanosecond.
   const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
   const auto thread = std::hash<std::thread::id>{}(std::this_thread::get_id());
-  return path.parent_path() / fmt::format(".{}.tmp-{}-{:x}-{:x}{}", path.stem().string(),
-                                          getpid(), thread & 0xffffff, stamp,
-                                          path.extension().string());
+  return path.parent_path() / fmt::format(".{}.tmp-{}-{:x}-{:x}{}", path.stem().string(), getpid(),
+                                          thread & 0xffffff, stamp, path.extension().string());
 }
 
 // fsync a file or folder; returns errno or 0.

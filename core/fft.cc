@@ -1,4 +1,4 @@
-#include "synthesize/fft.h"
+#include "core/fft.h"
 
 #include <fftw3.h>
 #include <fmt/format.h>

@@ -1,7 +1,8 @@
 #include "core/image.h"
 
-#include <algorithm>
 #include <fmt/format.h>
+
+#include <algorithm>
 
 #include "core/error.h"
 
@@ -15,8 +16,8 @@ constexpr std::size_t kMaxValues = std::size_t{1} << 31;
 void CheckShape(int width, int height, int channels) {
   if (width < 0 || height < 0 || channels < 0 ||
       static_cast<std::size_t>(width) * height * channels > kMaxValues) {
-    throw Error(fmt::format("unsupported image shape {}x{} with {} channels", width, height,
-                            channels));
+    throw Error(
+        fmt::format("unsupported image shape {}x{} with {} channels", width, height, channels));
   }
 }
 
@@ -35,8 +36,8 @@ Image::Image(int width, int height, std::vector<std::string> channel_names)
 
 void Image::set_channel_names(std::vector<std::string> names) {
   if (static_cast<int>(names.size()) != channels_) {
-    throw Error(fmt::format("{} channel names given for an image of {} channels", names.size(),
-                            channels_));
+    throw Error(
+        fmt::format("{} channel names given for an image of {} channels", names.size(), channels_));
   }
   channel_names_ = std::move(names);
 }

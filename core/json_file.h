@@ -24,7 +24,7 @@ class JsonReader {
 
   JsonReader operator[](const std::string& key) const;  // required member
   JsonReader operator[](std::size_t index) const;       // required element
-  std::size_t ArraySize() const;                         // requires an array
+  std::size_t ArraySize() const;                        // requires an array
 
   std::string String() const;
   double Number() const;  // finite

@@ -1,7 +1,6 @@
 #include "core/light_direction.h"
 
 #include <Eigen/Geometry>
-
 #include <cmath>
 #include <numbers>
 

@@ -1,7 +1,8 @@
 #include "core/photometric_set.h"
 
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "core/error.h"
 
@@ -48,9 +49,7 @@ void PhotometricSet::set_mask(Mask mask) {
   mask_ = std::move(mask);
 }
 
-Mask PhotometricSet::MaskOrAll() const {
-  return mask_ ? *mask_ : Mask(width(), height(), true);
-}
+Mask PhotometricSet::MaskOrAll() const { return mask_ ? *mask_ : Mask(width(), height(), true); }
 
 void PhotometricSet::set_intensities(std::vector<std::vector<float>> intensities) {
   if (intensities.size() != images_.size()) {
@@ -65,8 +64,8 @@ void PhotometricSet::set_intensities(std::vector<std::vector<float>> intensities
     }
     for (float v : row) {
       if (!std::isfinite(v) || v <= 0.0f) {
-        Fail(fmt::format("the intensity of {} is {}; intensities must be positive",
-                         image_names_[i], v));
+        Fail(fmt::format("the intensity of {} is {}; intensities must be positive", image_names_[i],
+                         v));
       }
     }
   }

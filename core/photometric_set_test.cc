@@ -37,17 +37,15 @@ TEST(PhotometricSetTest, RejectsMixedSizesNamingBothImages) {
 
 TEST(PhotometricSetTest, RejectsMixedChannelCounts) {
   EXPECT_THAT(MessageOf([] {
-                PhotometricSet({Filled(4, 3, 1, 0), Filled(4, 3, 3, 0)},
-                               {LightDirection::FromSlantTilt(0, 0),
-                                LightDirection::FromSlantTilt(30, 0)});
+                PhotometricSet(
+                    {Filled(4, 3, 1, 0), Filled(4, 3, 3, 0)},
+                    {LightDirection::FromSlantTilt(0, 0), LightDirection::FromSlantTilt(30, 0)});
               }),
               HasSubstr("channels"));
 }
 
 TEST(PhotometricSetTest, RejectsLightCountMismatch) {
-  EXPECT_THAT(MessageOf([] {
-                PhotometricSet({Filled(4, 3, 1, 0)}, {});
-              }),
+  EXPECT_THAT(MessageOf([] { PhotometricSet({Filled(4, 3, 1, 0)}, {}); }),
               HasSubstr("1 images but 0 light directions"));
 }
 

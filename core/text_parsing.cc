@@ -1,4 +1,4 @@
-#include "capture/text_parsing.h"
+#include "core/text_parsing.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "capture/text_parsing.h"
+#include "core/text_parsing.h"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,9 @@ namespace photomat {
 namespace {
 
 TEST(TextParsingTest, SplitLinesDropsBomAndCarriageReturns) {
-  const auto lines = SplitLines("\xEF\xBB\xBF" "a b\r\nc\r\n\nd");
+  const auto lines = SplitLines(
+      "\xEF\xBB\xBF"
+      "a b\r\nc\r\n\nd");
   ASSERT_EQ(lines.size(), 4u);
   EXPECT_EQ(lines[0], "a b");
   EXPECT_EQ(lines[1], "c");

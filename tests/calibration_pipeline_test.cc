@@ -5,18 +5,18 @@
 #include <cstdio>
 #include <numeric>
 
-#include "calibrate/exposure.h"
-#include "calibrate/flat_field.h"
-#include "calibrate/near_light.h"
-#include "calibrate/semi_calibrated.h"
-#include "calibrate/synthetic_calibration.h"
-#include "capture/load_photometric_set.h"
-#include "capture/synthetic_capture.h"
+#include "calibrate/radiometry/exposure.h"
+#include "calibrate/radiometry/flat_field.h"
+#include "calibrate/radiometry/near_light.h"
+#include "calibrate/radiometry/semi_calibrated.h"
+#include "calibrate/testing/synthetic_calibration.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/image_io.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
-#include "represent/robust_fit.h"
-#include "represent/robust_intensities.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
+#include "represent/fitting/robust_fit.h"
+#include "represent/fitting/robust_intensities.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

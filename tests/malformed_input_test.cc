@@ -1,12 +1,11 @@
 // Degenerate light sets read through every loader: the fit names the light file and the fault.
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <fmt/format.h>
-
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/error.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/layouts.h"
 #include "tests/support/test_support.h"
 

@@ -1,4 +1,4 @@
-#include "calibrate/calibration_report.h"
+#include "calibrate/lights/calibration_report.h"
 
 #include <fmt/format.h>
 

@@ -1,8 +1,8 @@
-#include "calibrate/calibration_report.h"
+#include "calibrate/lights/calibration_report.h"
 
 #include <gtest/gtest.h>
 
-#include "calibrate/light_list.h"
+#include "calibrate/lights/light_list.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"

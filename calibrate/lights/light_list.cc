@@ -1,11 +1,11 @@
-#include "calibrate/light_list.h"
+#include "calibrate/lights/light_list.h"
 
 #include <fmt/format.h>
 
-#include "capture/load_photometric_set.h"
-#include "capture/text_parsing.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 

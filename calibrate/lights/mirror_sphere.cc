@@ -1,4 +1,4 @@
-#include "calibrate/mirror_sphere.h"
+#include "calibrate/lights/mirror_sphere.h"
 
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
@@ -13,9 +13,9 @@
 #include <opencv2/imgproc.hpp>
 #include <queue>
 
-#include "capture/text_parsing.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 namespace {

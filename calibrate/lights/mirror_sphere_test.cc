@@ -1,4 +1,4 @@
-#include "calibrate/mirror_sphere.h"
+#include "calibrate/lights/mirror_sphere.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <numeric>
 
-#include "calibrate/light_list.h"
-#include "calibrate/synthetic_calibration.h"
+#include "calibrate/lights/light_list.h"
+#include "calibrate/testing/synthetic_calibration.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "tests/support/test_support.h"

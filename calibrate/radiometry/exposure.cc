@@ -1,4 +1,4 @@
-#include "calibrate/exposure.h"
+#include "calibrate/radiometry/exposure.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

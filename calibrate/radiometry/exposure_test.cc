@@ -1,4 +1,4 @@
-#include "calibrate/exposure.h"
+#include "calibrate/radiometry/exposure.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "calibrate/flat_field.h"
+#include "calibrate/radiometry/flat_field.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -5,7 +5,7 @@
 #include <string_view>
 #include <vector>
 
-#include "calibrate/near_light.h"
+#include "calibrate/radiometry/near_light.h"
 #include "core/image.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"

@@ -1,11 +1,11 @@
-#include "calibrate/flat_field.h"
+#include "calibrate/radiometry/flat_field.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "calibrate/near_light.h"
-#include "calibrate/synthetic_calibration.h"
+#include "calibrate/radiometry/near_light.h"
+#include "calibrate/testing/synthetic_calibration.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 

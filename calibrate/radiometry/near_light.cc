@@ -1,10 +1,10 @@
-#include "calibrate/near_light.h"
+#include "calibrate/radiometry/near_light.h"
 
 #include <fmt/format.h>
 
-#include "capture/text_parsing.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 

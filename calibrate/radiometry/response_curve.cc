@@ -1,4 +1,4 @@
-#include "calibrate/response_curve.h"
+#include "calibrate/radiometry/response_curve.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

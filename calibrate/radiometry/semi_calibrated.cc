@@ -1,4 +1,4 @@
-#include "calibrate/semi_calibrated.h"
+#include "calibrate/radiometry/semi_calibrated.h"
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>

@@ -1,8 +1,8 @@
-#include "calibrate/semi_calibrated.h"
+#include "calibrate/radiometry/semi_calibrated.h"
 
 #include <gtest/gtest.h>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "tests/support/synthetic_sets.h"
 

@@ -1,4 +1,4 @@
-#include "calibrate/synthetic_calibration.h"
+#include "calibrate/testing/synthetic_calibration.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -4,9 +4,9 @@
 #include <optional>
 #include <vector>
 
-#include "calibrate/mirror_sphere.h"
-#include "calibrate/near_light.h"
-#include "capture/synthetic_capture.h"
+#include "calibrate/lights/mirror_sphere.h"
+#include "calibrate/radiometry/near_light.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/image.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"

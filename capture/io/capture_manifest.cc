@@ -1,4 +1,4 @@
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 
 #include <fmt/format.h>
 
@@ -126,8 +126,8 @@ CaptureManifest SavePhotometricSet(const fs::path& folder, const PhotometricSet&
   std::error_code ec;
   fs::create_directories(folder, ec);
   if (ec) throw Error(folder, fmt::format("cannot create folder: {}", ec.message()));
-  const bool exr = options.sample_type == SampleType::kFloat ||
-                   options.sample_type == SampleType::kHalf;
+  const bool exr =
+      options.sample_type == SampleType::kFloat || options.sample_type == SampleType::kHalf;
   CaptureManifest manifest;
   manifest.colour_space = exr ? ColourSpace::kLinear : options.encoding;
   ImageWriteOptions write;

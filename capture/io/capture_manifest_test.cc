@@ -1,9 +1,9 @@
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 
@@ -39,8 +39,8 @@ TEST(CaptureManifestTest, LightsAsVectorsOrSlantTilt) {
 
 TEST(CaptureManifestTest, DisagreeingVectorAndAnglesAreRejected) {
   testing::TempDir dir;
-  const auto path =
-      WriteManifest(dir, R"({"file": "a.png", "light": [0, 0, 1], "slant_deg": 10, "tilt_deg": 0})");
+  const auto path = WriteManifest(
+      dir, R"({"file": "a.png", "light": [0, 0, 1], "slant_deg": 10, "tilt_deg": 0})");
   EXPECT_THAT([&] { ReadCaptureManifest(path); },
               ThrowsMessage<Error>(HasSubstr("images[0]: \"light\" and \"slant_deg\"/\"tilt_deg\" "
                                              "disagree by 10.000 degrees")));

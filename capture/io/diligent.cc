@@ -1,10 +1,10 @@
-#include "capture/diligent.h"
+#include "capture/io/diligent.h"
 
 #include <fmt/format.h>
 
-#include "capture/text_parsing.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 namespace {
@@ -25,8 +25,8 @@ std::vector<NumberRow> ReadNumberRows(const fs::path& path, int width) {
     const int line = static_cast<int>(i) + 1;
     const auto tokens = SplitWhitespace(lines[i]);
     if (static_cast<int>(tokens.size()) != width) {
-      throw Error(path, fmt::format("line {}: expected {} numbers, found \"{}\"", line, width,
-                                    lines[i]));
+      throw Error(path,
+                  fmt::format("line {}: expected {} numbers, found \"{}\"", line, width, lines[i]));
     }
     NumberRow row{{}, line};
     for (auto token : tokens) {
@@ -66,8 +66,8 @@ DiligentFiles ReadDiligentFiles(const fs::path& folder) {
   for (const NumberRow& row : directions) {
     const Eigen::Vector3d v(row.values[0], row.values[1], row.values[2]);
     if (v.z() < 0.0) {
-      throw Error(directions_file, fmt::format("line {}: light below the sample plane (z < 0)",
-                                               row.line));
+      throw Error(directions_file,
+                  fmt::format("line {}: light below the sample plane (z < 0)", row.line));
     }
     try {
       files.lights.push_back(LightDirection::FromVector(v));

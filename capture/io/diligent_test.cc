@@ -1,4 +1,4 @@
-#include "capture/diligent.h"
+#include "capture/io/diligent.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

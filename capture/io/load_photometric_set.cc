@@ -1,13 +1,13 @@
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <fmt/format.h>
 
-#include "capture/capture_manifest.h"
-#include "capture/diligent.h"
-#include "capture/lp_file.h"
+#include "capture/io/capture_manifest.h"
+#include "capture/io/diligent.h"
+#include "capture/io/lp_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
 
@@ -117,7 +117,8 @@ InputLocation DetectInput(const fs::path& path) {
   if (lp_files.size() == 1) return {InputKind::kLpFile, lp_files.front()};
   if (lp_files.size() > 1) {
     std::string names;
-    for (const auto& file : lp_files) names += (names.empty() ? "" : ", ") + file.filename().string();
+    for (const auto& file : lp_files)
+      names += (names.empty() ? "" : ", ") + file.filename().string();
     throw Error(path, fmt::format("several light files ({}); name the one to use", names));
   }
   throw Error(path,
@@ -179,9 +180,9 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
   // The set's source is the file its lights came from: messages about the lights point there.
   const fs::path source =
       input.kind == InputKind::kDiligent ? input.file / "light_directions.txt" : input.file;
-  LoadedSet loaded{PhotometricSet(std::move(images), std::move(description.lights),
-                                  std::move(names), source),
-                   input.kind, std::move(saturated), description.ground_truth_normals};
+  LoadedSet loaded{
+      PhotometricSet(std::move(images), std::move(description.lights), std::move(names), source),
+      input.kind, std::move(saturated), description.ground_truth_normals};
   if (description.mask) {
     try {
       loaded.set.set_mask(ReadMask(*description.mask));

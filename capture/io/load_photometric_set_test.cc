@@ -1,11 +1,10 @@
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <fmt/format.h>
-
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "tests/support/layouts.h"
@@ -94,7 +93,7 @@ TEST_P(LoaderTest, CountMismatch) {
   WriteLights(good_lights_, 5);
   const std::string error = LoadError();
   EXPECT_THAT(error, HasSubstr(layout_.kind == InputKind::kDiligent ? "filenames.txt"
-                                                                     : layout_.light_file.string()));
+                                                                    : layout_.light_file.string()));
   EXPECT_THAT(error, ::testing::AnyOf(HasSubstr("count 5"), HasSubstr("lists 5 images"),
                                       HasSubstr("2 values")));
 }
@@ -103,8 +102,8 @@ TEST_P(LoaderTest, ZeroVector) {
   auto lights = good_lights_;
   lights[1] = "0 0 0";
   WriteLights(lights);
-  EXPECT_THAT(LoadError(), AllOf(HasSubstr(layout_.light_file.string()),
-                                 HasSubstr("zero-length light vector")));
+  EXPECT_THAT(LoadError(),
+              AllOf(HasSubstr(layout_.light_file.string()), HasSubstr("zero-length light vector")));
 }
 
 INSTANTIATE_TEST_SUITE_P(AllLayouts, LoaderTest, ::testing::Values(0, 1, 2),
@@ -147,8 +146,8 @@ TEST(LoadDiligentTest, BallLoadsWithMaskIntensitiesAndTruth) {
   ASSERT_EQ(unscaled.set.intensities().size(), 96u);
   // Applied means divided: pick a bright object pixel of image 0.
   const float intensity = unscaled.set.intensities()[0][1];
-  EXPECT_NEAR(loaded.set.image(0).at(306, 256, 1), unscaled.set.image(0).at(306, 256, 1) / intensity,
-              1e-6);
+  EXPECT_NEAR(loaded.set.image(0).at(306, 256, 1),
+              unscaled.set.image(0).at(306, 256, 1) / intensity, 1e-6);
 }
 
 TEST(LoadLpTest, PtmFitterFixtureDecodesSrgbJpegs) {

@@ -1,12 +1,13 @@
-#include "capture/lp_file.h"
+#include "capture/io/lp_file.h"
+
+#include <fmt/format.h>
 
 #include <cmath>
-#include <fmt/format.h>
 #include <span>
 
-#include "capture/text_parsing.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 namespace {
@@ -36,8 +37,7 @@ LightFileEntry ParseLightLine(const fs::path& path, const std::string& line, int
   const std::vector<std::string_view> tokens = SplitWhitespace(rest);
   const std::size_t name_tokens = name.empty() ? 1 : 0;
   if (tokens.size() < 3 + name_tokens) {
-    FailAt(path, number,
-           fmt::format("expected \"filename x y z\", found \"{}\"", line));
+    FailAt(path, number, fmt::format("expected \"filename x y z\", found \"{}\"", line));
   }
   const auto vector_tokens = std::span(tokens).last(3);
   if (name.empty()) {

@@ -1,4 +1,4 @@
-#include "capture/lp_file.h"
+#include "capture/io/lp_file.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -87,9 +87,7 @@ TEST(LpFileTest, EmptyFile) {
   EXPECT_THAT(ErrorOf(""), HasSubstr("no light lines"));
 }
 
-TEST(LpFileTest, MissingFileIsNamed) {
-  EXPECT_THROW(ReadLpFile("/nonexistent/l.lp"), Error);
-}
+TEST(LpFileTest, MissingFileIsNamed) { EXPECT_THROW(ReadLpFile("/nonexistent/l.lp"), Error); }
 
 TEST(LpFileTest, WriteThenReadRoundTripsExactly) {
   testing::TempDir dir;

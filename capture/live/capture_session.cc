@@ -1,11 +1,11 @@
-#include "capture/capture_session.h"
+#include "capture/live/capture_session.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <thread>
 
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "capture/frame_source.h"
-#include "capture/light_controller.h"
-#include "capture/light_plan.h"
+#include "capture/live/frame_source.h"
+#include "capture/live/light_controller.h"
+#include "capture/live/light_plan.h"
 #include "core/progress.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "capture/capture_session.h"
+#include "capture/live/capture_session.h"
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>
@@ -10,16 +10,16 @@
 #include <cmath>
 #include <functional>
 
-#include "capture/capture_manifest.h"
-#include "capture/load_photometric_set.h"
-#include "capture/testing/emulated_v4l2_device.h"
-#include "capture/testing/synthetic_studio.h"
-#include "capture/v4l2_frame_source.h"
+#include "capture/io/capture_manifest.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/live/testing/emulated_v4l2_device.h"
+#include "capture/live/testing/synthetic_studio.h"
+#include "capture/live/v4l2_frame_source.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
-#include "represent/method.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
+#include "represent/model/method.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

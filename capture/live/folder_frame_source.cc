@@ -1,8 +1,8 @@
-#include "capture/folder_frame_source.h"
+#include "capture/live/folder_frame_source.h"
 
 #include <fmt/format.h>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 
 namespace photomat {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "capture/frame_source.h"
+#include "capture/live/frame_source.h"
 #include "core/photometric_set.h"
 
 namespace photomat {

@@ -1,9 +1,9 @@
-#include "capture/folder_frame_source.h"
+#include "capture/live/folder_frame_source.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 

@@ -1,4 +1,4 @@
-#include "capture/frame_source.h"
+#include "capture/live/frame_source.h"
 
 #include <fmt/format.h>
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "capture/pixel_format.h"
+#include "capture/live/pixel_format.h"
 #include "core/image.h"
 #include "core/light_direction.h"
 

@@ -1,4 +1,4 @@
-#include "capture/libcamera_frame_source.h"
+#include "capture/live/libcamera_frame_source.h"
 
 #include <fmt/format.h>
 #include <libcamera/libcamera.h>

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "capture/frame_source.h"
+#include "capture/live/frame_source.h"
 #include "core/colour.h"
 
 namespace photomat {

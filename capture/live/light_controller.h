@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "capture/frame_source.h"
+#include "capture/live/frame_source.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "capture/light_controller.h"
+#include "capture/live/light_controller.h"
 
 #include <fcntl.h>
 #include <gmock/gmock.h>

@@ -1,11 +1,11 @@
-#include "capture/light_plan.h"
+#include "capture/live/light_plan.h"
 
 #include <fmt/format.h>
 
 #include <filesystem>
 #include <sstream>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 
 namespace photomat {

@@ -1,9 +1,9 @@
-#include "capture/light_plan.h"
+#include "capture/live/light_plan.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "capture/lp_file.h"
+#include "capture/io/lp_file.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 

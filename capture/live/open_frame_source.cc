@@ -1,10 +1,10 @@
-#include "capture/open_frame_source.h"
+#include "capture/live/open_frame_source.h"
 
 #include <fmt/format.h>
 
-#include "capture/folder_frame_source.h"
-#include "capture/libcamera_frame_source.h"
-#include "capture/v4l2_frame_source.h"
+#include "capture/live/folder_frame_source.h"
+#include "capture/live/libcamera_frame_source.h"
+#include "capture/live/v4l2_frame_source.h"
 #include "core/error.h"
 
 namespace photomat {

@@ -3,7 +3,7 @@
 #include <memory>
 #include <string>
 
-#include "capture/frame_source.h"
+#include "capture/live/frame_source.h"
 #include "core/colour.h"
 
 namespace photomat {

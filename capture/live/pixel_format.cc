@@ -1,4 +1,4 @@
-#include "capture/pixel_format.h"
+#include "capture/live/pixel_format.h"
 
 #include <fmt/format.h>
 #include <linux/videodev2.h>

@@ -1,4 +1,4 @@
-#include "capture/pixel_format.h"
+#include "capture/live/pixel_format.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "capture/testing/frame_encoding.h"
+#include "capture/live/testing/frame_encoding.h"
 #include "core/error.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "capture/v4l2_frame_source.h"
+#include "capture/live/v4l2_frame_source.h"
 
 #include <fcntl.h>
 #include <fmt/format.h>

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "capture/frame_source.h"
-#include "capture/v4l2_syscalls.h"
+#include "capture/live/frame_source.h"
+#include "capture/live/v4l2_syscalls.h"
 #include "core/colour.h"
 #include "core/error.h"
 

@@ -1,4 +1,4 @@
-#include "capture/v4l2_frame_source.h"
+#include "capture/live/v4l2_frame_source.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "capture/testing/emulated_v4l2_device.h"
+#include "capture/live/testing/emulated_v4l2_device.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 

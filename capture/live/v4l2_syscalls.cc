@@ -1,4 +1,4 @@
-#include "capture/v4l2_syscalls.h"
+#include "capture/live/v4l2_syscalls.h"
 
 #include <fcntl.h>
 #include <sys/ioctl.h>

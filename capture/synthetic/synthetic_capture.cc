@@ -1,10 +1,10 @@
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <functional>
 #include <numbers>
 
@@ -81,8 +81,7 @@ Pattern MakeBumps(const SyntheticMaterialOptions& o, Random& random) {
   auto bumps = std::make_shared<std::vector<Bump>>();
   for (int i = 0; i < count; ++i) {
     const double shade = random.Uniform(0.8, 1.1);
-    bumps->push_back({random.Uniform(0, w), random.Uniform(0, h),
-                      random.Uniform(3.0, 8.0) * scale,
+    bumps->push_back({random.Uniform(0, w), random.Uniform(0, h), random.Uniform(3.0, 8.0) * scale,
                       (random.Uniform() < 0.75 ? 1.0 : -0.6) * random.Uniform(0.6, 1.0),
                       Rgb(shade, shade * random.Uniform(0.9, 1.05), shade * 0.95)});
   }
@@ -249,8 +248,7 @@ std::optional<SurfacePattern> ParseSurfacePattern(std::string_view name) {
 }
 
 SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options) {
-  if (options.width < 8 || options.height < 8 || options.width > 16384 ||
-      options.height > 16384) {
+  if (options.width < 8 || options.height < 8 || options.width > 16384 || options.height > 16384) {
     throw Error(fmt::format("synthetic size {}x{}: width and height must be in 8..16384",
                             options.width, options.height));
   }
@@ -283,7 +281,8 @@ SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options)
   for (std::size_t p = 0; p < height.pixel_count(); ++p) {
     steepest = std::max(steepest, std::hypot(double{gradient.pixel(p)[0]}, gradient.pixel(p)[1]));
   }
-  const double scale = std::tan(options.max_slope_degrees * kPi / 180.0) / std::max(steepest, 1e-12);
+  const double scale =
+      std::tan(options.max_slope_degrees * kPi / 180.0) / std::max(steepest, 1e-12);
   for (std::size_t p = 0; p < height.pixel_count(); ++p) {
     const double gp = gradient.pixel(p)[0] * scale, gq = gradient.pixel(p)[1] * scale;
     height.pixel(p)[0] = static_cast<float>(height.pixel(p)[0] * scale);
@@ -313,8 +312,8 @@ PhotometricSet RenderSyntheticCapture(const SyntheticMaterial& material,
         double shading = n.dot(l);
         double highlight = 0.0;
         const bool lit = shading > 0.0 &&
-                         !(options.shadows && InCastShadow(material.height, max_height, col + 0.5,
-                                                           h - row - 0.5, l));
+                         !(options.shadows &&
+                           InCastShadow(material.height, max_height, col + 0.5, h - row - 0.5, l));
         if (options.shadows && !lit) shading = 0.0;
         if (options.specular > 0.0 && lit) {
           highlight = options.specular * std::pow(std::max(0.0, n.dot(half)), options.shininess);
@@ -328,7 +327,8 @@ PhotometricSet RenderSyntheticCapture(const SyntheticMaterial& material,
     if (options.noise_sigma > 0.0) {
       // One stream per image, so the noise does not depend on the thread schedule.
       Random random(options.noise_seed * 1000003ULL + i);
-      for (float& v : image.values()) v += static_cast<float>(options.noise_sigma * random.Normal());
+      for (float& v : image.values())
+        v += static_cast<float>(options.noise_sigma * random.Normal());
     }
     images[i] = std::move(image);
   });

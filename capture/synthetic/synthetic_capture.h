@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 #include "core/image.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"

@@ -1,10 +1,10 @@
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 
@@ -54,16 +54,18 @@ TEST_P(SyntheticPatternTest, NormalsMatchTheHeightField) {
 
 TEST_P(SyntheticPatternTest, SameSeedSameMaterial) {
   const SyntheticMaterial a = Material(GetParam()), b = Material(GetParam());
-  EXPECT_TRUE(std::equal(a.height.values().begin(), a.height.values().end(),
-                         b.height.values().begin()));
-  EXPECT_TRUE(std::equal(a.albedo.values().begin(), a.albedo.values().end(),
-                         b.albedo.values().begin()));
+  EXPECT_TRUE(
+      std::equal(a.height.values().begin(), a.height.values().end(), b.height.values().begin()));
+  EXPECT_TRUE(
+      std::equal(a.albedo.values().begin(), a.albedo.values().end(), b.albedo.values().begin()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Patterns, SyntheticPatternTest,
                          ::testing::Values(SurfacePattern::kBumps, SurfacePattern::kGrooves,
                                            SurfacePattern::kBricks),
-                         [](const auto& param_info) { return std::string(ToString(param_info.param)); });
+                         [](const auto& param_info) {
+                           return std::string(ToString(param_info.param));
+                         });
 
 TEST(SyntheticCaptureTest, LambertianImagesAreAlbedoTimesCosine) {
   const SyntheticMaterial m = Material(SurfacePattern::kBricks);

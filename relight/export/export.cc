@@ -1,4 +1,4 @@
-#include "relight/export.h"
+#include "relight/export/export.h"
 
 #include <fmt/format.h>
 
@@ -8,8 +8,8 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "relight/gltf_tile.h"
-#include "relight/stack_file.h"
+#include "relight/export/gltf_tile.h"
+#include "relight/formats/stack_file.h"
 
 namespace photomat {
 namespace {

@@ -4,9 +4,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/progress.h"
-#include "relight/material_maps.h"
-#include "relight/normal_map.h"
-#include "represent/map_stack.h"
+#include "relight/export/material_maps.h"
+#include "relight/export/normal_map.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "relight/export.h"
+#include "relight/export/export.h"
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>
@@ -12,12 +12,12 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "relight/gltf_tile.h"
-#include "relight/interchange.h"
-#include "relight/ptm_file.h"
-#include "relight/stack_file.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
+#include "relight/export/gltf_tile.h"
+#include "relight/formats/interchange.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/stack_file.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

@@ -1,4 +1,4 @@
-#include "relight/gltf_tile.h"
+#include "relight/export/gltf_tile.h"
 
 #include <fmt/format.h>
 

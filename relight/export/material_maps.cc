@@ -1,4 +1,4 @@
-#include "relight/material_maps.h"
+#include "relight/export/material_maps.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -9,8 +9,8 @@
 #include <optional>
 
 #include "core/error.h"
-#include "relight/interchange.h"
-#include "represent/surface_integration.h"
+#include "relight/formats/interchange.h"
+#include "represent/surface/surface_integration.h"
 
 namespace photomat {
 namespace {

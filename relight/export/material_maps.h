@@ -7,7 +7,7 @@
 #include "core/colour.h"
 #include "core/image.h"
 #include "core/light_direction.h"
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

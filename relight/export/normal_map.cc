@@ -1,4 +1,4 @@
-#include "relight/normal_map.h"
+#include "relight/export/normal_map.h"
 
 #include <fmt/format.h>
 

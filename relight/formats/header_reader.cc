@@ -1,4 +1,4 @@
-#include "relight/header_reader.h"
+#include "relight/formats/header_reader.h"
 
 #include <fmt/format.h>
 
@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "capture/text_parsing.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 

@@ -1,11 +1,11 @@
-#include "relight/interchange.h"
+#include "relight/formats/interchange.h"
 
 #include <tbb/parallel_for.h>
 
 #include "core/colour.h"
 #include "core/error.h"
-#include "relight/stack_file.h"
-#include "represent/fit.h"
+#include "relight/formats/stack_file.h"
+#include "represent/fitting/fit.h"
 
 namespace photomat {
 namespace {

@@ -4,9 +4,9 @@
 
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
-#include "represent/map_stack.h"
-#include "represent/method.h"
-#include "represent/representation.h"
+#include "represent/model/method.h"
+#include "represent/model/representation.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat {
 

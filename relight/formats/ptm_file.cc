@@ -1,4 +1,4 @@
-#include "relight/ptm_file.h"
+#include "relight/formats/ptm_file.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -10,7 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "relight/header_reader.h"
+#include "relight/formats/header_reader.h"
 
 namespace photomat {
 namespace {

@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

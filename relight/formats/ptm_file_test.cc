@@ -1,4 +1,4 @@
-#include "relight/ptm_file.h"
+#include "relight/formats/ptm_file.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -8,12 +8,12 @@
 
 #include <cmath>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/atomic_file.h"
 #include "core/colour.h"
 #include "core/error.h"
-#include "relight/interchange.h"
-#include "represent/fit.h"
+#include "relight/formats/interchange.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

@@ -1,4 +1,4 @@
-#include "relight/rti_file.h"
+#include "relight/formats/rti_file.h"
 
 #include <fmt/format.h>
 
@@ -9,8 +9,8 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "relight/header_reader.h"
-#include "represent/hsh.h"
+#include "relight/formats/header_reader.h"
+#include "represent/model/hsh.h"
 
 namespace photomat {
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "relight/rti_file.h"
+#include "relight/formats/rti_file.h"
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>
@@ -6,11 +6,11 @@
 
 #include <cstring>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
-#include "relight/interchange.h"
-#include "represent/fit.h"
-#include "represent/hsh.h"
+#include "relight/formats/interchange.h"
+#include "represent/fitting/fit.h"
+#include "represent/model/hsh.h"
 
 namespace photomat {
 namespace {

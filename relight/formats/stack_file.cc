@@ -1,12 +1,12 @@
-#include "relight/stack_file.h"
+#include "relight/formats/stack_file.h"
 
 #include <fmt/format.h>
 
 #include <cctype>
 
 #include "core/error.h"
-#include "relight/ptm_file.h"
-#include "relight/rti_file.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/rti_file.h"
 
 namespace photomat {
 namespace {

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/colour.h"
-#include "represent/map_stack.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "relight/display_image.h"
+#include "relight/render/display_image.h"
 
 #include "core/colour.h"
 #include "core/image_io.h"

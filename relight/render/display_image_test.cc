@@ -1,4 +1,4 @@
-#include "relight/display_image.h"
+#include "relight/render/display_image.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "relight/output_folder.h"
+#include "relight/render/output_folder.h"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,9 @@
-#include "relight/relight.h"
-
-#include <tbb/parallel_for.h>
+#include "relight/render/relight.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
-#include "capture/capture_manifest.h"
+#include "capture/io/capture_manifest.h"
 #include "core/error.h"
 #include "core/image_io.h"
 

@@ -7,7 +7,7 @@
 #include "core/colour.h"
 #include "core/light_direction.h"
 #include "core/progress.h"
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

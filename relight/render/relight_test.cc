@@ -1,11 +1,11 @@
-#include "relight/relight.h"
+#include "relight/render/relight.h"
 
 #include <gtest/gtest.h>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

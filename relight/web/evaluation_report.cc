@@ -1,4 +1,4 @@
-#include "relight/evaluation_report.h"
+#include "relight/web/evaluation_report.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -12,9 +12,9 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/markup.h"
-#include "relight/display_image.h"
-#include "relight/output_folder.h"
-#include "represent/fit.h"
+#include "relight/render/display_image.h"
+#include "relight/render/output_folder.h"
+#include "represent/fitting/fit.h"
 
 namespace photomat {
 namespace {

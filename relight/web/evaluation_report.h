@@ -10,8 +10,8 @@
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
 #include "core/progress.h"
-#include "represent/evaluation.h"
-#include "represent/robust_fit.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/robust_fit.h"
 
 namespace photomat {
 

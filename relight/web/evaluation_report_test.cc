@@ -1,4 +1,4 @@
-#include "relight/evaluation_report.h"
+#include "relight/web/evaluation_report.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

@@ -1,4 +1,4 @@
-#include "relight/viewer_export.h"
+#include "relight/web/viewer_export.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -13,10 +13,10 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "relight/display_image.h"
-#include "relight/output_folder.h"
-#include "relight/viewer_assets.h"
-#include "represent/surface_integration.h"
+#include "relight/render/display_image.h"
+#include "relight/render/output_folder.h"
+#include "relight/web/viewer_assets.h"
+#include "represent/surface/surface_integration.h"
 
 namespace photomat {
 namespace {

@@ -12,8 +12,8 @@
 #include "core/colour.h"
 #include "core/light_direction.h"
 #include "core/progress.h"
-#include "represent/light_basis.h"
-#include "represent/representation.h"
+#include "represent/model/light_basis.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "relight/viewer_export.h"
+#include "relight/web/viewer_export.h"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/random.h"
-#include "relight/viewer_assets.h"
-#include "represent/fit.h"
+#include "relight/web/viewer_assets.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

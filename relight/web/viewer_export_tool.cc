@@ -11,9 +11,9 @@
 #include <string>
 
 #include "core/error.h"
-#include "relight/viewer_export.h"
-#include "represent/map_stack.h"
-#include "represent/method.h"
+#include "relight/web/viewer_export.h"
+#include "represent/model/method.h"
+#include "represent/stack/map_stack.h"
 
 int main(int argc, char** argv) {
   using namespace photomat;

@@ -1,14 +1,14 @@
-#include "represent/evaluation.h"
+#include "represent/evaluation/evaluation.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <numeric>
 
 #include "core/error.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 
 namespace photomat {
 namespace {
@@ -50,8 +50,8 @@ NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, cons
   stats.pixels = errors.size();
   stats.mean_degrees = Mean(errors);
   const auto count_below = [&](double limit) {
-    return static_cast<double>(std::count_if(errors.begin(), errors.end(),
-                                             [&](double e) { return e < limit; })) /
+    return static_cast<double>(
+               std::count_if(errors.begin(), errors.end(), [&](double e) { return e < limit; })) /
            errors.size();
   };
   stats.fraction_below_5_degrees = count_below(5.0);
@@ -63,8 +63,8 @@ NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, cons
   return stats;
 }
 
-double NormalisedRmsError(const Observations& observations, int image,
-                          const Eigen::VectorXf& relit, bool literal_thesis_rms) {
+double NormalisedRmsError(const Observations& observations, int image, const Eigen::VectorXf& relit,
+                          bool literal_thesis_rms) {
   const auto captured = observations.matrix().col(image).cast<double>();
   const auto count = static_cast<double>(captured.size());
   const double mean = captured.mean();

@@ -8,10 +8,10 @@
 #include "core/image.h"
 #include "core/photometric_set.h"
 #include "core/progress.h"
-#include "represent/method.h"
-#include "represent/observations.h"
-#include "represent/representation.h"
-#include "represent/robust_fit.h"
+#include "represent/fitting/observations.h"
+#include "represent/fitting/robust_fit.h"
+#include "represent/model/method.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 
@@ -47,7 +47,7 @@ struct MethodEvaluation {
   // Dong's normalised RMS error (eq. 4.5.1): the mean over images of e_k / sigma_k, e_k the RMS of
   // relit minus captured over the mask's pixels and all channels, sigma_k the standard deviation
   // of captured image k over the same values.
-  double eta_reconstruction = 0.0;  // fitted from all images, relit at each of them
+  double eta_reconstruction = 0.0;       // fitted from all images, relit at each of them
   std::optional<double> eta_prediction;  // image k relit from a fit without image k
   std::vector<double> reconstruction_per_image;
   std::vector<double> prediction_per_image;
@@ -57,8 +57,8 @@ struct MethodEvaluation {
 
 // The per-image error e_k / sigma_k of `relit` values against column `image` of `observations`
 // (the rows of the selected pixels).
-double NormalisedRmsError(const Observations& observations, int image,
-                          const Eigen::VectorXf& relit, bool literal_thesis_rms = false);
+double NormalisedRmsError(const Observations& observations, int image, const Eigen::VectorXf& relit,
+                          bool literal_thesis_rms = false);
 
 // Relit values of `representation` under `light` at the observations' pixels, in their row order.
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,

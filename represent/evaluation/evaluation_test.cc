@@ -1,10 +1,10 @@
-#include "represent/evaluation.h"
+#include "represent/evaluation/evaluation.h"
 
 #include <gtest/gtest.h>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 #include "core/image_io.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 
@@ -12,7 +12,7 @@ namespace photomat {
 namespace {
 
 std::map<std::string, MethodEvaluation> EvaluateAll(const PhotometricSet& set,
-                                                     bool prediction = true) {
+                                                    bool prediction = true) {
   const Observations observations(set);
   EvaluationOptions options;
   options.prediction = prediction;

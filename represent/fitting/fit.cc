@@ -1,4 +1,4 @@
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -11,7 +11,7 @@
 #include <numeric>
 
 #include "core/error.h"
-#include "represent/hsh.h"
+#include "represent/model/hsh.h"
 
 namespace photomat {
 namespace {

@@ -1,4 +1,4 @@
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "core/error.h"
-#include "represent/evaluation.h"
+#include "represent/evaluation/evaluation.h"
 #include "tests/support/synthetic_sets.h"
 
 namespace photomat {
@@ -40,7 +40,8 @@ TEST(FitTest, GradientRecoversNormalsAndAlbedoOfALambertianSample) {
 TEST(FitTest, PtmRecoversAnExactBiquadratic) {
   // Images made from known coefficients: the fit must return them.
   const auto lights = ThesisLightGrid();
-  const Eigen::VectorXd truth = (Eigen::VectorXd(6) << -0.3, -0.2, 0.1, 0.25, -0.15, 0.6).finished();
+  const Eigen::VectorXd truth =
+      (Eigen::VectorXd(6) << -0.3, -0.2, 0.1, 0.25, -0.15, 0.6).finished();
   std::vector<Image> images;
   for (const auto& light : lights) {
     Image image(3, 2, 1);
@@ -128,27 +129,26 @@ PhotometricSet FlatSet(const std::vector<LightDirection>& lights) {
 }
 
 TEST(FitErrorTest, FewerLightsThanTheMethodNeeds) {
-  const auto set = FlatSet({LightDirection::FromSlantTilt(30, 0),
-                            LightDirection::FromSlantTilt(30, 120),
-                            LightDirection::FromSlantTilt(45, 240),
-                            LightDirection::FromSlantTilt(60, 60),
-                            LightDirection::FromSlantTilt(60, 300)});
-  EXPECT_THAT([&] { Fit(set, Method::Parse("ptm")); },
-              ThrowsMessage<Error>(HasSubstr("lights.lp: ptm needs at least 6 images; the set has 5")));
+  const auto set =
+      FlatSet({LightDirection::FromSlantTilt(30, 0), LightDirection::FromSlantTilt(30, 120),
+               LightDirection::FromSlantTilt(45, 240), LightDirection::FromSlantTilt(60, 60),
+               LightDirection::FromSlantTilt(60, 300)});
+  EXPECT_THAT(
+      [&] { Fit(set, Method::Parse("ptm")); },
+      ThrowsMessage<Error>(HasSubstr("lights.lp: ptm needs at least 6 images; the set has 5")));
   EXPECT_THAT([&] { Fit(set, Method::Parse("eigen6")); },
               ThrowsMessage<Error>(HasSubstr("eigen6 needs at least 6 images")));
-  const auto two = FlatSet({LightDirection::FromSlantTilt(30, 0),
-                            LightDirection::FromSlantTilt(30, 90)});
+  const auto two =
+      FlatSet({LightDirection::FromSlantTilt(30, 0), LightDirection::FromSlantTilt(30, 90)});
   EXPECT_THAT([&] { Fit(two, Method::Parse("gradient")); },
               ThrowsMessage<Error>(HasSubstr("gradient needs at least 3 images")));
 }
 
 TEST(FitErrorTest, CoplanarLightsForGradientAnd3I) {
   // All lights in the x-z plane (tilts 0 and 180 only).
-  const auto set = FlatSet({LightDirection::FromSlantTilt(30, 0),
-                            LightDirection::FromSlantTilt(50, 0),
-                            LightDirection::FromSlantTilt(30, 180),
-                            LightDirection::FromSlantTilt(60, 180)});
+  const auto set =
+      FlatSet({LightDirection::FromSlantTilt(30, 0), LightDirection::FromSlantTilt(50, 0),
+               LightDirection::FromSlantTilt(30, 180), LightDirection::FromSlantTilt(60, 180)});
   EXPECT_THAT([&] { Fit(set, Method::Parse("gradient")); },
               ThrowsMessage<Error>(HasSubstr("lights.lp: gradient: the 4 lights are coplanar")));
   EXPECT_THAT([&] { Fit(set, Method::Parse("3i")); },

@@ -1,4 +1,4 @@
-#include "represent/observations.h"
+#include "represent/fitting/observations.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

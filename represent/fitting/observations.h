@@ -28,7 +28,9 @@ class Observations {
   const std::vector<std::size_t>& pixel_indices() const { return pixel_indices_; }
   int width() const { return width_; }
   int height() const { return height_; }
-  auto Channel(int c) const { return matrix_.middleRows(static_cast<Eigen::Index>(c) * pixels(), pixels()); }
+  auto Channel(int c) const {
+    return matrix_.middleRows(static_cast<Eigen::Index>(c) * pixels(), pixels());
+  }
 
   // I^T I in double precision (summed in blocks of float products), computed once. Thread-safe.
   const Eigen::MatrixXd& Gram() const;

@@ -1,4 +1,4 @@
-#include "represent/robust_fit.h"
+#include "represent/fitting/robust_fit.h"
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -17,9 +17,9 @@
 #include <string>
 
 #include "core/error.h"
-#include "represent/fit.h"
-#include "represent/hsh.h"
-#include "represent/light_basis.h"
+#include "represent/fitting/fit.h"
+#include "represent/model/hsh.h"
+#include "represent/model/light_basis.h"
 
 namespace photomat {
 namespace {

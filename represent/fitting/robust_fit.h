@@ -12,9 +12,9 @@
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
 #include "core/progress.h"
-#include "represent/method.h"
-#include "represent/observations.h"
-#include "represent/representation.h"
+#include "represent/fitting/observations.h"
+#include "represent/model/method.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

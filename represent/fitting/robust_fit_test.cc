@@ -1,4 +1,4 @@
-#include "represent/robust_fit.h"
+#include "represent/fitting/robust_fit.h"
 
 #include <gtest/gtest.h>
 
@@ -6,12 +6,12 @@
 #include <cstdio>
 #include <numeric>
 
-#include "capture/load_photometric_set.h"
-#include "capture/synthetic_capture.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

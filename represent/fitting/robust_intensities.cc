@@ -1,10 +1,10 @@
-#include "represent/robust_intensities.h"
+#include "represent/fitting/robust_intensities.h"
 
 #include <numeric>
 #include <vector>
 
-#include "calibrate/exposure.h"
-#include "represent/observations.h"
+#include "calibrate/radiometry/exposure.h"
+#include "represent/fitting/observations.h"
 
 namespace photomat {
 

@@ -1,8 +1,8 @@
 #pragma once
 
-#include "calibrate/semi_calibrated.h"
+#include "calibrate/radiometry/semi_calibrated.h"
 #include "core/photometric_set.h"
-#include "represent/robust_fit.h"
+#include "represent/fitting/robust_fit.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "represent/robust_intensities.h"
+#include "represent/fitting/robust_intensities.h"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <cstdio>
 
 #include "core/error.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "represent/hsh.h"
+#include "represent/model/hsh.h"
 
 #include <fmt/format.h>
 

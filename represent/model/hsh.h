@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "core/light_direction.h"
-#include "represent/light_basis.h"
+#include "represent/model/light_basis.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "represent/hsh.h"
+#include "represent/model/hsh.h"
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>
@@ -6,13 +6,13 @@
 
 #include <cmath>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/json_file.h"
 #include "core/photometric_set.h"
-#include "represent/evaluation.h"
-#include "represent/fit.h"
-#include "represent/light_basis.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
+#include "represent/model/light_basis.h"
 
 namespace photomat {
 namespace {

@@ -1,9 +1,9 @@
-#include "represent/light_basis.h"
+#include "represent/model/light_basis.h"
 
 #include <fmt/format.h>
 
 #include "core/error.h"
-#include "represent/hsh.h"
+#include "represent/model/hsh.h"
 
 namespace photomat {
 namespace {
@@ -64,8 +64,8 @@ InterpolatedLightBasis::InterpolatedLightBasis(std::vector<LightDirection> nodes
     : interpolator_(std::move(nodes), scheme), values_(std::move(values)) {
   if (values_.cols() != static_cast<Eigen::Index>(interpolator_.nodes().size()) ||
       values_.rows() == 0 || !values_.allFinite()) {
-    throw Error(fmt::format("interpolated light basis: {}x{} values for {} lights",
-                            values_.rows(), values_.cols(), interpolator_.nodes().size()));
+    throw Error(fmt::format("interpolated light basis: {}x{} values for {} lights", values_.rows(),
+                            values_.cols(), interpolator_.nodes().size()));
   }
 }
 
@@ -105,9 +105,12 @@ std::shared_ptr<const LightBasis> LightBasisFromJson(const JsonReader& json) {
       std::optional<LightInterpolator::Scheme> scheme;
       if (json.Has("scheme")) {
         const std::string name = json["scheme"].String();
-        if (name == "slant-rings") scheme = LightInterpolator::Scheme::kSlantRings;
-        else if (name == "triangulation") scheme = LightInterpolator::Scheme::kTriangulation;
-        else json["scheme"].Fail("expected \"slant-rings\" or \"triangulation\"");
+        if (name == "slant-rings")
+          scheme = LightInterpolator::Scheme::kSlantRings;
+        else if (name == "triangulation")
+          scheme = LightInterpolator::Scheme::kTriangulation;
+        else
+          json["scheme"].Fail("expected \"slant-rings\" or \"triangulation\"");
       }
       return std::make_shared<InterpolatedLightBasis>(nodes, values, scheme);
     }

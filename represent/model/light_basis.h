@@ -9,7 +9,7 @@
 
 #include "core/json_file.h"
 #include "core/light_direction.h"
-#include "represent/light_interpolation.h"
+#include "represent/model/light_interpolation.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "represent/light_basis.h"
+#include "represent/model/light_basis.h"
 
 #include <gtest/gtest.h>
 
@@ -19,11 +19,12 @@ TEST(LightBasisTest, ThreeImageClosedFormMatchesTheThesis) {
   const LinearLightBasis basis(l.inverse());
   EXPECT_TRUE(basis.Coefficients(LightDirection::FromSlantTilt(45, 0))
                   .isApprox(Eigen::Vector3d(1, 0, 0), 1e-12));
-  EXPECT_TRUE((basis.Coefficients(LightDirection::FromSlantTilt(45, 180)) -
-               Eigen::Vector3d(0, 0, 1)).norm() < 1e-12);
+  EXPECT_TRUE(
+      (basis.Coefficients(LightDirection::FromSlantTilt(45, 180)) - Eigen::Vector3d(0, 0, 1))
+          .norm() < 1e-12);
   const double tau = 0.7, sigma = 0.4;
-  const auto c = basis.Coefficients(LightDirection::FromSlantTilt(sigma * 180 / M_PI,
-                                                                  tau * 180 / M_PI));
+  const auto c =
+      basis.Coefficients(LightDirection::FromSlantTilt(sigma * 180 / M_PI, tau * 180 / M_PI));
   EXPECT_NEAR(c[1], std::sin(tau) * std::sin(sigma) / std::sin(M_PI / 4), 1e-12);
   const double s45 = std::sin(M_PI / 4);
   EXPECT_NEAR(c[0],

@@ -1,8 +1,9 @@
-#include "represent/light_interpolation.h"
+#include "represent/model/light_interpolation.h"
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <map>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
@@ -48,9 +49,8 @@ LightInterpolator::LightInterpolator(std::vector<LightDirection> nodes,
 bool LightInterpolator::BuildRings() {
   std::vector<int> order(nodes_.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return nodes_[a].SlantDegrees() < nodes_[b].SlantDegrees();
-  });
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return nodes_[a].SlantDegrees() < nodes_[b].SlantDegrees(); });
   rings_.clear();
   for (int node : order) {
     const double slant = nodes_[node].SlantDegrees();
@@ -93,8 +93,7 @@ void LightInterpolator::BuildTriangulation() {
   };
   std::map<std::pair<int, int>, int> edge_uses;
   for (const cv::Vec6f& t : triangles) {
-    const std::array<int, 3> tri = {node_at(t[0], t[1]), node_at(t[2], t[3]),
-                                    node_at(t[4], t[5])};
+    const std::array<int, 3> tri = {node_at(t[0], t[1]), node_at(t[2], t[3]), node_at(t[4], t[5])};
     const auto& a = projected_[tri[0]];
     const auto& b = projected_[tri[1]];
     const auto& c = projected_[tri[2]];
@@ -130,10 +129,10 @@ void LightInterpolator::AddRingWeights(const Ring& ring, double tilt, double sca
   const auto upper_it = std::upper_bound(nodes.begin(), nodes.end(),
                                          std::make_pair(tilt, std::numeric_limits<int>::max()));
   const std::size_t upper = upper_it == nodes.end() ? 0 : upper_it - nodes.begin();
-  const std::size_t lower = upper_it == nodes.begin() ? nodes.size() - 1
-                                                       : (upper_it - nodes.begin()) - 1;
+  const std::size_t lower =
+      upper_it == nodes.begin() ? nodes.size() - 1 : (upper_it - nodes.begin()) - 1;
   double low_tilt = nodes[lower].first, high_tilt = nodes[upper].first;
-  if (low_tilt > tilt) low_tilt -= 360.0;    // wrapped below 0
+  if (low_tilt > tilt) low_tilt -= 360.0;     // wrapped below 0
   if (high_tilt <= tilt) high_tilt += 360.0;  // wrapped past 360
   const double f = (tilt - low_tilt) / (high_tilt - low_tilt);
   weights.emplace_back(nodes[lower].second, scale * (1.0 - f));
@@ -194,8 +193,8 @@ std::vector<std::pair<int, double>> LightInterpolator::TriangulationWeights(
     const auto& a = projected_[u];
     const auto& b = projected_[v];
     const double dx = b[0] - a[0], dy = b[1] - a[1];
-    const double t = std::clamp(((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / (dx * dx + dy * dy),
-                                0.0, 1.0);
+    const double t =
+        std::clamp(((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
     const double distance = std::hypot(a[0] + t * dx - q[0], a[1] + t * dy - q[1]);
     if (distance < best_distance) {
       best_distance = distance;

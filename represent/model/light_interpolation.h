@@ -70,10 +70,10 @@ class LightInterpolator {
 
   std::vector<LightDirection> nodes_;
   Scheme scheme_ = Scheme::kSlantRings;
-  std::vector<Ring> rings_;                      // by increasing slant
+  std::vector<Ring> rings_;                       // by increasing slant
   std::vector<std::array<double, 2>> projected_;  // triangulation coordinates of the nodes
   std::vector<std::array<int, 3>> triangles_;
-  std::vector<std::array<int, 2>> boundary_;      // hull edges
+  std::vector<std::array<int, 2>> boundary_;  // hull edges
 };
 
 std::string_view ToString(LightInterpolator::Scheme scheme);

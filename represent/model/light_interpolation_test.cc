@@ -1,4 +1,4 @@
-#include "represent/light_interpolation.h"
+#include "represent/model/light_interpolation.h"
 
 #include <gtest/gtest.h>
 
@@ -44,7 +44,8 @@ TEST(LightInterpolatorTest, RingsAreExactAtNodes) {
 }
 
 TEST(LightInterpolatorTest, RingsGiveTheThesisBilinearWeights) {
-  // (tilt 40, slant 50): t1 = (40 - 30) / 30, t2 = (50 - 45) / 15 between tilts 30/60, slants 45/60.
+  // (tilt 40, slant 50): t1 = (40 - 30) / 30, t2 = (50 - 45) / 15 between tilts 30/60, slants
+  // 45/60.
   const LightInterpolator interpolator(ThesisLightGrid());
   const auto w = AsMap(interpolator.Weights(LightDirection::FromSlantTilt(50, 40)));
   const double t1 = 1.0 / 3.0, t2 = 1.0 / 3.0;

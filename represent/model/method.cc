@@ -1,7 +1,8 @@
-#include "represent/method.h"
+#include "represent/model/method.h"
+
+#include <fmt/format.h>
 
 #include <charconv>
-#include <fmt/format.h>
 
 #include "core/error.h"
 
@@ -80,8 +81,8 @@ std::vector<Method> ParseMethodList(std::string_view list) {
 
 std::vector<Method> AllMethods() {
   using K = Method::Kind;
-  return {{K::kThreeImage}, {K::kGradient}, {K::kPtm}, {K::kPtmLrgb}, {K::kEigen, 3},
-          {K::kEigen, 6}};
+  return {{K::kThreeImage}, {K::kGradient}, {K::kPtm},
+          {K::kPtmLrgb},    {K::kEigen, 3}, {K::kEigen, 6}};
 }
 
 }  // namespace photomat

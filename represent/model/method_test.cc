@@ -1,4 +1,4 @@
-#include "represent/method.h"
+#include "represent/model/method.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -23,8 +23,8 @@ TEST(MethodTest, NamesRoundTrip) {
 TEST(MethodTest, AllIsTheThesisFiveAndLrgb) {
   std::vector<std::string> names;
   for (const Method& m : ParseMethodList("all")) names.push_back(m.Name());
-  EXPECT_EQ(names, (std::vector<std::string>{"3i", "gradient", "ptm", "ptm-lrgb", "eigen3",
-                                             "eigen6"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"3i", "gradient", "ptm", "ptm-lrgb", "eigen3", "eigen6"}));
   EXPECT_EQ(ParseMethodList("ptm,eigen4").size(), 2u);
 }
 

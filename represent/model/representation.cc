@@ -1,4 +1,4 @@
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -10,7 +10,7 @@
 
 #include "core/image.h"
 #include "core/light_direction.h"
-#include "represent/light_basis.h"
+#include "represent/model/light_basis.h"
 
 namespace photomat {
 

@@ -1,9 +1,9 @@
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 
 namespace photomat {
@@ -11,8 +11,9 @@ namespace {
 
 TEST(RepresentationTest, SharedBasisWithGainIsAlbedoTimesDot) {
   // Gradient layout: normal (shared) x albedo (gain).
-  Image maps(1, 1, std::vector<std::string>{"normal.X", "normal.Y", "normal.Z", "albedo.R",
-                                            "albedo.G", "albedo.B"});
+  Image maps(1, 1,
+             std::vector<std::string>{"normal.X", "normal.Y", "normal.Z", "albedo.R", "albedo.G",
+                                      "albedo.B"});
   const float values[] = {0.0f, 0.6f, 0.8f, 0.5f, 0.25f, 1.0f};
   std::copy(std::begin(values), std::end(values), maps.values().begin());
   const Representation r("gradient", maps, {3, false, true, 3}, LinearLightBasis::Lambertian());
@@ -36,12 +37,12 @@ TEST(RepresentationTest, NegativeShadingClampsOnlyWhenAsked) {
 }
 
 TEST(RepresentationTest, LayoutMismatchIsAnError) {
-  EXPECT_THROW(Representation("ptm", Image(2, 2, 5), {6, true, false, 1},
-                              std::make_shared<PtmLightBasis>()),
-               Error);
-  EXPECT_THROW(Representation("ptm", Image(2, 2, 6), {6, true, false, 1},
-                              LinearLightBasis::Lambertian()),
-               Error);
+  EXPECT_THROW(
+      Representation("ptm", Image(2, 2, 5), {6, true, false, 1}, std::make_shared<PtmLightBasis>()),
+      Error);
+  EXPECT_THROW(
+      Representation("ptm", Image(2, 2, 6), {6, true, false, 1}, LinearLightBasis::Lambertian()),
+      Error);
 }
 
 TEST(RepresentationTest, WithMapsKeepsTheLightFunction) {

@@ -1,7 +1,8 @@
-#include "represent/map_stack.h"
+#include "represent/stack/map_stack.h"
+
+#include <fmt/format.h>
 
 #include <algorithm>
-#include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/image_io.h"
@@ -122,7 +123,8 @@ LoadedStack StackFromDescription(const std::string& text, const Image& stored,
   try {
     description = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception&) {
-    throw Error(path, fmt::format("the \"{}\" header attribute is not valid JSON", kStackAttribute));
+    throw Error(path,
+                fmt::format("the \"{}\" header attribute is not valid JSON", kStackAttribute));
   }
   const JsonReader json(description, path, kStackAttribute);
   if (!description.is_object() || json["format"].String() != kStackFormat) {
@@ -132,8 +134,8 @@ LoadedStack StackFromDescription(const std::string& text, const Image& stored,
   const MapLayout layout = LayoutFromJson(json["layout"]);
   const JsonReader channels = json["channels"];
   if (static_cast<int>(channels.ArraySize()) != layout.MapCount()) {
-    channels.Fail(fmt::format("{} names for a layout of {} maps", channels.ArraySize(),
-                              layout.MapCount()));
+    channels.Fail(
+        fmt::format("{} names for a layout of {} maps", channels.ArraySize(), layout.MapCount()));
   }
   // OpenEXR keeps channels sorted by name: put them back in layout order.
   Image maps = SelectChannels(stored, channels);

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/light_direction.h"
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 
@@ -51,7 +51,8 @@ LoadedStack StackFromDescription(const std::string& description, const Image& st
                                  const std::filesystem::path& path);
 
 // The folder `photomat fit --out DIR` writes: one stack per method and a "stacks.json":
-//   {"format": "photomat-fit", "version": 1, "input": "...", "stacks": {"gradient": "gradient.exr"}}
+//   {"format": "photomat-fit", "version": 1, "input": "...", "stacks": {"gradient":
+//   "gradient.exr"}}
 inline constexpr const char* kFitManifestName = "stacks.json";
 void WriteFitManifest(const std::filesystem::path& folder, const std::string& input,
                       const std::map<std::string, std::string>& stacks);

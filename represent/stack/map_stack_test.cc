@@ -1,11 +1,11 @@
-#include "represent/map_stack.h"
+#include "represent/stack/map_stack.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/fit.h"
+#include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 
@@ -27,8 +27,8 @@ TEST(MapStackTest, EveryMethodRoundTripsExactly) {
     EXPECT_EQ(r.method(), method.Name());
     EXPECT_EQ(r.maps().channel_names(), fitted.maps().channel_names());
     EXPECT_EQ(loaded.provenance.capture_lights.size(), 36u);
-    for (const auto& light : {LightDirection::FromSlantTilt(60, 60),
-                              LightDirection::FromSlantTilt(38, 200)}) {
+    for (const auto& light :
+         {LightDirection::FromSlantTilt(60, 60), LightDirection::FromSlantTilt(38, 200)}) {
       const Image a = fitted.Relight(light), b = r.Relight(light);
       for (std::size_t v = 0; v < a.values().size(); ++v) {
         ASSERT_EQ(a.values()[v], b.values()[v]) << method.Name();
@@ -51,7 +51,8 @@ TEST(MapStackTest, ExtraLayersTravelBesideTheMaps) {
   EXPECT_TRUE(LoadRepresentation([&] {
                 SaveRepresentation(dir / "plain.exr", ptm);
                 return dir / "plain.exr";
-              }()).extra_layers.empty());
+              }())
+                  .extra_layers.empty());
   Image clash(16, 16, std::vector<std::string>{"ptm.a0.R"});
   EXPECT_THAT([&] { SaveRepresentation(dir / "bad.exr", ptm, {}, clash); },
               ThrowsMessage<Error>(HasSubstr("extra layer \"ptm.a0.R\" repeats a map")));
@@ -84,8 +85,9 @@ TEST(MapStackTest, FitFolderResolvesByMethod) {
   EXPECT_EQ(ResolveStack(dir.path(), "ptm"), dir / "ptm.exr");
   EXPECT_THAT([&] { ResolveStack(dir.path(), std::nullopt); },
               ThrowsMessage<Error>(HasSubstr("several stacks (gradient, ptm)")));
-  EXPECT_THAT([&] { ResolveStack(dir.path(), "eigen3"); },
-              ThrowsMessage<Error>(HasSubstr("no \"eigen3\" stack here; available: gradient, ptm")));
+  EXPECT_THAT(
+      [&] { ResolveStack(dir.path(), "eigen3"); },
+      ThrowsMessage<Error>(HasSubstr("no \"eigen3\" stack here; available: gradient, ptm")));
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "represent/surface_integration.h"
+#include "represent/surface/surface_integration.h"
 
 #include <tbb/parallel_for.h>
 
@@ -96,11 +96,12 @@ Image NormalsFromGradients(const Image& gradients) {
 Image IntegrateFrankotChellappa(const Image& gradients) {
   CheckGradients(gradients);
   cv::Mat height;
-  cv::dft(HeightSpectrum(Transform(gradients)), height, cv::DFT_INVERSE | cv::DFT_SCALE |
-                                                            cv::DFT_REAL_OUTPUT);
+  cv::dft(HeightSpectrum(Transform(gradients)), height,
+          cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
   Image out(gradients.width(), gradients.height(), std::vector<std::string>{"height"});
   for (int y = 0; y < out.height(); ++y) {
-    for (int x = 0; x < out.width(); ++x) out.at(x, y, 0) = static_cast<float>(height.at<double>(y, x));
+    for (int x = 0; x < out.width(); ++x)
+      out.at(x, y, 0) = static_cast<float>(height.at<double>(y, x));
   }
   return out;
 }
@@ -172,7 +173,8 @@ Image IntegratePoisson(const Image& gradients, const Mask& mask_in) {
   }
   Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(targets.size()), unknowns);
   a.setFromTriplets(triplets.begin(), triplets.end());
-  const Eigen::Map<const Eigen::VectorXd> b(targets.data(), static_cast<Eigen::Index>(targets.size()));
+  const Eigen::Map<const Eigen::VectorXd> b(targets.data(),
+                                            static_cast<Eigen::Index>(targets.size()));
   // The normal equations are singular by the free constant (one per connected region); a tiny
   // Tikhonov term picks the zero-mean solution without biasing the shape measurably.
   Eigen::SparseMatrix<double> normal = a.transpose() * a;

@@ -1,10 +1,10 @@
-#include "represent/surface_integration.h"
+#include "represent/surface/surface_integration.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 
 namespace photomat {
@@ -51,8 +51,8 @@ Image TiltedBowl(int w, int h, Image& gradients) {
   for (int row = 0; row < h; ++row) {
     for (int col = 0; col < w; ++col) {
       const double x = col - w / 2.0, y = (h - 1 - row) - h / 2.0;
-      height.at(col, row, 0) = static_cast<float>(0.3 * x + 0.01 * (x * x + 0.5 * y * y) +
-                                                  2.0 * std::sin(x / 5.0));
+      height.at(col, row, 0) =
+          static_cast<float>(0.3 * x + 0.01 * (x * x + 0.5 * y * y) + 2.0 * std::sin(x / 5.0));
       gradients.at(col, row, 0) = static_cast<float>(0.3 + 0.02 * x + 0.4 * std::cos(x / 5.0));
       gradients.at(col, row, 1) = static_cast<float>(0.01 * y);
     }

@@ -1,4 +1,4 @@
-#include "synthesize/solid_carving.h"
+#include "synthesize/carving/solid_carving.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "core/error.h"
-#include "synthesize/volume_io.h"
+#include "synthesize/volume/volume_io.h"
 
 namespace photomat {
 namespace {

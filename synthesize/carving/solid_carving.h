@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "core/progress.h"
-#include "synthesize/mesh.h"
-#include "synthesize/volume.h"
+#include "synthesize/mesh/mesh.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

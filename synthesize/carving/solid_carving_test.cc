@@ -1,4 +1,4 @@
-#include "synthesize/solid_carving.h"
+#include "synthesize/carving/solid_carving.h"
 
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
-#include "synthesize/mesh_io.h"
-#include "synthesize/mesh_render.h"
-#include "synthesize/procedural_exemplars.h"
+#include "synthesize/mesh/mesh_io.h"
+#include "synthesize/mesh/mesh_render.h"
+#include "synthesize/solid/procedural_exemplars.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "synthesize/loop_subdivision.h"
+#include "synthesize/mesh/loop_subdivision.h"
 
 #include <algorithm>
 #include <cmath>

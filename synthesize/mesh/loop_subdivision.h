@@ -1,6 +1,6 @@
 #pragma once
 
-#include "synthesize/mesh.h"
+#include "synthesize/mesh/mesh.h"
 
 namespace photomat {
 

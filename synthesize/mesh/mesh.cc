@@ -1,4 +1,4 @@
-#include "synthesize/mesh.h"
+#include "synthesize/mesh/mesh.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "synthesize/mesh_compare.h"
+#include "synthesize/mesh/mesh_compare.h"
 
 #include <algorithm>
 #include <cmath>

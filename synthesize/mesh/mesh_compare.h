@@ -3,7 +3,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "synthesize/mesh.h"
+#include "synthesize/mesh/mesh.h"
 
 namespace photomat {
 

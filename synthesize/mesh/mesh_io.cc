@@ -1,4 +1,4 @@
-#include "synthesize/mesh_io.h"
+#include "synthesize/mesh/mesh_io.h"
 
 #include <assimp/material.h>
 #include <assimp/postprocess.h>

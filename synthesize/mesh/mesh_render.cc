@@ -1,4 +1,4 @@
-#include "synthesize/mesh_render.h"
+#include "synthesize/mesh/mesh_render.h"
 
 #include <fmt/format.h>
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/image.h"
-#include "synthesize/mesh.h"
+#include "synthesize/mesh/mesh.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/mesh.h"
+#include "synthesize/mesh/mesh.h"
 
 #include <assimp/scene.h>
 #include <gtest/gtest.h>
@@ -9,10 +9,10 @@
 
 #include "core/colour.h"
 #include "core/error.h"
-#include "synthesize/field_colours.h"
-#include "synthesize/loop_subdivision.h"
-#include "synthesize/mesh_io.h"
-#include "synthesize/mesh_render.h"
+#include "synthesize/mesh/field_colours.h"
+#include "synthesize/mesh/loop_subdivision.h"
+#include "synthesize/mesh/mesh_io.h"
+#include "synthesize/mesh/mesh_render.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "synthesize/appearance_space.h"
+#include "synthesize/solid/appearance_space.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/progress.h"
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/exemplar_solid.h"
+#include "synthesize/solid/exemplar_solid.h"
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -10,7 +10,7 @@
 #include <limits>
 
 #include "core/error.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
 namespace {

@@ -4,9 +4,9 @@
 #include <vector>
 
 #include "core/progress.h"
-#include "synthesize/frame_field.h"
-#include "synthesize/similarity_set.h"
-#include "synthesize/volume.h"
+#include "synthesize/solid/frame_field.h"
+#include "synthesize/solid/similarity_set.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/exemplar_solid.h"
+#include "synthesize/solid/exemplar_solid.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -14,10 +14,10 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "synthesize/procedural_exemplars.h"
-#include "synthesize/solid_quality.h"
-#include "synthesize/spectral_solid.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/solid/procedural_exemplars.h"
+#include "synthesize/solid/solid_quality.h"
+#include "synthesize/solid/spectral_solid.h"
+#include "synthesize/volume/voxel_hash.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "synthesize/frame_field.h"
+#include "synthesize/solid/frame_field.h"
 
 #include <fmt/format.h>
 

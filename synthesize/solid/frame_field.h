@@ -5,7 +5,7 @@
 #include <string_view>
 #include <vector>
 
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

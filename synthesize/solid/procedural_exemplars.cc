@@ -1,4 +1,4 @@
-#include "synthesize/procedural_exemplars.h"
+#include "synthesize/solid/procedural_exemplars.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -8,7 +8,7 @@
 #include <numbers>
 
 #include "core/error.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
 namespace {

@@ -4,7 +4,7 @@
 #include <optional>
 #include <string_view>
 
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

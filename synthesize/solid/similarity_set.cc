@@ -1,4 +1,4 @@
-#include "synthesize/similarity_set.h"
+#include "synthesize/solid/similarity_set.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -12,7 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "synthesize/volume_filter.h"
+#include "synthesize/volume/volume_filter.h"
 
 namespace photomat {
 namespace {

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/progress.h"
-#include "synthesize/appearance_space.h"
-#include "synthesize/volume.h"
+#include "synthesize/solid/appearance_space.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

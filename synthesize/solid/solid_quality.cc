@@ -1,4 +1,4 @@
-#include "synthesize/solid_quality.h"
+#include "synthesize/solid/solid_quality.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -10,9 +10,9 @@
 #include <limits>
 
 #include "core/error.h"
-#include "synthesize/fft.h"
-#include "synthesize/similarity_set.h"
-#include "synthesize/voxel_hash.h"
+#include "core/fft.h"
+#include "synthesize/solid/similarity_set.h"
+#include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
 namespace {

@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "synthesize/appearance_space.h"
-#include "synthesize/volume.h"
+#include "synthesize/solid/appearance_space.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/solid_quality.h"
+#include "synthesize/solid/solid_quality.h"
 
 #include <gtest/gtest.h>
 

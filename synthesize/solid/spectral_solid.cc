@@ -1,4 +1,4 @@
-#include "synthesize/spectral_solid.h"
+#include "synthesize/solid/spectral_solid.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -11,7 +11,7 @@
 
 #include "core/error.h"
 #include "core/random.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
 namespace {

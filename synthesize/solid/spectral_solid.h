@@ -9,10 +9,10 @@
 #include <string_view>
 #include <vector>
 
+#include "core/fft.h"
 #include "core/image.h"
 #include "core/progress.h"
-#include "synthesize/fft.h"
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/spectral_solid.h"
+#include "synthesize/solid/spectral_solid.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -8,7 +8,7 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/volume/voxel_hash.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "synthesize/fem.h"
+#include "synthesize/surface/fem.h"
 
 #include <fmt/format.h>
 

@@ -7,7 +7,7 @@
 #include <span>
 #include <vector>
 
-#include "synthesize/mesh.h"
+#include "synthesize/mesh/mesh.h"
 
 namespace photomat {
 

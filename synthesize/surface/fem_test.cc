@@ -1,4 +1,4 @@
-#include "synthesize/fem.h"
+#include "synthesize/surface/fem.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <numbers>
 
 #include "core/random.h"
-#include "synthesize/mesh.h"
-#include "synthesize/semi_implicit.h"
+#include "synthesize/mesh/mesh.h"
+#include "synthesize/surface/semi_implicit.h"
 
 namespace photomat {
 namespace {

@@ -1,4 +1,4 @@
-#include "synthesize/geometric_diffusion.h"
+#include "synthesize/surface/geometric_diffusion.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -12,7 +12,7 @@
 #include <memory>
 
 #include "core/error.h"
-#include "synthesize/fem.h"
+#include "synthesize/surface/fem.h"
 
 namespace photomat {
 

@@ -5,9 +5,9 @@
 #include <vector>
 
 #include "core/progress.h"
-#include "synthesize/mesh.h"
-#include "synthesize/reaction_diffusion.h"
-#include "synthesize/semi_implicit.h"
+#include "synthesize/mesh/mesh.h"
+#include "synthesize/surface/reaction_diffusion.h"
+#include "synthesize/surface/semi_implicit.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/geometric_diffusion.h"
+#include "synthesize/surface/geometric_diffusion.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <numbers>
 
-#include "synthesize/mesh_compare.h"
-#include "synthesize/mesh_io.h"
+#include "synthesize/mesh/mesh_compare.h"
+#include "synthesize/mesh/mesh_io.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "synthesize/pattern_analysis.h"
+#include "synthesize/surface/pattern_analysis.h"
 
 #include <fmt/format.h>
 

@@ -3,7 +3,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "synthesize/fem.h"
+#include "synthesize/surface/fem.h"
 
 namespace photomat {
 

@@ -1,10 +1,10 @@
-#include "synthesize/pattern_material.h"
+#include "synthesize/surface/pattern_material.h"
 
 #include <algorithm>
 
 #include "core/error.h"
-#include "represent/light_basis.h"
-#include "represent/surface_integration.h"
+#include "represent/model/light_basis.h"
+#include "represent/surface/surface_integration.h"
 
 namespace photomat {
 

@@ -3,8 +3,8 @@
 #include <Eigen/Core>
 
 #include "core/image.h"
-#include "represent/representation.h"
-#include "synthesize/fem.h"
+#include "represent/model/representation.h"
+#include "synthesize/surface/fem.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/reaction_diffusion.h"
+#include "synthesize/surface/reaction_diffusion.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "core/progress.h"
-#include "synthesize/fem.h"
-#include "synthesize/semi_implicit.h"
+#include "synthesize/surface/fem.h"
+#include "synthesize/surface/semi_implicit.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/reaction_diffusion.h"
+#include "synthesize/surface/reaction_diffusion.h"
 
 #include <gtest/gtest.h>
 
@@ -6,11 +6,11 @@
 #include <numbers>
 
 #include "core/error.h"
-#include "represent/map_stack.h"
-#include "synthesize/mesh.h"
-#include "synthesize/pattern_analysis.h"
-#include "synthesize/pattern_material.h"
-#include "synthesize/ready_pattern.h"
+#include "represent/stack/map_stack.h"
+#include "synthesize/mesh/mesh.h"
+#include "synthesize/surface/pattern_analysis.h"
+#include "synthesize/surface/pattern_material.h"
+#include "synthesize/surface/ready_pattern.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

@@ -1,4 +1,4 @@
-#include "synthesize/ready_pattern.h"
+#include "synthesize/surface/ready_pattern.h"
 
 #include <fmt/format.h>
 

@@ -2,7 +2,7 @@
 
 #include <filesystem>
 
-#include "synthesize/reaction_diffusion.h"
+#include "synthesize/surface/reaction_diffusion.h"
 
 namespace photomat {
 

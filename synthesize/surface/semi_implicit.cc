@@ -1,4 +1,4 @@
-#include "synthesize/semi_implicit.h"
+#include "synthesize/surface/semi_implicit.h"
 
 #include <fmt/format.h>
 

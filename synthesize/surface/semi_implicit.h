@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "synthesize/fem.h"
+#include "synthesize/surface/fem.h"
 
 namespace photomat {
 

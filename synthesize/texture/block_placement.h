@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "synthesize/source_map.h"
+#include "synthesize/texture/source_map.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/block_placement.h"
+#include "synthesize/texture/block_placement.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "synthesize/boundary_cut.h"
+#include "synthesize/texture/boundary_cut.h"
 
 #include <fmt/format.h>
 

@@ -3,7 +3,7 @@
 #include <span>
 #include <vector>
 
-#include "synthesize/block_placement.h"
+#include "synthesize/texture/block_placement.h"
 
 namespace photomat {
 

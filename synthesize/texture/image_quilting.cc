@@ -1,4 +1,4 @@
-#include "synthesize/image_quilting.h"
+#include "synthesize/texture/image_quilting.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -9,7 +9,7 @@
 
 #include "core/error.h"
 #include "core/random.h"
-#include "synthesize/boundary_cut.h"
+#include "synthesize/texture/boundary_cut.h"
 
 namespace photomat {
 namespace {

@@ -1,4 +1,4 @@
-#include "synthesize/image_quilting.h"
+#include "synthesize/texture/image_quilting.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/random.h"
-#include "synthesize/synthesis_quality.h"
+#include "synthesize/texture/synthesis_quality.h"
 
 namespace photomat {
 namespace {

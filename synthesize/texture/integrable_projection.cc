@@ -1,11 +1,11 @@
-#include "synthesize/integrable_projection.h"
+#include "synthesize/texture/integrable_projection.h"
 
 #include <fmt/format.h>
 
 #include <array>
 
 #include "core/error.h"
-#include "represent/surface_integration.h"
+#include "represent/surface/surface_integration.h"
 
 namespace photomat {
 namespace {

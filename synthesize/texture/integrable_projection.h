@@ -1,7 +1,7 @@
 #pragma once
 
 #include "core/image.h"
-#include "represent/representation.h"
+#include "represent/model/representation.h"
 
 namespace photomat {
 

@@ -1,13 +1,13 @@
-#include "synthesize/integrable_projection.h"
+#include "synthesize/texture/integrable_projection.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "core/error.h"
-#include "represent/fit.h"
-#include "represent/surface_integration.h"
-#include "synthesize/synthesis.h"
+#include "represent/fitting/fit.h"
+#include "represent/surface/surface_integration.h"
+#include "synthesize/texture/synthesis.h"
 #include "tests/support/synthetic_sets.h"
 
 namespace photomat {

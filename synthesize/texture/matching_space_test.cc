@@ -1,4 +1,4 @@
-#include "synthesize/matching_space.h"
+#include "synthesize/texture/matching_space.h"
 
 #include <gtest/gtest.h>
 

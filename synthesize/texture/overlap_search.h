@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "synthesize/block_placement.h"
-#include "synthesize/matching_space.h"
+#include "synthesize/texture/block_placement.h"
+#include "synthesize/texture/matching_space.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/overlap_search.h"
+#include "synthesize/texture/overlap_search.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "synthesize/pixel_synthesis.h"
+#include "synthesize/texture/pixel_synthesis.h"
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>

@@ -2,10 +2,10 @@
 
 #include "core/image.h"
 #include "core/progress.h"
-#include "synthesize/block_placement.h"
-#include "synthesize/matching_space.h"
-#include "synthesize/overlap_search.h"
-#include "synthesize/source_map.h"
+#include "synthesize/texture/block_placement.h"
+#include "synthesize/texture/matching_space.h"
+#include "synthesize/texture/overlap_search.h"
+#include "synthesize/texture/source_map.h"
 
 namespace photomat {
 

@@ -1,4 +1,4 @@
-#include "synthesize/pixel_synthesis.h"
+#include "synthesize/texture/pixel_synthesis.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -6,10 +6,10 @@
 #include <map>
 #include <vector>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/random.h"
-#include "synthesize/synthesis_quality.h"
+#include "synthesize/texture/synthesis_quality.h"
 
 namespace photomat {
 namespace {

@@ -1,4 +1,4 @@
-#include "synthesize/source_map.h"
+#include "synthesize/texture/source_map.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "synthesize/synthesis.h"
+#include "synthesize/texture/synthesis.h"
 
 #include <fmt/format.h>
 

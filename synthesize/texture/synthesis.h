@@ -6,11 +6,11 @@
 
 #include "core/image.h"
 #include "core/progress.h"
-#include "represent/representation.h"
-#include "synthesize/block_placement.h"
-#include "synthesize/image_quilting.h"
-#include "synthesize/pixel_synthesis.h"
-#include "synthesize/source_map.h"
+#include "represent/model/representation.h"
+#include "synthesize/texture/block_placement.h"
+#include "synthesize/texture/image_quilting.h"
+#include "synthesize/texture/pixel_synthesis.h"
+#include "synthesize/texture/source_map.h"
 
 namespace photomat {
 

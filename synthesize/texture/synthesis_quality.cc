@@ -1,4 +1,4 @@
-#include "synthesize/synthesis_quality.h"
+#include "synthesize/texture/synthesis_quality.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>

@@ -5,8 +5,8 @@
 #include <optional>
 
 #include "core/image.h"
-#include "synthesize/matching_space.h"
-#include "synthesize/source_map.h"
+#include "synthesize/texture/matching_space.h"
+#include "synthesize/texture/source_map.h"
 
 namespace photomat {
 

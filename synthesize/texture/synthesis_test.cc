@@ -1,10 +1,10 @@
-#include "synthesize/synthesis.h"
+#include "synthesize/texture/synthesis.h"
 
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "represent/fit.h"
-#include "represent/map_stack.h"
+#include "represent/fitting/fit.h"
+#include "represent/stack/map_stack.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 

@@ -1,4 +1,4 @@
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "synthesize/volume_filter.h"
+#include "synthesize/volume/volume_filter.h"
 
 #include <tbb/parallel_for.h>
 

@@ -1,6 +1,6 @@
 #pragma once
 
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

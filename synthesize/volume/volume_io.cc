@@ -1,4 +1,4 @@
-#include "synthesize/volume_io.h"
+#include "synthesize/volume/volume_io.h"
 
 #include <fmt/format.h>
 #include <openvdb/openvdb.h>

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 namespace photomat {
 

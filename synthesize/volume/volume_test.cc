@@ -1,4 +1,4 @@
-#include "synthesize/volume.h"
+#include "synthesize/volume/volume.h"
 
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
@@ -7,9 +7,9 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
-#include "synthesize/volume_filter.h"
-#include "synthesize/volume_io.h"
-#include "synthesize/voxel_hash.h"
+#include "synthesize/volume/volume_filter.h"
+#include "synthesize/volume/volume_io.h"
+#include "synthesize/volume/voxel_hash.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {

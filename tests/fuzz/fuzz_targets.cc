@@ -10,13 +10,13 @@
 #include <set>
 #include <string>
 
-#include "capture/capture_manifest.h"
-#include "capture/lp_file.h"
+#include "capture/io/capture_manifest.h"
+#include "capture/io/lp_file.h"
 #include "core/error.h"
 #include "core/image.h"
-#include "relight/ptm_file.h"
-#include "relight/rti_file.h"
-#include "represent/map_stack.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/rti_file.h"
+#include "represent/stack/map_stack.h"
 
 namespace photomat::fuzz {
 namespace {

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "relight/ptm_file.h"
-#include "relight/rti_file.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/rti_file.h"
 
 namespace fs = std::filesystem;
 using namespace photomat;

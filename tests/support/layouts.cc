@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "capture/text_parsing.h"
 #include "core/image_io.h"
+#include "core/text_parsing.h"
 #include "tests/support/test_support.h"
 
 namespace photomat::testing {
@@ -55,7 +55,8 @@ std::vector<LayoutWriter> Layouts() {
            std::string vector;
            for (auto token : SplitWhitespace(lights[i])) {
              const std::string text(token);
-             vector += (vector.empty() ? "" : ", ") + (ParseNumber(text) ? text : "\"" + text + "\"");
+             vector +=
+                 (vector.empty() ? "" : ", ") + (ParseNumber(text) ? text : "\"" + text + "\"");
            }
            const std::string intensity = count == static_cast<int>(lights.size()) ? "1" : "[1, 1]";
            images += fmt::format("{}{{\"file\": \"{}\", \"light\": [{}], \"intensity\": {}}}",

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "capture/load_photometric_set.h"
+#include "capture/io/load_photometric_set.h"
 
 namespace photomat::testing {
 

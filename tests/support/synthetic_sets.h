@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "capture/synthetic_capture.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
 

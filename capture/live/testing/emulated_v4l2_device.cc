@@ -1,4 +1,4 @@
-#include "capture/testing/emulated_v4l2_device.h"
+#include "capture/live/testing/emulated_v4l2_device.h"
 
 #include <linux/videodev2.h>
 #include <sys/mman.h>
@@ -9,7 +9,7 @@
 #include <cstring>
 #include <thread>
 
-#include "capture/testing/frame_encoding.h"
+#include "capture/live/testing/frame_encoding.h"
 #include "core/error.h"
 
 namespace photomat::testing {

@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "capture/pixel_format.h"
-#include "capture/v4l2_syscalls.h"
+#include "capture/live/pixel_format.h"
+#include "capture/live/v4l2_syscalls.h"
 #include "core/colour.h"
 #include "core/image.h"
 

@@ -1,4 +1,4 @@
-#include "capture/testing/frame_encoding.h"
+#include "capture/live/testing/frame_encoding.h"
 
 #include <fmt/format.h>
 #include <turbojpeg.h>

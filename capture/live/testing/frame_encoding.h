@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "capture/pixel_format.h"
+#include "capture/live/pixel_format.h"
 #include "core/colour.h"
 #include "core/image.h"
 

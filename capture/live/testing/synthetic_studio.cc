@@ -1,4 +1,4 @@
-#include "capture/testing/synthetic_studio.h"
+#include "capture/live/testing/synthetic_studio.h"
 
 #include <fmt/format.h>
 

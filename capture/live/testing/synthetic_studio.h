@@ -4,8 +4,8 @@
 #include <map>
 #include <vector>
 
-#include "capture/synthetic_capture.h"
-#include "capture/testing/emulated_v4l2_device.h"
+#include "capture/live/testing/emulated_v4l2_device.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/image.h"
 #include "core/light_direction.h"
 

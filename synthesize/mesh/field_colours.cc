@@ -1,4 +1,4 @@
-#include "synthesize/field_colours.h"
+#include "synthesize/mesh/field_colours.h"
 
 #include <fmt/format.h>
 
