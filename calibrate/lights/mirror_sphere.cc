@@ -1,7 +1,5 @@
 #include "calibrate/lights/mirror_sphere.h"
 
-#include <ceres/ceres.h>
-#include <ceres/sphere_manifold.h>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
@@ -13,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <queue>
 
+#include "calibrate/lights/mirror_sphere_refinement.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/text_parsing.h"
@@ -63,84 +62,6 @@ std::optional<SphereCircle> AlgebraicCircle(const std::vector<Eigen::Vector2d>& 
   circle.radius = std::sqrt(r2);
   return circle;
 }
-
-// Distance of an edge point from the circle (orthographic outline), in pixels.
-struct OrthographicEdgeResidual {
-  explicit OrthographicEdgeResidual(const Eigen::Vector2d& p) : x(p.x()), y(p.y()) {}
-  template <typename T>
-  bool operator()(const T* circle, T* residual) const {
-    const T dx = T(x) - circle[0], dy = T(y) - circle[1];
-    residual[0] = ceres::sqrt(dx * dx + dy * dy + T(1e-12)) - circle[2];
-    return true;
-  }
-  double x, y;
-};
-
-// Where the highlight of light l (photomat frame) lands on the circle, minus where it was seen.
-struct OrthographicHighlightResidual {
-  explicit OrthographicHighlightResidual(const Eigen::Vector2d& p) : x(p.x()), y(p.y()) {}
-  template <typename T>
-  bool operator()(const T* circle, const T* light, T* residual) const {
-    // The normal at the mirror point bisects the light and the view vector (0, 0, 1).
-    const T hx = light[0], hy = light[1], hz = light[2] + T(1.0);
-    const T norm = ceres::sqrt(hx * hx + hy * hy + hz * hz);
-    residual[0] = circle[0] + circle[2] * hx / norm - T(x);
-    residual[1] = circle[1] - circle[2] * hy / norm - T(y);
-    return true;
-  }
-  double x, y;
-};
-
-// Perspective camera, OpenCV frame (X right, Y down, Z forward), sphere of radius 1 centred at C.
-// An outline point's viewing ray is tangent to the sphere: its angle to C is asin(1 / |C|).
-struct PerspectiveEdgeResidual {
-  PerspectiveEdgeResidual(const Eigen::Vector3d& viewing_ray, double focal_length)
-      : ray(viewing_ray), focal(focal_length) {}
-  template <typename T>
-  bool operator()(const T* centre, T* residual) const {
-    const T cx = centre[0], cy = centre[1], cz = centre[2];
-    const T dot = T(ray.x()) * cx + T(ray.y()) * cy + T(ray.z()) * cz;
-    const T crx = T(ray.y()) * cz - T(ray.z()) * cy;
-    const T cry = T(ray.z()) * cx - T(ray.x()) * cz;
-    const T crz = T(ray.x()) * cy - T(ray.y()) * cx;
-    const T angle = ceres::atan2(ceres::sqrt(crx * crx + cry * cry + crz * crz + T(1e-18)), dot);
-    const T distance = ceres::sqrt(cx * cx + cy * cy + cz * cz);
-    residual[0] = T(focal) * (angle - ceres::asin(T(1.0) / distance));
-    return true;
-  }
-  Eigen::Vector3d ray;
-  double focal;
-};
-
-// The perspective mirror point of light l (camera frame) on the sphere: the normal bisects l and
-// the direction to the camera, which itself depends on the point; a few fixed-point steps
-// converge because the sphere is small next to its distance.
-template <typename T>
-void PerspectiveMirrorPoint(const T* centre, const T* light, T* point) {
-  T view[3] = {-centre[0], -centre[1], -centre[2]};
-  for (int step = 0; step < 6; ++step) {
-    const T vn = ceres::sqrt(view[0] * view[0] + view[1] * view[1] + view[2] * view[2]);
-    T h[3] = {light[0] + view[0] / vn, light[1] + view[1] / vn, light[2] + view[2] / vn};
-    const T hn = ceres::sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
-    for (int i = 0; i < 3; ++i) point[i] = centre[i] + h[i] / hn;
-    for (int i = 0; i < 3; ++i) view[i] = -point[i];
-  }
-}
-
-struct PerspectiveHighlightResidual {
-  PerspectiveHighlightResidual(const Eigen::Vector2d& uv, const CameraIntrinsics& k)
-      : u(uv.x()), v(uv.y()), camera(k) {}
-  template <typename T>
-  bool operator()(const T* centre, const T* light, T* residual) const {
-    T point[3];
-    PerspectiveMirrorPoint(centre, light, point);
-    residual[0] = T(camera.fx) * point[0] / point[2] + T(camera.cx) - T(u);
-    residual[1] = T(camera.fy) * point[1] / point[2] + T(camera.cy) - T(v);
-    return true;
-  }
-  double u, v;
-  CameraIntrinsics camera;
-};
 
 // OpenCV pixel coordinates (centres at integers) of a continuous coordinate.
 Eigen::Vector2d ToOpenCvPixel(const Eigen::Vector2d& p) { return p - Eigen::Vector2d(0.5, 0.5); }
@@ -220,24 +141,6 @@ std::vector<Eigen::Vector2d> RadialEdgePoints(const cv::Mat& grey, const SphereC
   return points;
 }
 
-// Geometric circle fit of edge points, with a Huber loss against stray points.
-SphereCircle RefineCircle(const SphereCircle& start, const std::vector<Eigen::Vector2d>& points) {
-  double circle[3] = {start.centre.x(), start.centre.y(), start.radius};
-  ceres::Problem problem;
-  for (const auto& p : points) {
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<OrthographicEdgeResidual, 1, 3>(
-                                 new OrthographicEdgeResidual(p)),
-                             new ceres::HuberLoss(0.5), circle);
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 50;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  return {Eigen::Vector2d(circle[0], circle[1]), circle[2]};
-}
-
 double EdgeRms(const SphereCircle& circle, const std::vector<Eigen::Vector2d>& points) {
   if (points.empty()) return 0.0;
   double sum = 0.0;
@@ -246,6 +149,13 @@ double EdgeRms(const SphereCircle& circle, const std::vector<Eigen::Vector2d>& p
     sum += d * d;
   }
   return std::sqrt(sum / static_cast<double>(points.size()));
+}
+
+// The circle through `points`: the geometric fit with a Huber loss from `start` when this build
+// has the refinement (Ceres), Kasa's algebraic fit otherwise (the unrefined estimate).
+SphereCircle FitCircle(const SphereCircle& start, const std::vector<Eigen::Vector2d>& points) {
+  if (MirrorSphereRefinementAvailable()) return RefineCircle(start, points);
+  return AlgebraicCircle(points).value_or(start);
 }
 
 }  // namespace
@@ -304,7 +214,7 @@ SphereCircle FitSphereToMask(const Image& mask, const fs::path& source) {
   if (static_cast<int>(points.size()) < kMinimumEdgePoints || !start) {
     throw Error(source, "sphere not found: the mask has no outline (is it empty or full?)");
   }
-  const SphereCircle circle = RefineCircle(*start, points);
+  const SphereCircle circle = FitCircle(*start, points);
   const double rms = EdgeRms(circle, points);
   if (!(circle.radius > 2.0) || rms > 0.05 * circle.radius) {
     throw Error(source, fmt::format("sphere not found: the mask's outline is not a circle (RMS "
@@ -352,10 +262,10 @@ SphereCircle DetectSphere(const std::vector<Image>& images, const fs::path& sour
   if (static_cast<int>(points.size()) < kMinimumEdgePoints) {
     throw Error(source, "sphere not found: its outline is too faint to measure");
   }
-  SphereCircle circle = RefineCircle(start, points);
+  SphereCircle circle = FitCircle(start, points);
   // Once more around the refined circle (the profiles are then centred on the outline).
   points = RadialEdgePoints(body, circle);
-  if (static_cast<int>(points.size()) >= kMinimumEdgePoints) circle = RefineCircle(circle, points);
+  if (static_cast<int>(points.size()) >= kMinimumEdgePoints) circle = FitCircle(circle, points);
   // A faint or cluttered outline gives a circle that is wrong without failing: refuse it.
   const double rms = EdgeRms(circle, points);
   if (static_cast<int>(points.size()) < kRadialProfiles / 2 ||
@@ -530,60 +440,28 @@ MirrorSphereCalibration CalibrateLightsFromMirrorSphere(const std::vector<Image>
   result.edge_points = static_cast<int>(edges.size());
   const std::size_t n = images.size();
   std::vector<Eigen::Vector3d> lights(n);
-  ceres::Problem problem;
-  ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::DENSE_SCHUR;
-  solver.max_num_iterations = 100;
-  solver.num_threads = 1;
-  solver.function_tolerance = 1e-12;
-  solver.parameter_tolerance = 1e-12;
-  ceres::Solver::Summary summary;
+  std::vector<Eigen::Vector2d> highlights(n);
+  for (std::size_t i = 0; i < n; ++i) highlights[i] = result.highlights[i].position;
   if (!result.perspective) {
-    double circle[3] = {result.initial.centre.x(), result.initial.centre.y(),
-                        result.initial.radius};
+    result.sphere = result.initial;
     for (std::size_t i = 0; i < n; ++i) {
-      lights[i] = LightFromHighlight(result.initial, result.highlights[i].position).vector();
+      lights[i] = LightFromHighlight(result.initial, highlights[i]).vector();
     }
-    if (options.refine) {
-      for (const auto& p : edges) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<OrthographicEdgeResidual, 1, 3>(
-                                     new OrthographicEdgeResidual(p)),
-                                 new ceres::HuberLoss(0.5), circle);
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<OrthographicHighlightResidual, 2, 3, 3>(
-                new OrthographicHighlightResidual(result.highlights[i].position)),
-            nullptr, circle, lights[i].data());
-        problem.SetManifold(lights[i].data(), new ceres::SphereManifold<3>());
-      }
-      ceres::Solve(solver, &problem, &summary);
-    }
-    result.sphere = {Eigen::Vector2d(circle[0], circle[1]), circle[2]};
+    if (options.refine) RefineOrthographicSphere(edges, highlights, &result.sphere, &lights);
     result.edge_rms_pixels = EdgeRms(result.sphere, edges);
   } else {
     const CameraIntrinsics& camera = *options.camera;
     Eigen::Vector3d centre = SphereCentreFromCircle(result.initial, camera);
     for (std::size_t i = 0; i < n; ++i) {
-      lights[i] = PhotomatToCamera(
-          PerspectiveLight(centre, result.highlights[i].position, camera).vector());
+      lights[i] = PhotomatToCamera(PerspectiveLight(centre, highlights[i], camera).vector());
     }
     if (options.refine) {
-      const double focal = MeanFocal(camera);
-      for (const auto& p : edges) {
-        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PerspectiveEdgeResidual, 1, 3>(
-                                     new PerspectiveEdgeResidual(CameraRay(camera, p), focal)),
-                                 new ceres::HuberLoss(0.5), centre.data());
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<PerspectiveHighlightResidual, 2, 3, 3>(
-                new PerspectiveHighlightResidual(ToOpenCvPixel(result.highlights[i].position),
-                                                 camera)),
-            nullptr, centre.data(), lights[i].data());
-        problem.SetManifold(lights[i].data(), new ceres::SphereManifold<3>());
-      }
-      ceres::Solve(solver, &problem, &summary);
+      std::vector<Eigen::Vector3d> edge_rays;
+      for (const auto& p : edges) edge_rays.push_back(CameraRay(camera, p));
+      std::vector<Eigen::Vector2d> opencv_highlights;
+      for (const auto& h : highlights) opencv_highlights.push_back(ToOpenCvPixel(h));
+      RefinePerspectiveSphere(edge_rays, MeanFocal(camera), opencv_highlights, camera, &centre,
+                              &lights);
     }
     // Report the refined sphere as its image circle (centre of the outline, mean radius).
     const Eigen::Vector3d projected_centre(camera.fx * centre.x() / centre.z() + camera.cx,

@@ -31,7 +31,9 @@ namespace photomat {
 //      from the edge points (Huber loss) jointly with one unit light direction per image whose
 //      predicted highlight must land on the measured one. In this single-sphere problem each
 //      direction is free, so the highlight residuals vanish at the optimum and the sphere is set
-//      by its outline; the lights follow the refined sphere in one consistent solve;
+//      by its outline; the lights follow the refined sphere in one consistent solve
+//      (mirror_sphere_refinement.h; a build without Ceres keeps the unrefined estimate, and the
+//      outlines of steps 1 and 3 are Kasa's algebraic circle fits);
 //   4. the direction is the reflection of the view vector about the sphere's normal at the
 //      highlight: orthographic camera by default (view vector +z), or perspective with known
 //      intrinsics (the view ray through the highlight pixel).
@@ -51,8 +53,8 @@ CameraIntrinsics ReadCameraIntrinsics(const std::filesystem::path& path);
 
 // The sphere outline from a mask image read as linear coverage (any channel; values in [0, 1]):
 // sub-pixel edge points where the coverage crosses 0.5 along rows and columns, fitted by a circle
-// (algebraic start, Ceres geometric refinement with a Huber loss). Throws Error naming `source`
-// when the mask holds no circle-like region.
+// (algebraic start, Ceres geometric refinement with a Huber loss; the algebraic fit alone in a
+// build without Ceres). Throws Error naming `source` when the mask holds no circle-like region.
 SphereCircle FitSphereToMask(const Image& mask, const std::filesystem::path& source = {});
 
 // Sub-pixel edge points of the mask (where coverage crosses 0.5), for the joint refinement.
@@ -104,7 +106,9 @@ Eigen::Vector2d HighlightFromLight(const SphereCircle& sphere, const LightDirect
 struct MirrorSphereOptions {
   HighlightOptions highlight;
   std::optional<CameraIntrinsics> camera;  // unset: orthographic
-  bool refine = true;                      // the Ceres joint refinement
+  // The Ceres joint refinement (step 3). In a build without Ceres, true is an Error
+  // (MirrorSphereRefinementAvailable() in mirror_sphere_refinement.h).
+  bool refine = true;
   Progress* progress = nullptr;
 };
 

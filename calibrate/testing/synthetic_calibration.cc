@@ -95,6 +95,32 @@ MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
   return render;
 }
 
+MirrorSphereRenderOptions SmallSphereRenderOptions() {
+  MirrorSphereRenderOptions options;
+  options.width = 200;
+  options.height = 150;
+  options.sphere = {Eigen::Vector2d(97.3, 76.6), 60.0};
+  options.supersampling = 3;
+  return options;
+}
+
+std::vector<std::string> SphereImageNames(std::size_t count) {
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < count; ++i) names.push_back(fmt::format("sphere_{}.png", i));
+  return names;
+}
+
+AngleStats CompareLights(const std::vector<LightDirection>& a,
+                         const std::vector<LightDirection>& b) {
+  AngleStats stats;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const double angle = a[i].AngleToDegrees(b[i]);
+    stats.mean += angle / static_cast<double>(a.size());
+    stats.max = std::max(stats.max, angle);
+  }
+  return stats;
+}
+
 PhotometricSet RenderNearLightCapture(const SyntheticMaterial& material,
                                       const std::vector<NearLight>& lights) {
   if (lights.empty()) throw Error("no lights to render");

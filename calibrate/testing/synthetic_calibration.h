@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "calibrate/lights/mirror_sphere.h"
@@ -43,6 +44,18 @@ struct MirrorSphereRender {
 
 MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
                                       const MirrorSphereRenderOptions& options = {});
+
+// A small render (200 x 150, a sphere of radius 60 px, 3 x 3 supersampling): plenty for
+// 0.1-degree accuracy, and fast.
+MirrorSphereRenderOptions SmallSphereRenderOptions();
+// "sphere_0.png", "sphere_1.png", ...: the names a calibration gives its images in messages.
+std::vector<std::string> SphereImageNames(std::size_t count);
+// The angles between the lights of two lists of the same length, in degrees.
+struct AngleStats {
+  double mean = 0.0, max = 0.0;
+};
+AngleStats CompareLights(const std::vector<LightDirection>& a,
+                         const std::vector<LightDirection>& b);
 
 // `material` under near point lights with inverse-square fall-off (Lambertian, attached shadows
 // clamped to 0), in the sample frame of near_light.h (surface height included). The set's lights
