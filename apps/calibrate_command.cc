@@ -1,15 +1,19 @@
 // photomat calibrate: light directions from a mirror sphere, flat-fields, light intensities,
-// camera response, and applying them to a capture (issue 5).
+// camera response, and applying them to a capture.
+#include "apps/calibrate_command.h"
+
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cctype>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "calibrate/lights/calibration_report.h"
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere.h"
+#include "calibrate/lights/mirror_sphere_refinement.h"
 #include "calibrate/radiometry/exposure.h"
 #include "calibrate/radiometry/flat_field.h"
 #include "calibrate/radiometry/near_light.h"
@@ -132,6 +136,14 @@ SphereCapture ReadSphereCapture(const fs::path& input, const std::optional<Colou
   return capture;
 }
 
+// Without --refine or --no-refine the lights are refined when this build can; a build without
+// Ceres says once that it gives the unrefined sphere.
+bool RefineByDefault() {
+  if (MirrorSphereRefinementAvailable()) return true;
+  spdlog::warn("{}: the lights come from the unrefined sphere", MirrorSphereRefinementAbsence());
+  return false;
+}
+
 void AddLightsCommand(CLI::App& calibrate) {
   struct Options {
     fs::path input;
@@ -142,6 +154,7 @@ void AddLightsCommand(CLI::App& calibrate) {
     fs::path camera;
     fs::path images_for;
     std::string colour_space;
+    bool refine = false;
     bool no_refine = false;
   };
   auto options = std::make_shared<Options>();
@@ -171,7 +184,12 @@ void AddLightsCommand(CLI::App& calibrate) {
                       "count): the sample captured under the same lights");
   command->add_option("--colour-space", options->colour_space,
                       "How integer images encode light: linear or srgb (default: 8-bit sRGB)");
-  command->add_flag("--no-refine", options->no_refine, "Skip the Ceres refinement");
+  CLI::Option* refine = command->add_flag(
+      "--refine", options->refine,
+      "Refine the sphere jointly with the lights (Ceres; the default when this build has Ceres, "
+      "an error when it has not)");
+  command->add_flag("--no-refine", options->no_refine, "Skip the Ceres refinement")
+      ->excludes(refine);
   command->callback([options] {
     const std::optional<ColourSpace> space = ParseColourSpaceOption(options->colour_space);
     SphereCapture capture = ReadSphereCapture(options->input, space);
@@ -181,7 +199,7 @@ void AddLightsCommand(CLI::App& calibrate) {
       capture.mask = ReadImage(options->mask, coverage).image;
     }
     MirrorSphereOptions sphere_options;
-    sphere_options.refine = !options->no_refine;
+    sphere_options.refine = options->refine || (!options->no_refine && RefineByDefault());
     if (!options->camera.empty()) sphere_options.camera = ReadCameraIntrinsics(options->camera);
     TerminalProgressBar bar;
     sphere_options.progress = &bar;
@@ -492,10 +510,7 @@ void AddApplyCommand(CLI::App& calibrate) {
 }  // namespace
 
 void AddCalibrateCommand(CLI::App& app) {
-  CLI::App* calibrate = app.add_subcommand(
-      "calibrate",
-      "Calibrate a capture: light directions from a mirror sphere, flat-fields from a matte "
-      "target, light intensities, camera response; and apply them.");
+  CLI::App* calibrate = AddListedCommand(app, "calibrate");
   calibrate->require_subcommand(1);
   AddLightsCommand(*calibrate);
   AddFlatFieldCommand(*calibrate);

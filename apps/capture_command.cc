@@ -1,11 +1,13 @@
 // `photomat capture` and `photomat devices`: live capture from a camera while a light controller
 // switches the lights of a plan (README, "Capture").
+#include "apps/capture_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <sstream>
 
-#include "apps/commands.h"
+#include "apps/cli_main.h"
 #include "capture/live/capture_session.h"
 #include "capture/live/libcamera_frame_source.h"
 #include "capture/live/light_controller.h"
@@ -103,11 +105,7 @@ void AddCaptureCommand(CLI::App& app) {
     bool resume = false;
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "capture",
-      "Record a photometric set from a camera while a light controller switches the lights of a "
-      "plan. Images and the manifest are written as they come; --resume continues an "
-      "interrupted session.");
+  CLI::App* command = AddListedCommand(app, "capture");
   command
       ->add_option("--device", options->device,
                    "Camera: /dev/videoN (V4L2), libcamera:ID or libcamera:INDEX, or "
@@ -216,10 +214,7 @@ void AddCaptureCommand(CLI::App& app) {
 }
 
 void AddDevicesCommand(CLI::App& app) {
-  CLI::App* command = app.add_subcommand(
-      "devices",
-      "List the cameras photomat can capture from: V4L2 devices (/dev/video*) and libcamera "
-      "cameras, with their formats and controls.");
+  CLI::App* command = AddListedCommand(app, "devices");
   command->callback([] {
     LinuxV4l2Syscalls syscalls;
     const std::vector<DeviceDescription> v4l2 = ListV4l2Devices(syscalls);

@@ -1,7 +1,9 @@
+#include "apps/demo_command.h"
+
 #include <fmt/format.h>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "capture/io/capture_manifest.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -24,10 +26,7 @@ void AddDemoCommand(CLI::App& app) {
     int sweep = 24;
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "demo",
-      "Run the whole pipeline on the built-in synthetic sample: generate, fit all methods, "
-      "evaluate, relight a light sweep, then grow every stack to 4x its area and relight it.");
+  CLI::App* command = AddListedCommand(app, "demo");
   command->add_option("--out", options->out, "Output folder")->capture_default_str();
   command->add_option("--size", options->size, "Sample width and height in pixels")
       ->capture_default_str()

@@ -1,9 +1,11 @@
+#include "apps/evaluate_command.h"
+
 #include <fmt/format.h>
 
 #include <charconv>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "apps/robust_support.h"
 #include "apps/synthesis_cli.h"
 #include "core/error.h"
@@ -51,11 +53,7 @@ void AddEvaluateCommand(CLI::App& app) {
     SynthesisEvaluationOptions synthesis;
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "evaluate",
-      "Measure how well each method relights the captured images: Dong's normalised RMS error "
-      "for reconstruction (fit all, relight each) and leave-one-out prediction, and the normal "
-      "angular error against ground truth.");
+  CLI::App* command = AddListedCommand(app, "evaluate");
   command->add_option("input", options->input, "Photometric set (folder, .lp, manifest, DiLiGenT)")
       ->required();
   command->add_option("--methods", options->methods, "Comma-separated methods, or all")

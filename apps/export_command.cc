@@ -1,10 +1,12 @@
+#include "apps/export_command.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <functional>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "core/colour.h"
 #include "core/error.h"
 #include "relight/export/export.h"
@@ -169,11 +171,7 @@ void RunExport(const ExportCommandOptions& options) {
 
 void AddExportCommand(CLI::App& app) {
   auto options = std::make_shared<ExportCommandOptions>();
-  CLI::App* command = app.add_subcommand(
-      "export",
-      "Write a representation for other tools: with --out, a 16-bit tangent-space normal map, an "
-      "sRGB albedo, a height map (EXR and 16-bit PNG), a glTF 2.0 tile and the stack with its "
-      "height layer; with --ptm / --rti, a PTM (PTM_1.2) or HSH RTI file.");
+  CLI::App* command = AddListedCommand(app, "export");
   command
       ->add_option("input", options->input,
                    "A map stack (.exr or fit folder), a .ptm or .rti file, or a photometric set "

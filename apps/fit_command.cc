@@ -1,10 +1,12 @@
+#include "apps/fit_command.h"
+
 #include <fmt/format.h>
 
 #include <numeric>
 #include <optional>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "apps/robust_support.h"
 #include "core/colour.h"
 #include "core/error.h"
@@ -24,10 +26,7 @@ void AddFitCommand(CLI::App& app) {
     std::string loss = "cauchy";
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "fit",
-      "Fit relightable representations to a photometric set; writes one multi-layer EXR map "
-      "stack per method and stacks.json into --out.");
+  CLI::App* command = AddListedCommand(app, "fit");
   command
       ->add_option("input", options->input,
                    "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")

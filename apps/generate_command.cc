@@ -1,7 +1,9 @@
+#include "apps/generate_command.h"
+
 #include <fmt/format.h>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "core/error.h"
 
 namespace photomat::app {
@@ -15,10 +17,7 @@ void AddGenerateCommand(CLI::App& app) {
     GenerateOptions generate;
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "generate",
-      "Render a synthetic capture with ground truth: a procedural material (height field and RGB "
-      "albedo) under known lights. Writes images, manifest.json and gt_normals/albedo/height.exr.");
+  CLI::App* command = AddListedCommand(app, "generate");
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_option("--size", options->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   command->add_option("--pattern", options->pattern, "Material: bricks, bumps or grooves")

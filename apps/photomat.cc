@@ -1,43 +1,71 @@
 // photomat: relightable material maps from photographs under many lights.
-#include <fmt/format.h>
-#include <spdlog/spdlog.h>
+//
+// This program only dispatches: `photomat NAME ARGS...` runs the program that implements NAME
+// (libexec/photomat/photomat-pipeline, -capture, -calibrate, -solid, -rd; see command_table.h)
+// with the same arguments, so that each command loads only the shared libraries it needs (fit
+// does not load libcamera, OpenVDB, assimp or Ceres) and `photomat --help` loads none of them.
+// The help, --version and the errors for a missing or unknown subcommand are the same CLI11 app
+// the programs build, with every subcommand listed.
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <exception>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <system_error>
 
-#include "apps/commands.h"
-#include "core/error.h"
+#include "apps/command_table.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using photomat::app::CommandInfo;
+
+// libexec/photomat/PROGRAM beside the bin/ folder of this executable.
+fs::path ProgramPath(std::string_view program) {
+  std::error_code error;
+  const fs::path self = fs::read_symlink("/proc/self/exe", error);
+  const fs::path bin = error ? fs::path(".") : self.parent_path();
+  return bin.parent_path() / "libexec" / "photomat" / program;
+}
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "photomat: error: %s\n", message.c_str());
+  return 1;
+}
+
+// Replaces this process with the command's program; returns only when that fails.
+int RunProgram(const CommandInfo& command, char** argv) {
+  if (command.component && !photomat::app::ComponentAbsence(*command.component).empty()) {
+    return Fail(photomat::app::BuiltWithout(*command.component));
+  }
+  const fs::path program = ProgramPath(command.program);
+  execv(program.c_str(), argv);
+  return Fail("cannot run " + program.string() + ": " + std::strerror(errno));
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  spdlog::set_pattern("photomat: %l: %v");
-  CLI::App app(
-      "photomat: turns photographs of a material sample under many known lights into relightable "
-      "material maps.",
-      "photomat");
+  if (argc >= 2) {
+    if (const CommandInfo* command = photomat::app::FindCommand(argv[1])) {
+      return RunProgram(*command, argv);
+    }
+  }
+  CLI::App app(std::string(photomat::app::ProgramDescription()), "photomat");
   app.require_subcommand(1);
-  app.set_version_flag("--version", "photomat 0.1.0");
-  photomat::app::AddGenerateCommand(app);
-  photomat::app::AddFitCommand(app);
-  photomat::app::AddRelightCommand(app);
-  photomat::app::AddEvaluateCommand(app);
-  photomat::app::AddDemoCommand(app);
-  photomat::app::AddCaptureCommand(app);
-  photomat::app::AddDevicesCommand(app);
-  photomat::app::AddSolidCommand(app);
-  photomat::app::AddRdCommand(app);
-  photomat::app::AddCalibrateCommand(app);
-  photomat::app::AddExportCommand(app);
-  photomat::app::AddSynthesizeCommand(app);
+  app.set_version_flag("--version", std::string(photomat::app::ProgramVersion()));
+  for (const CommandInfo& command : photomat::app::Commands()) {
+    app.add_subcommand(std::string(command.name),
+                       photomat::app::DescribeInThisBuild(command.description, command.component));
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
-  } catch (const photomat::Error& error) {
-    fmt::print(stderr, "photomat: error: {}\n", error.what());
-    return 1;
-  } catch (const std::exception& error) {
-    fmt::print(stderr, "photomat: error: {}\n", error.what());
-    return 1;
   }
-  return 0;
+  // Only reachable with a subcommand CLI11 knows and FindCommand does not: none.
+  return Fail("no program for this subcommand");
 }

@@ -1,5 +1,7 @@
 // photomat rd: reaction-diffusion patterns grown on a mesh (FEM) or on a periodic grid (a tileable
 // material written as a map stack).
+#include "apps/rd_command.h"
+
 #include <fmt/format.h>
 
 #include <chrono>
@@ -10,8 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -292,11 +294,7 @@ void RunOnMesh(const RdOptions& o, ReactionDiffusionModel& model, SimulationOpti
 
 void AddRdCommand(CLI::App& app) {
   auto o = std::make_shared<RdOptions>();
-  CLI::App* command = app.add_subcommand(
-      "rd",
-      "Grow a reaction-diffusion pattern on a surface mesh (finite elements; writes a coloured "
-      "PLY and glTF, previews, the fields) or on a periodic grid (a tileable material written as "
-      "a relightable map stack).");
+  CLI::App* command = AddListedCommand(app, "rd");
   command->add_option("--mesh", o->mesh,
                       "Mesh file (OBJ, PLY, ...), or sphere[:RADIUS[:LEVEL]], torus[:R:r[:N]]");
   command->add_option("--grid", o->grid, "Periodic grid WIDTHxHEIGHT instead of a mesh");

@@ -1,7 +1,9 @@
+#include "apps/relight_command.h"
+
 #include <fmt/format.h>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "core/error.h"
 #include "relight/formats/stack_file.h"
 #include "relight/render/relight.h"
@@ -21,10 +23,7 @@ void AddRelightCommand(CLI::App& app) {
     bool clamp = false;
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "relight",
-      "Render a map stack under new lights. One light (--light) writes one image to --out; "
-      "several (--lights, --sweep) write a folder of images with a manifest.json.");
+  CLI::App* command = AddListedCommand(app, "relight");
   command
       ->add_option("stack", options->stack,
                    "A map stack (.exr), a folder written by `photomat fit`, or a .ptm or .rti "

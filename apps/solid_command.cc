@@ -1,5 +1,8 @@
 // photomat solid: solid textures from 2D views (Dischler et al. 1998), grown from a solid exemplar
-// under frame-field control (Su 2008), and procedural exemplars.
+// under frame-field control (Su 2008), and procedural exemplars; `carve` is in
+// solid_carve_command.cc (it needs meshes too).
+#include "apps/solid_command.h"
+
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
@@ -8,16 +11,16 @@
 #include <memory>
 #include <optional>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
+#ifdef PHOTOMAT_WITH_CARVING
+#include "apps/solid_carve_command.h"
+#endif
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/progress.h"
-#include "synthesize/carving/solid_carving.h"
-#include "synthesize/mesh/mesh_io.h"
-#include "synthesize/mesh/mesh_render.h"
 #include "synthesize/solid/exemplar_solid.h"
 #include "synthesize/solid/frame_field.h"
 #include "synthesize/solid/procedural_exemplars.h"
@@ -26,9 +29,7 @@
 #include "synthesize/volume/volume_io.h"
 
 namespace photomat::app {
-namespace {
 
-// Limits TBB's threads for the command when --threads is given (results do not depend on it).
 std::unique_ptr<tbb::global_control> LimitThreads(int threads) {
   if (threads <= 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -38,6 +39,14 @@ std::unique_ptr<tbb::global_control> LimitThreads(int threads) {
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
+
+namespace {
+
+constexpr std::string_view kCarveDescription =
+    "Carve a mesh out of a solid texture: every vertex takes the volume's value where the mesh "
+    "sits in it (its bounding box centred in the volume, longest side across it). Writes "
+    "carved.ply and carved.glb (per-vertex colours), vertex_values.csv (every channel), "
+    "preview_{front,right,back,left,top}.png and carve.json.";
 
 void WriteOutputs(const std::filesystem::path& out, const std::filesystem::path& slices,
                   const Volume& volume) {
@@ -374,110 +383,6 @@ void AddGrow(CLI::App& solid) {
   });
 }
 
-// --- carve ---
-
-void AddCarve(CLI::App& solid) {
-  struct Options {
-    std::filesystem::path volume, mesh, out;
-    CarveOptions carve;
-    bool clamp = false;
-    bool normalise = false;
-    int preview_size = 512;
-    int threads = 0;
-  };
-  auto options = std::make_shared<Options>();
-  CLI::App* command = solid.add_subcommand(
-      "carve",
-      "Carve a mesh out of a solid texture: every vertex takes the volume's value where the mesh "
-      "sits in it (its bounding box centred in the volume, longest side across it). Writes "
-      "carved.ply and carved.glb (per-vertex colours), vertex_values.csv (every channel), "
-      "preview_{front,right,back,left,top}.png and carve.json.");
-  command->add_option("volume", options->volume, "Solid texture: FILE.vdb or an EXR slice folder")
-      ->required();
-  command->add_option("--mesh", options->mesh, "Mesh file (OBJ, PLY, OFF, STL, ...)")->required();
-  command->add_option("--out", options->out, "Output folder")->required();
-  command
-      ->add_option("--periods", options->carve.placement.periods,
-                   "Volume periods across the mesh's longest side (above 1 repeats the volume)")
-      ->capture_default_str();
-  command->add_flag("--clamp", options->clamp,
-                    "The volume does not tile: repeat its faces instead of wrapping around");
-  command
-      ->add_option("--max-edge", options->carve.max_mean_edge_voxels,
-                   "Subdivide until the mean edge is at most this many voxels (0: never)")
-      ->capture_default_str();
-  command->add_flag("--normalise", options->normalise,
-                    "Stretch the shown channels' range over the colours (non-colour volumes)");
-  command->add_option("--preview-size", options->preview_size, "Preview side, pixels")
-      ->capture_default_str();
-  command->add_option("--threads", options->threads, "Threads (0: all; same result any count)")
-      ->capture_default_str();
-  command->callback([options] {
-    const auto limit = LimitThreads(options->threads);
-    const Volume volume = ReadVolume(options->volume);
-    const TriangleMesh mesh = ReadMesh(options->mesh);
-    CarveOptions carve = options->carve;
-    carve.placement.tileable = !options->clamp;
-    TerminalProgressBar bar;
-    const auto start = std::chrono::steady_clock::now();
-    const CarvedMesh carved = CarveMesh(mesh, volume, carve, &bar);
-    const std::vector<Eigen::Vector3f> colours = CarvedColours(carved, volume, options->normalise);
-    fmt::print(
-        "carved {} ({} vertices, {} subdivision levels: {} vertices) out of a {} solid "
-        "({:.2f} s)\n",
-        options->mesh.filename().string(), mesh.vertex_count(), carved.subdivision_levels,
-        carved.mesh.vertex_count(), ToString(volume.size()), Seconds(start));
-    CreateFolder(options->out);
-    WriteMesh(options->out / "carved.ply", carved.mesh, colours);
-    WriteMesh(options->out / "carved.glb", carved.mesh, colours);
-    // Every channel at every vertex (representation maps carry more than a colour).
-    std::string table;
-    const std::vector<std::string> names = volume.ChannelNamesOrDefault();
-    for (std::size_t c = 0; c < names.size(); ++c) table += (c ? "," : "") + names[c];
-    table += "\n";
-    for (int v = 0; v < carved.mesh.vertex_count(); ++v) {
-      const auto values = carved.at(v);
-      for (std::size_t c = 0; c < values.size(); ++c) {
-        table += fmt::format("{}{:.6g}", c ? "," : "", values[c]);
-      }
-      table += "\n";
-    }
-    WriteTextFileAtomically(options->out / "vertex_values.csv", table);
-    PreviewOptions preview;
-    preview.size = options->preview_size;
-    const std::vector<PreviewView> views = DefaultPreviewViews();
-    bar.Start("preview renders", views.size());
-    for (const PreviewView& view : views) {
-      WritePreviews(options->out, "preview", carved.mesh, colours, {view}, preview);
-      bar.Advance();
-    }
-    bar.Finish();
-    const CarveMapping& mapping = carved.mapping;
-    WriteJsonFile(
-        options->out / "carve.json",
-        {{"volume", options->volume.string()},
-         {"volume_size", ToString(volume.size())},
-         {"channels", names},
-         {"mesh", options->mesh.string()},
-         {"input_vertices", mesh.vertex_count()},
-         {"subdivision_levels", carved.subdivision_levels},
-         {"vertices", carved.mesh.vertex_count()},
-         {"triangles", carved.mesh.triangle_count()},
-         {"mean_edge_voxels", MeanEdgeLength(carved.mesh) * mapping.scale},
-         {"periods", carve.placement.periods},
-         {"tileable", carve.placement.tileable},
-         {"scale_voxels_per_unit", mapping.scale},
-         {"mesh_centre",
-          {mapping.mesh_centre.x(), mapping.mesh_centre.y(), mapping.mesh_centre.z()}},
-         {"volume_centre",
-          {mapping.volume_centre.x(), mapping.volume_centre.y(), mapping.volume_centre.z()}}});
-    fmt::print(
-        "wrote carved.ply, carved.glb, vertex_values.csv, {} previews and carve.json to "
-        "{}\n",
-        views.size(), options->out.string());
-  });
-}
-
 // --- exemplar ---
 
 void AddExemplar(CLI::App& solid) {
@@ -506,14 +411,15 @@ void AddExemplar(CLI::App& solid) {
 }  // namespace
 
 void AddSolidCommand(CLI::App& app) {
-  CLI::App* solid = app.add_subcommand(
-      "solid",
-      "Solid (3D) textures: from 2D views, grown from a solid exemplar, procedural, and objects "
-      "carved out of them.");
+  CLI::App* solid = AddListedCommand(app, "solid");
   solid->require_subcommand(1);
   AddFromViews(*solid);
   AddGrow(*solid);
-  AddCarve(*solid);
+#ifdef PHOTOMAT_WITH_CARVING
+  AddSolidCarveCommand(*solid, kCarveDescription);
+#else
+  AddAbsentCommand(*solid, "carve", kCarveDescription, Component::kCarving);
+#endif
   AddExemplar(*solid);
 }
 

@@ -1,9 +1,11 @@
+#include "apps/synthesize_command.h"
+
 #include <fmt/format.h>
 
 #include <optional>
 
+#include "apps/cli_main.h"
 #include "apps/cli_support.h"
-#include "apps/commands.h"
 #include "apps/synthesis_cli.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -55,12 +57,7 @@ void AddSynthesizeCommand(CLI::App& app) {
     std::filesystem::path height;
   };
   auto options = std::make_shared<Options>();
-  CLI::App* command = app.add_subcommand(
-      "synthesize",
-      "Grow a map stack (any method) or a plain image to a new size by image quilting in R^n "
-      "(the thesis's modified Efros-Freeman) or pixel-based multiresolution synthesis (modified "
-      "Wei-Levoy). Every output pixel copies a whole sample pixel (all maps together), so the "
-      "grown stack relights with the sample's light basis.");
+  CLI::App* command = AddListedCommand(app, "synthesize");
   command
       ->add_option("input", options->input,
                    "A map stack (.exr), a folder written by `photomat fit`, or an image")

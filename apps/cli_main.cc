@@ -1,0 +1,43 @@
+#include "apps/cli_main.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <exception>
+#include <string>
+
+#include "core/error.h"
+
+namespace photomat::app {
+
+int RunCommands(int argc, char** argv, std::initializer_list<AddCommandFunction> commands) {
+  spdlog::set_pattern("photomat: %l: %v");
+  CLI::App app(std::string(ProgramDescription()), "photomat");
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(ProgramVersion()));
+  for (AddCommandFunction add : commands) add(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error);
+  } catch (const std::exception& error) {
+    fmt::print(stderr, "photomat: error: {}\n", error.what());
+    return 1;
+  }
+  return 0;
+}
+
+CLI::App* AddListedCommand(CLI::App& app, std::string_view name) {
+  return app.add_subcommand(std::string(name), std::string(CommandDescription(name)));
+}
+
+void AddAbsentCommand(CLI::App& parent, std::string_view name, std::string_view description,
+                      Component component) {
+  CLI::App* command =
+      parent.add_subcommand(std::string(name), DescribeInThisBuild(description, &component));
+  command->allow_extras();
+  command->set_help_flag();
+  command->callback([component] { throw Error(BuiltWithout(component)); });
+}
+
+}  // namespace photomat::app
