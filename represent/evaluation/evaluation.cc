@@ -19,50 +19,6 @@ double Mean(const std::vector<double>& values) {
 
 }  // namespace
 
-nlohmann::json NormalErrorStats::ToJson() const {
-  return {{"pixels", pixels},
-          {"mean_angular_error_deg", mean_degrees},
-          {"median_angular_error_deg", median_degrees},
-          {"max_angular_error_deg", max_degrees},
-          {"fraction_below_5_deg", fraction_below_5_degrees},
-          {"fraction_below_10_deg", fraction_below_10_degrees}};
-}
-
-NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, const Mask& mask) {
-  if (estimated.width() != truth.width() || estimated.height() != truth.height()) {
-    throw Error(fmt::format("ground-truth normals are {}x{} but the estimate is {}x{}",
-                            truth.width(), truth.height(), estimated.width(), estimated.height()));
-  }
-  if (estimated.channels() < 3 || truth.channels() < 3) {
-    throw Error("normal maps need 3 channels (x, y, z)");
-  }
-  std::vector<double> errors;
-  for (std::size_t p = 0; p < truth.pixel_count(); ++p) {
-    if (mask.width() == truth.width() && !mask[p]) continue;
-    const auto t = truth.pixel(p);
-    const auto e = estimated.pixel(p);
-    const Eigen::Vector3d tv(t[0], t[1], t[2]), ev(e[0], e[1], e[2]);
-    if (tv.squaredNorm() < 0.25 || ev.squaredNorm() == 0.0) continue;  // outside the truth
-    errors.push_back(AngleBetweenDegrees(tv, ev));
-  }
-  if (errors.empty()) throw Error("no pixel has both a ground-truth and an estimated normal");
-  NormalErrorStats stats;
-  stats.pixels = errors.size();
-  stats.mean_degrees = Mean(errors);
-  const auto count_below = [&](double limit) {
-    return static_cast<double>(
-               std::count_if(errors.begin(), errors.end(), [&](double e) { return e < limit; })) /
-           errors.size();
-  };
-  stats.fraction_below_5_degrees = count_below(5.0);
-  stats.fraction_below_10_degrees = count_below(10.0);
-  std::sort(errors.begin(), errors.end());
-  const std::size_t n = errors.size();
-  stats.median_degrees = n % 2 ? errors[n / 2] : 0.5 * (errors[n / 2 - 1] + errors[n / 2]);
-  stats.max_degrees = errors.back();
-  return stats;
-}
-
 double NormalisedRmsError(const Observations& observations, int image, const Eigen::VectorXf& relit,
                           bool literal_thesis_rms) {
   const auto captured = observations.matrix().col(image).cast<double>();
