@@ -17,9 +17,6 @@
 #include "capture/live/v4l2_frame_source.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/evaluation/evaluation.h"
-#include "represent/fitting/fit.h"
-#include "represent/model/method.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {
@@ -69,25 +66,10 @@ struct Rig {
   SyntheticStudio studio{Material(), ThesisLightGrid()};
 
   EmulatedCameraOptions Camera(std::uint32_t fourcc = V4L2_PIX_FMT_RGB24) {
-    EmulatedCameraOptions options;
-    options.fourccs = {fourcc};
-    options.width = kSize;
-    options.height = kSize;
-    options.scene = studio.SceneFromStateFile(light_file);
-    options.noise_sigma = 0.002;
-    options.dark_level = 0.03;
-    options.dark_pattern = 0.02;
-    return options;
+    return studio.Camera(light_file, fourcc);
   }
   std::string Command() const { return "echo {n} > " + light_file.string(); }
-  CaptureSettings Settings() const {
-    CaptureSettings settings;
-    settings.frames_per_light = 3;
-    settings.settle = std::chrono::milliseconds(3);
-    settings.frame_timeout = std::chrono::milliseconds(300);
-    settings.controls.exposure_us = 10000.0;  // the emulator's reference: scale 1
-    return settings;
-  }
+  CaptureSettings Settings() const { return testing::QuickCaptureSettings(); }
   LightPlan Plan() const { return {ThesisLightGrid(), "thesis"}; }
 
   // Resumes with a healthy camera and controller.
@@ -149,7 +131,7 @@ std::string ErrorOf(const std::function<void()>& f) {
   return "no error";
 }
 
-TEST(CaptureSessionDeathTest, KilledAfterTwentyLightsResumesAndFitsTheTruth) {
+TEST(CaptureSessionDeathTest, KilledAfterTwentyLightsResumesToTheWholeSet) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   Rig rig;
   // The light controller kills the capture process when asked for light 21: a power cut.
@@ -187,16 +169,6 @@ TEST(CaptureSessionDeathTest, KilledAfterTwentyLightsResumesAndFitsTheTruth) {
       }
     }
   }
-
-  // The set fits with Gradient to within half a degree of the generator's normals.
-  const LoadedSet loaded = LoadPhotometricSet(rig.out);
-  const Representation fit = Fit(loaded.set, Method::Parse("gradient"));
-  const NormalErrorStats stats = CompareNormals(
-      *EstimateNormals(fit), rig.studio.material().normals, Mask(kSize, kSize, true));
-  EXPECT_LT(stats.mean_degrees, 0.5);
-  RecordProperty("mean_normal_error_degrees", std::to_string(stats.mean_degrees));
-  std::printf("gradient normals vs truth: mean %.3f deg, median %.3f deg, max %.3f deg\n",
-              stats.mean_degrees, stats.median_degrees, stats.max_degrees);
 }
 
 TEST(CaptureSessionTest, DeviceGoneMidStreamIsAnErrorAndTheFolderResumes) {

@@ -1,10 +1,17 @@
 #include "represent/evaluation/evaluation.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+
 #include "capture/io/load_photometric_set.h"
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/image_io.h"
 #include "represent/fitting/fit.h"
+#include "represent/fitting/robust_fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 
@@ -69,21 +76,94 @@ TEST(EvaluationTest, NormalisedErrorIsRmsOverStandardDeviation) {
               std::sqrt(0.5) / 2.0, 1e-7);
 }
 
-TEST(EvaluationTest, NormalStatisticsOfAKnownRotation) {
-  Image truth(4, 1, 3), estimate(4, 1, 3);
-  const double angles[] = {1.0, 3.0, 6.0, 12.0};
-  for (int x = 0; x < 4; ++x) {
-    const double a = angles[x] * M_PI / 180;
-    truth.at(x, 0, 2) = 1.0f;
-    estimate.at(x, 0, 0) = static_cast<float>(std::sin(a));
-    estimate.at(x, 0, 2) = static_cast<float>(std::cos(a));
+TEST(HshTest, EvaluateScoresEveryOrder) {
+  // A shadowed, glossy sample under the five-ring dome: more terms fit the captured images better,
+  // and leave-one-out prediction works for every order.
+  SyntheticMaterialOptions material;
+  material.width = material.height = 24;
+  material.max_slope_degrees = 45;
+  SyntheticRenderOptions render;
+  render.shadows = true;
+  render.specular = 0.3;
+  const PhotometricSet set =
+      RenderSyntheticCapture(MakeSyntheticMaterial(material), testing::FiveRingDome(), render);
+  const Observations observations(set);
+  double previous = INFINITY;
+  for (const char* name : {"hsh4", "hsh9", "hsh16"}) {
+    const MethodEvaluation evaluation =
+        EvaluateMethod(set, observations, Method::Parse(name), nullptr);
+    EXPECT_LT(evaluation.eta_reconstruction, previous) << name;
+    ASSERT_TRUE(evaluation.eta_prediction) << name;
+    EXPECT_GT(*evaluation.eta_prediction, evaluation.eta_reconstruction) << name;
+    EXPECT_LT(*evaluation.eta_prediction, 1.0) << name;
+    previous = evaluation.eta_reconstruction;
+    ::testing::Test::RecordProperty(
+        std::string(name) + "_eta",
+        fmt::format("{:.4f} / {:.4f}", evaluation.eta_reconstruction, *evaluation.eta_prediction));
   }
-  const NormalErrorStats stats = CompareNormals(estimate, truth, Mask(4, 1, true));
-  EXPECT_NEAR(stats.mean_degrees, 5.5, 1e-4);
-  EXPECT_NEAR(stats.median_degrees, 4.5, 1e-4);
-  EXPECT_NEAR(stats.max_degrees, 12.0, 1e-4);
-  EXPECT_DOUBLE_EQ(stats.fraction_below_5_degrees, 0.5);
-  EXPECT_DOUBLE_EQ(stats.fraction_below_10_degrees, 0.75);
+}
+
+TEST(RobustFitTest, EvaluationWithRobustFits) {
+  const auto synthetic = testing::ShadowedSpecularSet(32);
+  const Observations observations(synthetic.set);
+  EvaluationOptions plain;
+  plain.prediction = false;
+  EvaluationOptions robust = plain;
+  robust.robust = RobustFitOptions{};
+  const Method gradient = Method::Parse("gradient");
+  const MethodEvaluation a =
+      EvaluateMethod(synthetic.set, observations, gradient, &synthetic.material.normals, plain);
+  const MethodEvaluation b =
+      EvaluateMethod(synthetic.set, observations, gradient, &synthetic.material.normals, robust);
+  EXPECT_LT(b.normals->mean_degrees, 0.5 * a.normals->mean_degrees);
+}
+
+// Robust PTM, HSH and Eigen-k share the photometric-stereo weights: fitted to an image set with
+// shadows and highlights, they relight closer to the same material without them (the part their
+// models can represent) than the least-squares fits do.
+TEST(RobustFitTest, RobustPtmAndEigenIgnoreTheSameOutliers) {
+  SyntheticMaterialOptions material_options;
+  material_options.width = material_options.height = 40;
+  material_options.max_slope_degrees = 45.0;
+  const SyntheticMaterial material = MakeSyntheticMaterial(material_options);
+  SyntheticRenderOptions harsh;
+  harsh.shadows = true;
+  harsh.specular = 0.5;
+  harsh.shininess = 60.0;
+  const PhotometricSet captured = RenderSyntheticCapture(material, ThesisLightGrid(), harsh);
+  SyntheticRenderOptions diffuse;
+  diffuse.shadows = true;
+  const PhotometricSet clean = RenderSyntheticCapture(material, ThesisLightGrid(), diffuse);
+  const Observations observations(captured);
+  const Observations clean_observations(clean);
+  std::vector<int> all(captured.size());
+  std::iota(all.begin(), all.end(), 0);
+  const RobustFit robust(observations, captured.lights(), all, RobustFitOptions{});
+  EXPECT_GT(robust.summary().down_weighted, 0u);
+  EXPECT_GT(robust.summary().attached_shadow, 0u);
+  for (const char* name : {"ptm", "ptm-lrgb", "hsh9", "eigen6"}) {
+    const Method method = Method::Parse(name);
+    const Representation plain = FitObservations(observations, captured.lights(), method, all);
+    const Representation weighted = robust.Fit(method);
+    EXPECT_TRUE(weighted.details().contains("robust")) << name;
+    double plain_error = 0.0, robust_error = 0.0;
+    for (int i = 0; i < captured.size(); ++i) {
+      plain_error += NormalisedRmsError(
+          clean_observations, i, RelightObservedPixels(plain, clean_observations, clean.light(i)));
+      robust_error +=
+          NormalisedRmsError(clean_observations, i,
+                             RelightObservedPixels(weighted, clean_observations, clean.light(i)));
+    }
+    std::printf("%s relit against the diffuse images: least squares %.4f, robust %.4f\n", name,
+                plain_error / captured.size(), robust_error / captured.size());
+    EXPECT_LT(robust_error, 0.8 * plain_error) << name;
+  }
+  // 3I has no robust form: the same three images.
+  const Representation three = robust.Fit(Method::Parse("3i"));
+  EXPECT_EQ(three.maps().values()[5],
+            FitObservations(observations, captured.lights(), Method::Parse("3i"), all)
+                .maps()
+                .values()[5]);
 }
 
 // Mean angular error of `method`'s normals on a DiLiGenT object, all 96 images.

@@ -10,8 +10,8 @@
 #include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
+#include "represent/model/normal_error.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 
@@ -69,54 +69,6 @@ TEST(RobustFitTest, ShadowsAndHighlightsHurtLeastSquaresNotTheRobustFit) {
   }
 }
 
-// Robust PTM, HSH and Eigen-k share the photometric-stereo weights: fitted to an image set with
-// shadows and highlights, they relight closer to the same material without them (the part their
-// models can represent) than the least-squares fits do.
-TEST(RobustFitTest, RobustPtmAndEigenIgnoreTheSameOutliers) {
-  SyntheticMaterialOptions material_options;
-  material_options.width = material_options.height = 40;
-  material_options.max_slope_degrees = 45.0;
-  const SyntheticMaterial material = MakeSyntheticMaterial(material_options);
-  SyntheticRenderOptions harsh;
-  harsh.shadows = true;
-  harsh.specular = 0.5;
-  harsh.shininess = 60.0;
-  const PhotometricSet captured = RenderSyntheticCapture(material, ThesisLightGrid(), harsh);
-  SyntheticRenderOptions diffuse;
-  diffuse.shadows = true;
-  const PhotometricSet clean = RenderSyntheticCapture(material, ThesisLightGrid(), diffuse);
-  const Observations observations(captured);
-  const Observations clean_observations(clean);
-  std::vector<int> all(captured.size());
-  std::iota(all.begin(), all.end(), 0);
-  const RobustFit robust(observations, captured.lights(), all, RobustFitOptions{});
-  EXPECT_GT(robust.summary().down_weighted, 0u);
-  EXPECT_GT(robust.summary().attached_shadow, 0u);
-  for (const char* name : {"ptm", "ptm-lrgb", "hsh9", "eigen6"}) {
-    const Method method = Method::Parse(name);
-    const Representation plain = FitObservations(observations, captured.lights(), method, all);
-    const Representation weighted = robust.Fit(method);
-    EXPECT_TRUE(weighted.details().contains("robust")) << name;
-    double plain_error = 0.0, robust_error = 0.0;
-    for (int i = 0; i < captured.size(); ++i) {
-      plain_error += NormalisedRmsError(
-          clean_observations, i, RelightObservedPixels(plain, clean_observations, clean.light(i)));
-      robust_error +=
-          NormalisedRmsError(clean_observations, i,
-                             RelightObservedPixels(weighted, clean_observations, clean.light(i)));
-    }
-    std::printf("%s relit against the diffuse images: least squares %.4f, robust %.4f\n", name,
-                plain_error / captured.size(), robust_error / captured.size());
-    EXPECT_LT(robust_error, 0.8 * plain_error) << name;
-  }
-  // 3I has no robust form: the same three images.
-  const Representation three = robust.Fit(Method::Parse("3i"));
-  EXPECT_EQ(three.maps().values()[5],
-            FitObservations(observations, captured.lights(), Method::Parse("3i"), all)
-                .maps()
-                .values()[5]);
-}
-
 TEST(RobustFitTest, UnmeasuredObservationsTakeNoPart) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kGrooves, 24);
   // Ruin a third of the observations of every pixel, and say so in the measured masks.
@@ -153,21 +105,6 @@ TEST(RobustFitTest, CoplanarLightsAreRejected) {
               std::string::npos)
         << error.what();
   }
-}
-
-TEST(RobustFitTest, EvaluationWithRobustFits) {
-  const auto synthetic = testing::ShadowedSpecularSet(32);
-  const Observations observations(synthetic.set);
-  EvaluationOptions plain;
-  plain.prediction = false;
-  EvaluationOptions robust = plain;
-  robust.robust = RobustFitOptions{};
-  const Method gradient = Method::Parse("gradient");
-  const MethodEvaluation a =
-      EvaluateMethod(synthetic.set, observations, gradient, &synthetic.material.normals, plain);
-  const MethodEvaluation b =
-      EvaluateMethod(synthetic.set, observations, gradient, &synthetic.material.normals, robust);
-  EXPECT_LT(b.normals->mean_degrees, 0.5 * a.normals->mean_degrees);
 }
 
 // DiLiGenT, all 96 images (README of the data: least squares 4.10 ball, 8.41 cat; photomat's

@@ -6,8 +6,8 @@
 #include <cstdio>
 
 #include "core/error.h"
-#include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
+#include "represent/model/normal_error.h"
 #include "tests/support/synthetic_sets.h"
 
 namespace photomat {

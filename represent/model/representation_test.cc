@@ -3,8 +3,6 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "represent/fitting/fit.h"
-#include "tests/support/synthetic_sets.h"
 
 namespace photomat {
 namespace {
@@ -43,34 +41,6 @@ TEST(RepresentationTest, LayoutMismatchIsAnError) {
   EXPECT_THROW(
       Representation("ptm", Image(2, 2, 6), {6, true, false, 1}, LinearLightBasis::Lambertian()),
       Error);
-}
-
-TEST(RepresentationTest, WithMapsKeepsTheLightFunction) {
-  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
-  const Representation ptm = Fit(synthetic.set, Method::Parse("ptm"));
-  Image shifted = ptm.maps();
-  const Representation copy = ptm.WithMaps(shifted);
-  const auto light = LightDirection::FromSlantTilt(37, 211);
-  EXPECT_EQ(copy.Relight(light).values()[40], ptm.Relight(light).values()[40]);
-  EXPECT_THROW(ptm.WithMaps(Image(16, 16, 3)), Error);
-}
-
-TEST(RepresentationTest, NormalsFromGradient3IAndPtmAgreeWithTheTruth) {
-  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 32);
-  for (const char* name : {"gradient", "3i", "ptm", "ptm-lrgb"}) {
-    const auto normals = EstimateNormals(Fit(synthetic.set, Method::Parse(name)));
-    ASSERT_TRUE(normals) << name;
-    double sum = 0.0;
-    for (std::size_t p = 0; p < normals->pixel_count(); ++p) {
-      const auto e = normals->pixel(p), t = synthetic.material.normals.pixel(p);
-      sum += AngleBetweenDegrees({e[0], e[1], e[2]}, {t[0], t[1], t[2]});
-    }
-    // Exact for the Lambertian methods; PTM's biquadratic approximates the cosine.
-    const double mean = sum / normals->pixel_count();
-    ::testing::Test::RecordProperty(std::string(name) + "_mean_deg", std::to_string(mean));
-    EXPECT_LT(mean, std::string(name).starts_with("ptm") ? 0.5 : 0.01) << name;
-  }
-  EXPECT_FALSE(EstimateNormals(Fit(synthetic.set, Method::Parse("eigen3"))));
 }
 
 }  // namespace

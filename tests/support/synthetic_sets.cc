@@ -28,6 +28,16 @@ SyntheticSet ShadowedSpecularSet(int size) {
   return {std::move(material), std::move(set)};
 }
 
+std::vector<LightDirection> FiveRingDome() {
+  std::vector<LightDirection> lights;
+  for (int slant = 15; slant <= 75; slant += 15) {
+    for (int tilt = 0; tilt < 360; tilt += 30) {
+      lights.push_back(LightDirection::FromSlantTilt(slant, tilt + slant));
+    }
+  }
+  return lights;
+}
+
 std::vector<std::vector<float>> UnequalRgbIntensities(int count) {
   std::vector<std::vector<float>> intensities;
   for (int i = 0; i < count; ++i) {

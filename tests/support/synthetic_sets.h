@@ -22,6 +22,9 @@ SyntheticSet LambertianSet(SurfacePattern pattern = SurfacePattern::kBricks, int
 // Blinn-Phong highlights: what Lambertian methods cannot represent.
 SyntheticSet ShadowedSpecularSet(int size = 64);
 
+// Lights at five slants (15..75) x 12 tilts: enough distinct slants for 16-term HSH.
+std::vector<LightDirection> FiveRingDome();
+
 // Known, unequal RGB intensities for `count` lights (smooth in the light index, different per
 // channel, all positive): the truth of semi-calibrated tests.
 std::vector<std::vector<float>> UnequalRgbIntensities(int count);

@@ -39,4 +39,26 @@ SceneRenderer SyntheticStudio::SceneFromStateFile(std::filesystem::path state_fi
   return [this, state_file] { return Render(ReadLightNumber(state_file)); };
 }
 
+EmulatedCameraOptions SyntheticStudio::Camera(const std::filesystem::path& state_file,
+                                              std::uint32_t fourcc) {
+  EmulatedCameraOptions options;
+  options.fourccs = {fourcc};
+  options.width = material_.normals.width();
+  options.height = material_.normals.height();
+  options.scene = SceneFromStateFile(state_file);
+  options.noise_sigma = 0.002;
+  options.dark_level = 0.03;
+  options.dark_pattern = 0.02;
+  return options;
+}
+
+CaptureSettings QuickCaptureSettings() {
+  CaptureSettings settings;
+  settings.frames_per_light = 3;
+  settings.settle = std::chrono::milliseconds(3);
+  settings.frame_timeout = std::chrono::milliseconds(300);
+  settings.controls.exposure_us = 10000.0;  // the emulator's reference: scale 1
+  return settings;
+}
+
 }  // namespace photomat::testing

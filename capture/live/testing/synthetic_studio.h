@@ -1,9 +1,11 @@
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <vector>
 
+#include "capture/live/capture_session.h"
 #include "capture/live/testing/emulated_v4l2_device.h"
 #include "capture/synthetic/synthetic_capture.h"
 #include "core/image.h"
@@ -30,11 +32,19 @@ class SyntheticStudio {
   // A scene for EmulatedCameraOptions: the light named in `state_file` at each frame.
   SceneRenderer SceneFromStateFile(std::filesystem::path state_file);
 
+  // The emulated camera of the capture tests: `fourcc` at the material's size, looking at
+  // SceneFromStateFile(state_file), with a little noise and a dark level with a fixed pattern.
+  EmulatedCameraOptions Camera(const std::filesystem::path& state_file, std::uint32_t fourcc);
+
  private:
   SyntheticMaterial material_;
   std::vector<LightDirection> lights_;
   double brightness_;
   std::map<int, Image> cache_;
 };
+
+// Capture settings that keep the tests fast: 3 frames per light, 3 ms to settle, frames within
+// 300 ms, the emulator's reference exposure.
+CaptureSettings QuickCaptureSettings();
 
 }  // namespace photomat::testing
