@@ -6,29 +6,6 @@
 namespace photomat::app {
 namespace {
 
-// PHOTOMAT_WITHOUT_<COMPONENT> is defined (apps/CMakeLists.txt) only when the component is off:
-// what was left out and why, as the configure summary says it.
-#ifdef PHOTOMAT_WITHOUT_LIVE_CAPTURE
-constexpr std::string_view kWithoutLiveCapture = PHOTOMAT_WITHOUT_LIVE_CAPTURE;
-#else
-constexpr std::string_view kWithoutLiveCapture;
-#endif
-#ifdef PHOTOMAT_WITHOUT_SOLIDS
-constexpr std::string_view kWithoutSolids = PHOTOMAT_WITHOUT_SOLIDS;
-#else
-constexpr std::string_view kWithoutSolids;
-#endif
-#ifdef PHOTOMAT_WITHOUT_SURFACE_PATTERNS
-constexpr std::string_view kWithoutSurfacePatterns = PHOTOMAT_WITHOUT_SURFACE_PATTERNS;
-#else
-constexpr std::string_view kWithoutSurfacePatterns;
-#endif
-#ifdef PHOTOMAT_WITHOUT_CARVING
-constexpr std::string_view kWithoutCarving = PHOTOMAT_WITHOUT_CARVING;
-#else
-constexpr std::string_view kWithoutCarving;
-#endif
-
 constexpr Component kLiveCapture = Component::kLiveCapture;
 constexpr Component kSolids = Component::kSolids;
 constexpr Component kSurfacePatterns = Component::kSurfacePatterns;
@@ -111,16 +88,18 @@ std::string_view CommandDescription(std::string_view name) {
   return command->description;
 }
 
+// PHOTOMAT_WITHOUT_<COMPONENT> (apps/CMakeLists.txt): what was left out and why, as the configure
+// summary says it; "" when the component is built.
 std::string_view ComponentAbsence(Component component) {
   switch (component) {
     case Component::kLiveCapture:
-      return kWithoutLiveCapture;
+      return PHOTOMAT_WITHOUT_LIVE_CAPTURE;
     case Component::kSolids:
-      return kWithoutSolids;
+      return PHOTOMAT_WITHOUT_SOLIDS;
     case Component::kSurfacePatterns:
-      return kWithoutSurfacePatterns;
+      return PHOTOMAT_WITHOUT_SURFACE_PATTERNS;
     case Component::kCarving:
-      return kWithoutCarving;
+      return PHOTOMAT_WITHOUT_CARVING;
   }
   return {};
 }
