@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "apps/command_table.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -78,6 +79,37 @@ TEST(PhotomatCliTest, EverySubcommandHasHelp) {
     EXPECT_THAT(help.output, HasSubstr("Usage: photomat " + std::string(command))) << command;
   }
   EXPECT_NE(RunPhotomat("").exit_code, 0);  // a subcommand is required
+}
+
+// `photomat` runs every listed subcommand's program; one whose component this build left out stays
+// listed and fails with one line that says what is missing and why (README "Optional
+// components").
+TEST(PhotomatCliTest, EveryListedCommandRunsOrSaysWhatThisBuildLacks) {
+  const RunResult top = RunPhotomat("--help");
+  ASSERT_EQ(top.exit_code, 0);
+  for (const app::CommandInfo& command : app::Commands()) {
+    const std::string name(command.name);
+    EXPECT_THAT(top.output, HasSubstr("\n  " + name + " ")) << name;
+    const RunResult help = RunPhotomat(name + " --help");
+    if (!command.component || app::ComponentAbsence(*command.component).empty()) {
+      EXPECT_EQ(help.exit_code, 0) << name << ": " << help.output;
+      EXPECT_THAT(help.output, HasSubstr("Usage: photomat " + name)) << name;
+    } else {
+      EXPECT_EQ(help.exit_code, 1) << name;
+      EXPECT_EQ(help.output, "photomat: error: " + app::BuiltWithout(*command.component) + "\n");
+      EXPECT_THAT(help.output, HasSubstr("=OFF: ")) << name;
+    }
+  }
+  // carve is part of `solid`, and needs meshes as well.
+  if (app::ComponentAbsence(app::Component::kSolids).empty()) {
+    const RunResult carve = RunPhotomat("solid carve --help");
+    if (app::ComponentAbsence(app::Component::kCarving).empty()) {
+      EXPECT_EQ(carve.exit_code, 0) << carve.output;
+    } else {
+      EXPECT_EQ(carve.exit_code, 1);
+      EXPECT_THAT(carve.output, HasSubstr(app::BuiltWithout(app::Component::kCarving)));
+    }
+  }
 }
 
 TEST(PhotomatCliTest, DemoRunsTheWholePipeline) {
