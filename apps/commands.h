@@ -18,5 +18,6 @@ void AddRdCommand(CLI::App& app);
 void AddCalibrateCommand(CLI::App& app);
 void AddExportCommand(CLI::App& app);
 void AddSynthesizeCommand(CLI::App& app);
+void AddBatchCommand(CLI::App& app);
 
 }  // namespace photomat::app

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   photomat::app::AddCalibrateCommand(app);
   photomat::app::AddExportCommand(app);
   photomat::app::AddSynthesizeCommand(app);
+  photomat::app::AddBatchCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
