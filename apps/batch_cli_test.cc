@@ -27,17 +27,9 @@ using ::testing::HasSubstr;
 using testing::RunPhotomatIn;
 using testing::TestCapture;
 
-std::vector<TestCapture> EightCaptures() {
-  std::vector<TestCapture> captures;
-  for (int i = 0; i < 8; ++i) captures.push_back({fmt::format("capture-{}", i), "32x24", i + 1});
-  captures[3].fault = CaptureFault::kMissingImage;
-  captures[6].fault = CaptureFault::kMalformedLp;
-  return captures;
-}
-
 TEST(BatchCliTest, EightCapturesTwoBrokenMatchTheCommandsByHand) {
   TempDir dir;
-  const std::vector<TestCapture> captures = EightCaptures();
+  const std::vector<TestCapture> captures = testing::EightCapturesTwoBroken();
   testing::WriteCaptures(dir.path(), captures);
   const fs::path recipe = testing::WriteTestRecipe(dir.path());
   const fs::path batch = dir / "batch";
@@ -63,16 +55,17 @@ TEST(BatchCliTest, EightCapturesTwoBrokenMatchTheCommandsByHand) {
   EXPECT_THAT(run.output, HasSubstr("6 done, 2 failed, 0 not run"));
 
   // The six good ones: byte for byte what the commands give by hand.
+  std::vector<testing::ByHandRun> good;
   for (const TestCapture& capture : captures) {
     const fs::path output = dir / "out" / capture.name;
     if (capture.fault != CaptureFault::kNone) {
       EXPECT_FALSE(fs::exists(output)) << capture.name;
       continue;
     }
-    const fs::path by_hand = dir / "by-hand" / capture.name;
-    ASSERT_EQ(testing::RunByHand(dir / "captures" / capture.name, capture.name, by_hand), "");
-    testing::ExpectSameOutputs(by_hand, output);
+    good.push_back(
+        {dir / "captures" / capture.name, capture.name, dir / "by-hand" / capture.name, output});
   }
+  testing::ExpectSameAsByHand(good);
   // Nothing but the final folders in the output folder: no temporary ones left.
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 6);
 
@@ -179,11 +172,19 @@ TEST(BatchCliTest, KilledHalfWayThenResumedRunsEveryTaskOnce) {
   EXPECT_EQ(attempts, 8 + static_cast<int>(running_at_kill.size()));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir / "out"), fs::directory_iterator()), 8);
   // And the resumed tasks wrote what a person would have.
+  std::vector<testing::ByHandRun> resumed;
   for (int index : running_at_kill) {
     const Task& task = plan.tasks[static_cast<std::size_t>(index)];
-    const fs::path by_hand = dir / "by-hand" / task.name;
-    ASSERT_EQ(testing::RunByHand(task.capture, task.name, by_hand), "");
-    testing::ExpectSameOutputs(by_hand, task.folder);
+    resumed.push_back({task.capture, task.name, dir / "by-hand" / task.name, task.folder});
+  }
+  testing::ExpectSameAsByHand(resumed);
+}
+
+TEST(BatchCliTest, EveryBatchCommandHasHelp) {
+  for (const char* command : {"plan", "run", "slurm", "status", "summary", "run-task"}) {
+    const ChildOutcome help = RunPhotomatIn(fs::temp_directory_path(), {"batch", command, "--help"});
+    EXPECT_EQ(help.exit_code, 0) << command;
+    EXPECT_THAT(help.output, HasSubstr(std::string("Usage: photomat batch ") + command)) << command;
   }
 }
 

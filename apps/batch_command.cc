@@ -47,7 +47,7 @@ void AddPlan(CLI::App& batch) {
       const bool is_done = IsTaskDone(task);
       done += is_done;
       large += task.large;
-      fmt::print("{:>5}  {:<20} {:>6} steps  {:>8.1f} Mpx*img{}  -> {}\n", task.index, task.name,
+      fmt::print("{:>5}  {:<20} {:>2} steps  {:>9.3g} Mpx*img{}  -> {}\n", task.index, task.name,
                  task.steps.size(), static_cast<double>(task.pixel_images) / 1e6,
                  is_done ? "  done" : (task.large ? "  large" : ""), task.folder.string());
     }
@@ -76,9 +76,13 @@ void AddRun(CLI::App& batch) {
   command->add_option("--workers", options->run.workers,
                       "Tasks at once (default: the available cores / --threads-per-task)");
   command
-      ->add_option("--threads-per-task", options->run.threads_per_task, "Cores each task may use")
+      ->add_option("--threads-per-task", options->run.threads_per_task,
+                   "Cores each task uses: --workers defaults to the cores over this")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  command->add_flag("--pin-cpus", options->run.pin_cpus,
+                    "Pin each worker's steps to its own --threads-per-task cores (for machines "
+                    "that run nothing else)");
   command->callback([options] {
     const BatchRunResult result = RunBatch(options->dir, options->run);
     fmt::print("summary: {}, index: {}\n", (options->dir / "summary.json").string(),

@@ -240,10 +240,7 @@ PartitionName=test Nodes={0} Default=YES MaxTime=INFINITE State=UP
 
 TEST_F(SingleNodeSlurm, EightCapturesTwoBrokenThroughTheJobArray) {
   TempDir dir;
-  std::vector<TestCapture> captures;
-  for (int i = 0; i < 8; ++i) captures.push_back({fmt::format("capture-{}", i), "32x24", i + 1});
-  captures[3].fault = CaptureFault::kMissingImage;
-  captures[6].fault = CaptureFault::kMalformedLp;
+  const std::vector<TestCapture> captures = testing::EightCapturesTwoBroken();
   testing::WriteCaptures(dir.path(), captures);
   const fs::path recipe = testing::WriteTestRecipe(dir.path());
   const fs::path batch = dir / "batch";
@@ -291,7 +288,7 @@ TEST_F(SingleNodeSlurm, CancelledArrayTaskIsTheOnlyOneThatRunsAgain) {
   // The middle capture is large enough to be cancelled while it runs.
   testing::WriteCaptures(
       dir.path(),
-      {{"capture-0", "32x24", 1}, {"capture-1", "192x192", 2}, {"capture-2", "32x24", 3}});
+      {{"capture-0", "32x24", 1}, {"capture-1", "128x128", 2}, {"capture-2", "32x24", 3}});
   const fs::path recipe = testing::WriteTestRecipe(dir.path());
   const fs::path batch = dir / "batch";
   ASSERT_TRUE(RunPhotomatIn(dir.path(), {"batch", "plan", recipe.string(), "--out", batch.string()})
@@ -343,9 +340,8 @@ TEST_F(SingleNodeSlurm, CancelledArrayTaskIsTheOnlyOneThatRunsAgain) {
   for (const Task& task : plan.tasks) {
     EXPECT_EQ(testing::CountAttempts(LogPath(batch, task)), task.index == 1 ? 2 : 1) << task.name;
   }
-  const fs::path by_hand = dir / "by-hand" / slow.name;
-  ASSERT_EQ(testing::RunByHand(slow.capture, slow.name, by_hand), "");
-  testing::ExpectSameOutputs(by_hand, slow.folder);
+  testing::ExpectSameAsByHand(
+      {{slow.capture, slow.name, dir / "by-hand" / slow.name, slow.folder}});
 }
 
 }  // namespace

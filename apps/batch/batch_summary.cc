@@ -129,7 +129,10 @@ std::string IndexHtml(const fs::path& batch_dir, const BatchSummary& summary) {
     if (t.report) links.push_back(link(t.folder / "report" / "index.html", "report"));
     if (t.viewer) links.push_back(link(t.folder / "viewer" / "index.html", "viewer"));
     if (t.maps) links.push_back(link(t.folder / "maps", "maps"));
-    links.push_back(link(LogPath(batch_dir, t.index, t.name), "log"));
+    std::error_code ec;
+    if (fs::exists(LogPath(batch_dir, t.index, t.name), ec)) {
+      links.push_back(link(LogPath(batch_dir, t.index, t.name), "log"));
+    }
     const std::size_t span = std::max<std::size_t>(1, t.methods.size());
     for (std::size_t m = 0; m < span; ++m) {
       rows += "<tr>";

@@ -57,6 +57,7 @@ class BatchSummaryTest : public ::testing::Test {
     failed.error = "/c/vase/img_007.png: image file not found";
     fs::create_directories(batch_ / "records");
     WriteTaskRecord(RecordPath(batch_, plan_.tasks[1]), failed);
+    photomat::testing::WriteFile(LogPath(batch_, plan_.tasks[1]), "=== attempt 1 of task 1 (vase)\n");
   }
 
   TempDir dir_;
@@ -105,7 +106,8 @@ TEST_F(BatchSummaryTest, IndexLinksRelativelyAndEscapes) {
     ++links;
   }
   EXPECT_THAT(html, HasSubstr("href=\"../out/coin%20%3C1%3E%20%26%20co/report/index.html\""));
-  EXPECT_EQ(links, 4);  // the report and three logs
+  EXPECT_EQ(links, 2);  // the done task's report and the failed task's log (the others have none)
+  EXPECT_THAT(html, HasSubstr("href=\"logs/0001-vase.log\""));
 }
 
 TEST(RelativeLinkTest, EncodesAndWalksUp) {

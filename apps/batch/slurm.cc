@@ -1,6 +1,9 @@
 #include "apps/batch/slurm.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
+
+#include <csignal>
 
 #include <algorithm>
 #include <cctype>
@@ -16,9 +19,11 @@ namespace {
 namespace fs = std::filesystem;
 
 // A task never measured needs about kBaseBytes + kBytesPerPixelImage x pixels x images: the
-// resident size of a photomat process before it reads a capture, and what fitting and
-// evaluation add per pixel and image (both measured with `batch run` records; README).
-constexpr std::int64_t kBaseBytes = 160LL << 20;
+// resident size of a photomat process before it reads a capture (measured: 148 MB for
+// `photomat --version`), and what fitting and evaluation add per pixel and image (the test
+// recipe's measured peaks: 150 MB at 32 x 24 x 36, 198 MB at 192 x 192 x 36, i.e. 36 bytes; 40
+// with a little room). The request adds --mem-margin on top.
+constexpr std::int64_t kBaseBytes = 150LL << 20;
 constexpr double kBytesPerPixelImage = 40.0;
 constexpr std::size_t kMaxArrayIndices = 1000;
 
@@ -327,6 +332,9 @@ std::vector<TaskStatus> BatchStatus(const fs::path& batch_dir, const SlurmClient
     // What squeue still remembers of ended jobs counts as accounting where sacct has none.
     accounting.merge(states.ended);
   }
+  char host_name[256] = {};
+  gethostname(host_name, sizeof(host_name) - 1);
+  const std::string host = host_name;
   std::vector<TaskStatus> status;
   for (const Task& task : plan.tasks) {
     TaskStatus s{task.index, task.name, "not run", ""};
@@ -357,9 +365,12 @@ std::vector<TaskStatus> BatchStatus(const fs::path& batch_dir, const SlurmClient
       s.state =
           accounted != accounting.end() && accounted->second == "COMPLETED" ? "failed" : s.state;
     } else if (record && record->state == TaskState::kRunning) {
-      s.state = "stopped";
-      s.detail = fmt::format("attempt {} on {} (pid {}) did not finish", record->attempt,
-                             record->host, record->pid);
+      // Not Slurm's: a `batch run` here, if its process is still alive.
+      const bool alive = record->host == host && record->pid > 0 && ::kill(record->pid, 0) == 0;
+      s.state = alive ? "running" : "stopped";
+      s.detail = alive ? fmt::format("attempt {}, pid {}", record->attempt, record->pid)
+                       : fmt::format("attempt {} on {} (pid {}) did not finish", record->attempt,
+                                     record->host, record->pid);
     }
     status.push_back(std::move(s));
   }

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -278,12 +279,25 @@ TEST_F(SlurmTest, StatusCombinesRecordsQueueAndAccounting) {
 }
 
 TEST_F(SlurmTest, StatusWithoutSlurmIsTheRecords) {
-  const TaskPlan plan = Plan(2);
+  const TaskPlan plan = Plan(4);
   MarkDone(plan.tasks[0], 1);
+  // Task 2 is being run by a live process of this host (this test's), task 3's process is gone.
+  char host[256] = {};
+  gethostname(host, sizeof(host) - 1);
+  for (int i : {2, 3}) {
+    TaskRecord record;
+    record.hash = plan.tasks[i].hash;
+    record.host = host;
+    record.pid = i == 2 ? static_cast<int>(getpid()) : 0;
+    fs::create_directories(dir_ / "records");
+    WriteTaskRecord(RecordPath(dir_.path(), plan.tasks[i]), record);
+  }
   FakeSlurm slurm;
   const std::vector<TaskStatus> status = BatchStatus(dir_.path(), slurm.Client());
   EXPECT_EQ(status[0].state, "done");
   EXPECT_EQ(status[1].state, "not run");
+  EXPECT_EQ(status[2].state, "running");
+  EXPECT_EQ(status[3].state, "stopped");
   EXPECT_TRUE(slurm.calls.empty());  // never submitted: no Slurm client is asked
 }
 

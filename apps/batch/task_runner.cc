@@ -250,9 +250,9 @@ BatchRunResult RunBatch(const fs::path& batch_dir, const BatchRunOptions& option
       pending.push_back(task.index);
     }
   }
-  fmt::print("batch {}: {} tasks, {} already done, {} to run on {} worker(s) ({} thread(s) each)\n",
-             batch_dir.string(), result.tasks, result.already_done, pending.size(), workers,
-             threads);
+  fmt::print("batch {}: {} tasks, {} already done, {} to run on {} worker(s){}\n", batch_dir.string(),
+             result.tasks, result.already_done, pending.size(), workers,
+             options.pin_cpus ? fmt::format(" ({} core(s) each)", threads) : "");
   std::fflush(stdout);
 
   const std::vector<int> cpus = AvailableCpus();
@@ -260,9 +260,9 @@ BatchRunResult RunBatch(const fs::path& batch_dir, const BatchRunOptions& option
   std::mutex mutex;  // guards `result` and the printed lines
   int finished = result.already_done;
   const auto work = [&](int slot) {
-    // This worker's share of the cores; TBB in each step sizes its pool from it.
+    // Pinned: this worker's share of the cores; TBB in each step sizes its pool from it.
     std::vector<int> share;
-    for (int t = 0; t < threads; ++t) {
+    for (int t = 0; options.pin_cpus && t < threads; ++t) {
       share.push_back(cpus[static_cast<std::size_t>(slot * threads + t) % cpus.size()]);
     }
     for (std::size_t i = next++; i < pending.size(); i = next++) {

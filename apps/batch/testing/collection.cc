@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "core/atomic_file.h"
 #include "tests/support/test_support.h"
@@ -15,6 +17,14 @@
 namespace photomat::batch::testing {
 
 namespace fs = std::filesystem;
+
+std::vector<TestCapture> EightCapturesTwoBroken() {
+  std::vector<TestCapture> captures;
+  for (int i = 0; i < 8; ++i) captures.push_back({fmt::format("capture-{}", i), "32x24", i + 1});
+  captures[3].fault = CaptureFault::kMissingImage;
+  captures[6].fault = CaptureFault::kMalformedLp;
+  return captures;
+}
 
 ChildOutcome RunPhotomatIn(const fs::path& folder, const std::vector<std::string>& arguments) {
   fs::create_directories(folder);
@@ -116,6 +126,23 @@ void ExpectSameOutputs(const fs::path& by_hand, const fs::path& batch) {
   for (const std::string& file : expected) {
     EXPECT_TRUE(ReadComparableBytes(by_hand / file) == ReadComparableBytes(batch / file))
         << file << " differs between " << by_hand << " and " << batch;
+  }
+}
+
+void ExpectSameAsByHand(const std::vector<ByHandRun>& runs) {
+  std::vector<std::string> failures(runs.size());
+  std::atomic<std::size_t> next{0};
+  const auto work = [&] {
+    for (std::size_t i = next++; i < runs.size(); i = next++) {
+      failures[i] = RunByHand(runs[i].capture, runs[i].name, runs[i].by_hand);
+    }
+  };
+  std::thread first(work), second(work);
+  first.join();
+  second.join();
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    ASSERT_EQ(failures[i], "") << runs[i].name;
+    ExpectSameOutputs(runs[i].by_hand, runs[i].output);
   }
 }
 

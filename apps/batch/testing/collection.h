@@ -21,6 +21,10 @@ struct TestCapture {
   CaptureFault fault = CaptureFault::kNone;
 };
 
+// Eight 32x24 captures, capture-0 to capture-7; capture-3 misses an image, capture-6 has a
+// malformed .lp (the must-show collection of `batch run` and of the Slurm array).
+std::vector<TestCapture> EightCapturesTwoBroken();
+
 // `photomat ARGUMENTS` with `folder` as working directory (created), output collected.
 ChildOutcome RunPhotomatIn(const std::filesystem::path& folder,
                            const std::vector<std::string>& arguments);
@@ -49,6 +53,16 @@ std::string ReadComparableBytes(const std::filesystem::path& file);
 
 // Expects the same files under both folders, byte for byte (ReadComparableBytes).
 void ExpectSameOutputs(const std::filesystem::path& by_hand, const std::filesystem::path& batch);
+
+// One capture of the recipe: run by hand into `by_hand`, then compared with the batch's `output`.
+struct ByHandRun {
+  std::filesystem::path capture;
+  std::string name;
+  std::filesystem::path by_hand;
+  std::filesystem::path output;
+};
+// RunByHand for every run, two at a time (the machine's cores), then ExpectSameOutputs for each.
+void ExpectSameAsByHand(const std::vector<ByHandRun>& runs);
 
 // The attempts a task log records ("=== attempt N" lines).
 int CountAttempts(const std::filesystem::path& log);
