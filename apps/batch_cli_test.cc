@@ -182,7 +182,8 @@ TEST(BatchCliTest, KilledHalfWayThenResumedRunsEveryTaskOnce) {
 
 TEST(BatchCliTest, EveryBatchCommandHasHelp) {
   for (const char* command : {"plan", "run", "slurm", "status", "summary", "run-task"}) {
-    const ChildOutcome help = RunPhotomatIn(fs::temp_directory_path(), {"batch", command, "--help"});
+    const ChildOutcome help =
+        RunPhotomatIn(fs::temp_directory_path(), {"batch", command, "--help"});
     EXPECT_EQ(help.exit_code, 0) << command;
     EXPECT_THAT(help.output, HasSubstr(std::string("Usage: photomat batch ") + command)) << command;
   }

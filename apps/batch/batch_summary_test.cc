@@ -57,7 +57,8 @@ class BatchSummaryTest : public ::testing::Test {
     failed.error = "/c/vase/img_007.png: image file not found";
     fs::create_directories(batch_ / "records");
     WriteTaskRecord(RecordPath(batch_, plan_.tasks[1]), failed);
-    photomat::testing::WriteFile(LogPath(batch_, plan_.tasks[1]), "=== attempt 1 of task 1 (vase)\n");
+    photomat::testing::WriteFile(LogPath(batch_, plan_.tasks[1]),
+                                 "=== attempt 1 of task 1 (vase)\n");
   }
 
   TempDir dir_;

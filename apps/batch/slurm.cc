@@ -3,11 +3,10 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include <csignal>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <csignal>
 
 #include "core/atomic_file.h"
 #include "core/error.h"

@@ -118,6 +118,34 @@ void Commit(const fs::path& temp, const fs::path& folder) {
   }
 }
 
+struct StepFailure {
+  std::string step, error;
+};
+
+// Runs the task's steps in `temp`, in order, until one fails; their peak memory goes into
+// `record`.
+std::optional<StepFailure> RunSteps(const Task& task, const fs::path& temp,
+                                    const fs::path& photomat, const std::vector<int>& cpus,
+                                    const fs::path& log, TaskRecord& record) {
+  for (const TaskStep& step : task.steps) {
+    AppendLog(log, "$ " + ShellCommand("photomat", step.arguments));
+    const std::uintmax_t offset = FileSize(log);
+    ChildCommand command{photomat, step.arguments, temp, ChildOutput::kAppendToFile, log, cpus};
+    ChildOutcome outcome;
+    try {
+      outcome = RunChild(command);
+    } catch (const Error& error) {
+      return StepFailure{step.name, error.what()};
+    }
+    record.peak_rss_bytes = std::max(record.peak_rss_bytes, outcome.peak_rss_bytes);
+    if (!outcome.Succeeded()) {
+      const std::string error = PhotomatErrorLine(ReadFrom(log, offset));
+      return StepFailure{step.name, error.empty() ? "photomat " + outcome.Describe() : error};
+    }
+  }
+  return std::nullopt;
+}
+
 std::string FormatBytes(std::int64_t bytes) {
   return fmt::format("{:.0f} MB", static_cast<double>(bytes) / (1024.0 * 1024.0));
 }
@@ -192,23 +220,10 @@ TaskRunResult RunTask(const fs::path& batch_dir, const Task& task, const fs::pat
   const fs::path temp = task.folder.parent_path() /
                         fmt::format("{}{}-{}", TemporaryPrefix(task), record.host, record.pid);
   CreateFolders(temp);
-  for (const TaskStep& step : task.steps) {
-    AppendLog(log, "$ " + ShellCommand("photomat", step.arguments));
-    const std::uintmax_t offset = FileSize(log);
-    ChildCommand command{photomat, step.arguments, temp, ChildOutput::kAppendToFile, log, cpus};
-    ChildOutcome outcome;
-    try {
-      outcome = RunChild(command);
-    } catch (const Error& error) {
-      fs::remove_all(temp, ec);
-      return fail(step.name, error.what());
-    }
-    record.peak_rss_bytes = std::max(record.peak_rss_bytes, outcome.peak_rss_bytes);
-    if (!outcome.Succeeded()) {
-      fs::remove_all(temp, ec);
-      const std::string error = PhotomatErrorLine(ReadFrom(log, offset));
-      return fail(step.name, error.empty() ? "photomat " + outcome.Describe() : error);
-    }
+  if (const std::optional<StepFailure> failure =
+          RunSteps(task, temp, photomat, cpus, log, record)) {
+    fs::remove_all(temp, ec);
+    return fail(failure->step, failure->error);
   }
   record.state = TaskState::kDone;
   record.elapsed_seconds =
@@ -250,8 +265,8 @@ BatchRunResult RunBatch(const fs::path& batch_dir, const BatchRunOptions& option
       pending.push_back(task.index);
     }
   }
-  fmt::print("batch {}: {} tasks, {} already done, {} to run on {} worker(s){}\n", batch_dir.string(),
-             result.tasks, result.already_done, pending.size(), workers,
+  fmt::print("batch {}: {} tasks, {} already done, {} to run on {} worker(s){}\n",
+             batch_dir.string(), result.tasks, result.already_done, pending.size(), workers,
              options.pin_cpus ? fmt::format(" ({} core(s) each)", threads) : "");
   std::fflush(stdout);
 

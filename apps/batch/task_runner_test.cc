@@ -229,6 +229,30 @@ TEST_F(TaskRunnerTest, BatchRunsEveryTaskOnceReportsFailuresAndSkipsDoneTasks) {
   for (int i = 0; i < 6; ++i) EXPECT_EQ(Runs(fmt::format("t{}", i)), i == 3 ? 2 : 1) << i;
 }
 
+// IMPLEMENTER CHOICE (README): steps run unpinned unless asked; pinned, each sees its worker's
+// share of the cores.
+TEST_F(TaskRunnerTest, PinnedWorkersGiveEachStepItsShareOfTheCores) {
+  WritePlan({MakeTask(0, "p0", {{"cpus"}}), MakeTask(1, "p1", {{"cpus"}})});
+  BatchRunOptions options;
+  options.workers = 2;
+  options.photomat = FakePhotomat();
+  const std::string all = fmt::format("cpus {}\n", AvailableCpus().size());
+  ::testing::internal::CaptureStdout();
+  RunBatch(batch_, options);
+  const TaskPlan plan = ReadTaskPlan(batch_);
+  for (const Task& task : plan.tasks)
+    EXPECT_THAT(ReadTextFile(LogPath(batch_, task)), HasSubstr(all));
+
+  for (const Task& task : plan.tasks) fs::remove_all(task.folder);
+  options.pin_cpus = true;
+  RunBatch(batch_, options);
+  ::testing::internal::GetCapturedStdout();
+  for (const Task& task : plan.tasks) {
+    const std::string log = ReadTextFile(LogPath(batch_, task));
+    EXPECT_THAT(log.substr(log.find("=== attempt 2 of")), HasSubstr("cpus 1\n")) << task.name;
+  }
+}
+
 TEST(PhotomatErrorLineTest, TakesTheLastErrorLinesFault) {
   EXPECT_EQ(
       PhotomatErrorLine("loading\nphotomat: warning: x\nphotomat: error: a.lp: line 2: bad\n"),
