@@ -241,11 +241,7 @@ PartitionName=test Nodes={0} Default=YES MaxTime=INFINITE State=UP
 TEST_F(SingleNodeSlurm, EightCapturesTwoBrokenThroughTheJobArray) {
   TempDir dir;
   const std::vector<TestCapture> captures = testing::EightCapturesTwoBroken();
-  testing::WriteCaptures(dir.path(), captures);
-  const fs::path recipe = testing::WriteTestRecipe(dir.path());
-  const fs::path batch = dir / "batch";
-  ASSERT_TRUE(RunPhotomatIn(dir.path(), {"batch", "plan", recipe.string(), "--out", batch.string()})
-                  .Succeeded());
+  const fs::path batch = testing::PlanTestCollection(dir.path(), captures);
 
   const auto start = Clock::now();
   const ChildOutcome submit = RunPhotomatIn(dir.path(), {"batch", "slurm", batch.string()});
@@ -286,13 +282,9 @@ TEST_F(SingleNodeSlurm, EightCapturesTwoBrokenThroughTheJobArray) {
 TEST_F(SingleNodeSlurm, CancelledArrayTaskIsTheOnlyOneThatRunsAgain) {
   TempDir dir;
   // The middle capture is large enough to be cancelled while it runs.
-  testing::WriteCaptures(
+  const fs::path batch = testing::PlanTestCollection(
       dir.path(),
       {{"capture-0", "32x24", 1}, {"capture-1", "128x128", 2}, {"capture-2", "32x24", 3}});
-  const fs::path recipe = testing::WriteTestRecipe(dir.path());
-  const fs::path batch = dir / "batch";
-  ASSERT_TRUE(RunPhotomatIn(dir.path(), {"batch", "plan", recipe.string(), "--out", batch.string()})
-                  .Succeeded());
   const TaskPlan plan = ReadTaskPlan(batch);
   const Task& slow = plan.tasks[1];
 
@@ -336,10 +328,12 @@ TEST_F(SingleNodeSlurm, CancelledArrayTaskIsTheOnlyOneThatRunsAgain) {
   const ChildOutcome status = RunPhotomatIn(dir.path(), {"batch", "status", batch.string()});
   std::cout << status.output;
   EXPECT_THAT(status.output, HasSubstr("3 done\n"));
-  // Attempts: one each for the tasks that were never cancelled, two for the cancelled one.
+  // Attempts (numbered by the task records as each starts): one each for the tasks that were
+  // never cancelled, two for the cancelled one.
   for (const Task& task : plan.tasks) {
-    EXPECT_EQ(testing::CountAttempts(LogPath(batch, task)), task.index == 1 ? 2 : 1) << task.name;
+    EXPECT_EQ(DoneRecord(task)->attempt, task.index == 1 ? 2 : 1) << task.name;
   }
+
   testing::ExpectSameAsByHand(
       {{slow.capture, slow.name, dir / "by-hand" / slow.name, slow.folder}});
 }

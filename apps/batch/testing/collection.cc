@@ -1,6 +1,7 @@
 #include "apps/batch/testing/collection.h"
 
 #include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -72,6 +73,18 @@ fs::path WriteTestRecipe(const fs::path& dir) {
 }
 )");
   return recipe;
+}
+
+fs::path PlanTestCollection(const fs::path& dir, const std::vector<TestCapture>& captures) {
+  WriteCaptures(dir, captures);
+  const fs::path recipe = WriteTestRecipe(dir);
+  const fs::path batch = dir / "batch";
+  const ChildOutcome plan =
+      RunPhotomatIn(dir, {"batch", "plan", recipe.string(), "--out", batch.string()});
+  EXPECT_TRUE(plan.Succeeded()) << plan.output;
+  EXPECT_THAT(plan.output,
+              ::testing::HasSubstr(fmt::format("{} tasks (0 already done)", captures.size())));
+  return batch;
 }
 
 std::string RunByHand(const fs::path& capture, const std::string& name, const fs::path& folder) {

@@ -38,6 +38,10 @@ void WriteCaptures(const std::filesystem::path& dir, const std::vector<TestCaptu
 // .ptm, .rti, the viewer and the evaluation report, into DIR/out/NAME.
 std::filesystem::path WriteTestRecipe(const std::filesystem::path& dir);
 
+// WriteCaptures, WriteTestRecipe and `photomat batch plan` into DIR/batch, which it returns.
+std::filesystem::path PlanTestCollection(const std::filesystem::path& dir,
+                                         const std::vector<TestCapture>& captures);
+
 // Runs, in `folder`, the photomat commands a person would type for one capture of that recipe.
 // Returns "" or the first failing command's output.
 std::string RunByHand(const std::filesystem::path& capture, const std::string& name,
