@@ -69,6 +69,10 @@ constexpr std::array kCommands{
                 "synthesis (modified Wei-Levoy). Every output pixel copies a whole sample pixel "
                 "(all maps together), so the grown stack relights with the sample's light basis.",
                 "photomat-pipeline"},
+    CommandInfo{"batch",
+                "Process a collection: plan a recipe into tasks, run them here or on a Slurm "
+                "cluster, follow them, summarise.",
+                "photomat-batch"},
 };
 
 }  // namespace

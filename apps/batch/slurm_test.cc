@@ -1,0 +1,305 @@
+// The Slurm layer against a scripted client (the real cluster: apps/batch_slurm_test.cc).
+#include "apps/batch/slurm.h"
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/json_file.h"
+#include "tests/support/test_support.h"
+
+namespace photomat::batch {
+namespace {
+
+namespace fs = std::filesystem;
+using photomat::testing::TempDir;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+// Answers sbatch with increasing job ids and squeue/sacct with what the test sets; records every
+// call.
+struct FakeSlurm {
+  int next_job = 41;
+  std::string squeue;
+  std::optional<std::string> sacct;  // nullopt: accounting disabled (exit 1)
+  bool sbatch_fails = false;
+  std::vector<std::vector<std::string>> calls;
+
+  SlurmClient Client() {
+    return [this](const std::vector<std::string>& argv) {
+      calls.push_back(argv);
+      ChildOutcome outcome;
+      outcome.exit_code = 0;
+      if (argv[0] == "sbatch") {
+        if (sbatch_fails) {
+          outcome.exit_code = 1;
+          outcome.output = "sbatch: error: invalid partition specified: gpu\n";
+        } else {
+          outcome.output = fmt::format("{}\n", next_job++);
+        }
+      } else if (argv[0] == "squeue") {
+        outcome.output = squeue;
+      } else if (argv[0] == "sacct") {
+        if (sacct) {
+          outcome.output = *sacct;
+        } else {
+          outcome.exit_code = 1;
+          outcome.output = "Slurm accounting storage is disabled\n";
+        }
+      }
+      return outcome;
+    };
+  }
+};
+
+class SlurmTest : public ::testing::Test {
+ protected:
+  // Tasks 0..count-1 of `pixel_images` each; none run yet.
+  TaskPlan Plan(int count, std::uint64_t pixel_images = 1'000'000) {
+    TaskPlan plan;
+    plan.recipe_file = dir_ / "recipe.json";
+    for (int i = 0; i < count; ++i) {
+      Task task;
+      task.index = i;
+      task.name = fmt::format("c{}", i);
+      task.capture = dir_ / "captures" / task.name;
+      task.folder = dir_ / "out" / task.name;
+      task.steps = {{"fit", {"fit", task.capture.string(), "--out", "stacks"}}};
+      task.pixel_images = pixel_images;
+      task.hash = TaskHash(task);
+      plan.tasks.push_back(task);
+    }
+    fs::create_directories(dir_.path());
+    WriteTaskPlan(dir_.path(), plan);
+    return plan;
+  }
+
+  void MarkDone(const Task& task, std::int64_t peak) {
+    TaskRecord record;
+    record.state = TaskState::kDone;
+    record.hash = task.hash;
+    record.peak_rss_bytes = peak;
+    fs::create_directories(task.folder);
+    WriteTaskRecord(DoneRecordPath(task), record);
+  }
+
+  void RecordAttempt(const Task& task, TaskState state, std::int64_t peak,
+                     const std::string& error = "") {
+    TaskRecord record;
+    record.state = state;
+    record.attempt = 1;
+    record.hash = task.hash;
+    record.peak_rss_bytes = peak;
+    record.failed_step = "fit";
+    record.error = error;
+    fs::create_directories(dir_ / "records");
+    WriteTaskRecord(RecordPath(dir_.path(), task), record);
+  }
+
+  SlurmOptions Options() const {
+    SlurmOptions options;
+    options.photomat = "/opt/photomat/bin/photomat";
+    return options;
+  }
+
+  TempDir dir_;
+};
+
+TEST(SlurmMemoryTest, RequestIsTheNeedTimesTheMarginInWholeSteps) {
+  EXPECT_EQ(MemoryRequestMib(100LL << 20, 1.5), 256);    // 150 MiB: the floor
+  EXPECT_EQ(MemoryRequestMib(1000LL << 20, 1.5), 1536);  // 1500 MiB, up to 64 MiB steps
+  EXPECT_EQ(MemoryRequestMib(1024LL << 20, 2.0), 2048);
+  Task task;
+  task.pixel_images = 0;
+  const std::int64_t base = TaskMemoryNeedBytes(task, std::nullopt);
+  task.pixel_images = 100'000'000;
+  EXPECT_GT(TaskMemoryNeedBytes(task, std::nullopt), base + (2000LL << 20));  // grows with size
+  TaskRecord measured;
+  measured.peak_rss_bytes = 123LL << 20;
+  EXPECT_EQ(TaskMemoryNeedBytes(task, measured), 123LL << 20);  // a measurement wins
+}
+
+TEST_F(SlurmTest, ArraysGroupTasksByMemoryAndLeaveDoneTasksOut) {
+  const TaskPlan plan = Plan(5);
+  MarkDone(plan.tasks[1], 100LL << 20);
+  RecordAttempt(plan.tasks[2], TaskState::kFailed, 1000LL << 20);  // measured: 1536M
+  RecordAttempt(plan.tasks[4], TaskState::kFailed, 1010LL << 20);  // measured: 1536M
+  const std::vector<SlurmArray> arrays = PlanArrays(dir_.path(), plan, Options());
+  ASSERT_EQ(arrays.size(), 2u);
+  EXPECT_EQ(arrays[0].memory, "1536M");
+  EXPECT_THAT(arrays[0].tasks, ElementsAre(2, 4));
+  EXPECT_THAT(arrays[1].tasks, ElementsAre(0, 3));  // estimated from their size
+
+  SlurmOptions fixed = Options();
+  fixed.memory = "8G";
+  const std::vector<SlurmArray> one = PlanArrays(dir_.path(), plan, fixed);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one[0].memory, "8G");
+  EXPECT_THAT(one[0].tasks, ElementsAre(0, 2, 3, 4));
+}
+
+TEST_F(SlurmTest, ArraysHoldAtMostAThousandIndices) {
+  const TaskPlan plan = Plan(1001);
+  const std::vector<SlurmArray> arrays = PlanArrays(dir_.path(), plan, Options());
+  ASSERT_EQ(arrays.size(), 2u);
+  EXPECT_EQ(arrays[0].tasks.size(), 1000u);
+  EXPECT_THAT(arrays[1].tasks, ElementsAre(1000));
+}
+
+TEST_F(SlurmTest, ScriptMapsArrayIndicesToTasksWithTheGivenDirectives) {
+  SlurmOptions options = Options();
+  options.partition = "main";
+  options.time = "1:00:00";
+  options.account = "lab";
+  options.qos = "low";
+  options.cpus_per_task = 2;
+  options.extra_sbatch = "--gres gpu:1  --hold";
+  const SlurmArray array{"", {0, 3, 5}, "768M", {}};
+  EXPECT_EQ(
+      ArrayScript("/shared/batch one", options.photomat, array, options),
+      "#!/bin/bash\n"
+      "# photomat batch: 3 task(s) of /shared/batch one not done at submission; array index i "
+      "runs task tasks[i].\n"
+      "#SBATCH --job-name=photomat-batch\n"
+      "#SBATCH --array=0-2\n"
+      "#SBATCH --cpus-per-task=2\n"
+      "#SBATCH --mem=768M\n"
+      "#SBATCH --partition=main\n"
+      "#SBATCH --time=1:00:00\n"
+      "#SBATCH --account=lab\n"
+      "#SBATCH --qos=low\n"
+      "#SBATCH --gres gpu:1\n"
+      "#SBATCH --hold\n"
+      "tasks=(0 3 5)\n"
+      "exec /opt/photomat/bin/photomat batch run-task '/shared/batch one' "
+      "\"${tasks[$SLURM_ARRAY_TASK_ID]}\"\n");
+}
+
+TEST_F(SlurmTest, SubmitsArraysThenTheSummaryAfterThemAndRecordsTheJobs) {
+  const TaskPlan plan = Plan(3);
+  MarkDone(plan.tasks[0], 100LL << 20);
+  FakeSlurm slurm;
+  const SlurmSubmission submission = SubmitBatch(dir_.path(), Options(), slurm.Client());
+  ASSERT_EQ(submission.arrays.size(), 1u);
+  EXPECT_EQ(submission.arrays[0].job, "41");
+  EXPECT_THAT(submission.arrays[0].tasks, ElementsAre(1, 2));
+  EXPECT_EQ(submission.summary_job, "42");
+  ASSERT_EQ(slurm.calls.size(), 2u);  // no earlier submission: no squeue
+  const auto& array_call = slurm.calls[0];
+  EXPECT_EQ(array_call[0], "sbatch");
+  EXPECT_THAT(array_call, ::testing::Contains("--parsable"));
+  EXPECT_THAT(array_call,
+              ::testing::Contains("--output=" + (dir_.path() / "logs/slurm-%A_%a.out").string()));
+  EXPECT_EQ(array_call.back(), submission.arrays[0].script.string());
+  EXPECT_THAT(ReadTextFile(submission.arrays[0].script), HasSubstr("tasks=(1 2)\n"));
+  EXPECT_THAT(slurm.calls[1], ::testing::Contains("--dependency=afterany:41"));
+  EXPECT_THAT(ReadTextFile(slurm.calls[1].back()),
+              HasSubstr("batch summary " + dir_.path().string()));
+  const std::vector<SlurmSubmission> recorded = ReadSubmissions(dir_.path());
+  ASSERT_EQ(recorded.size(), 1u);
+  EXPECT_EQ(recorded[0].arrays[0].job, "41");
+  EXPECT_EQ(recorded[0].summary_job, "42");
+
+  // While its jobs are queued, a second submission is refused (the tasks would run twice).
+  slurm.squeue = "41_1|RUNNING\n42|PENDING\n";
+  try {
+    SubmitBatch(dir_.path(), Options(), slurm.Client());
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(
+        error.what(),
+        HasSubstr("the previous submission is still in the queue (41_1 running, 42 pending)"));
+  }
+  // Once they have left, only what is not done goes again.
+  slurm.squeue = "";
+  MarkDone(plan.tasks[2], 100LL << 20);
+  const SlurmSubmission again = SubmitBatch(dir_.path(), Options(), slurm.Client());
+  ASSERT_EQ(again.arrays.size(), 1u);
+  EXPECT_THAT(again.arrays[0].tasks, ElementsAre(1));
+  EXPECT_EQ(ReadSubmissions(dir_.path()).size(), 2u);
+  EXPECT_TRUE(fs::exists(dir_ / "slurm/submission-2-array-0.sh"));
+}
+
+TEST_F(SlurmTest, NothingToSubmitWhenEveryTaskIsDone) {
+  const TaskPlan plan = Plan(2);
+  for (const Task& task : plan.tasks) MarkDone(task, 1);
+  FakeSlurm slurm;
+  EXPECT_TRUE(SubmitBatch(dir_.path(), Options(), slurm.Client()).arrays.empty());
+  EXPECT_TRUE(slurm.calls.empty());
+}
+
+TEST_F(SlurmTest, SbatchFailureNamesTheScriptAndSlurmsMessage) {
+  Plan(1);
+  FakeSlurm slurm;
+  slurm.sbatch_fails = true;
+  try {
+    SubmitBatch(dir_.path(), Options(), slurm.Client());
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), HasSubstr("submission-1-array-0.sh: sbatch failed (exit status 1): "
+                                        "sbatch: error: invalid partition specified: gpu"));
+  }
+  EXPECT_TRUE(ReadSubmissions(dir_.path()).empty());
+}
+
+TEST(ParseJobStatesTest, SqueueAndSacctLines) {
+  EXPECT_EQ(ParseJobStates("12_3|RUNNING\n12_4|CANCELLED by 0\n13|PENDING\nbad line\n"),
+            (std::map<std::string, std::string>{
+                {"12_3", "RUNNING"}, {"12_4", "CANCELLED"}, {"13", "PENDING"}}));
+}
+
+TEST_F(SlurmTest, StatusCombinesRecordsQueueAndAccounting) {
+  const TaskPlan plan = Plan(6);
+  FakeSlurm slurm;
+  SubmitBatch(dir_.path(), Options(), slurm.Client());  // job 41: tasks 0..5, summary 42
+  MarkDone(plan.tasks[0], 90LL << 20);
+  slurm.squeue = "41_1|RUNNING\n41_2|PENDING\n42|PENDING\n";
+  RecordAttempt(plan.tasks[3], TaskState::kFailed, 1,
+                "/c/c3/lights.lp: line 5: \"abc\" is not a number");
+  RecordAttempt(plan.tasks[4], TaskState::kRunning, 1);  // killed: no outcome recorded
+
+  const std::vector<TaskStatus> without = BatchStatus(dir_.path(), slurm.Client());
+  std::vector<std::string> states;
+  for (const TaskStatus& s : without) states.push_back(s.state);
+  EXPECT_THAT(states, ElementsAre("done", "running", "pending", "failed", "stopped", "stopped"));
+  EXPECT_EQ(without[1].detail, "Slurm job 41_1");
+  EXPECT_EQ(without[3].detail, "fit: /c/c3/lights.lp: line 5: \"abc\" is not a number");
+  EXPECT_THAT(without[5].detail, HasSubstr("Slurm job 41_5 left the queue without a done record"));
+  EXPECT_THAT(without[5].detail, HasSubstr("sacct unavailable"));
+
+  slurm.sacct = "41_4|CANCELLED by 0\n41_5|OUT_OF_MEMORY\n";
+  const std::vector<TaskStatus> with = BatchStatus(dir_.path(), slurm.Client());
+  EXPECT_EQ(with[4].detail, "Slurm job 41_4: CANCELLED");
+  EXPECT_EQ(with[5].detail, "Slurm job 41_5: OUT_OF_MEMORY");
+  const std::string text = FormatStatus(with);
+  EXPECT_THAT(text, HasSubstr("1 done, 1 running, 1 pending, 1 failed, 2 stopped\n"));
+}
+
+TEST_F(SlurmTest, StatusWithoutSlurmIsTheRecords) {
+  const TaskPlan plan = Plan(4);
+  MarkDone(plan.tasks[0], 1);
+  // Task 2 is being run by a live process of this host (this test's), task 3's process is gone.
+  char host[256] = {};
+  gethostname(host, sizeof(host) - 1);
+  for (int i : {2, 3}) {
+    TaskRecord record;
+    record.hash = plan.tasks[i].hash;
+    record.host = host;
+    record.pid = i == 2 ? static_cast<int>(getpid()) : 0;
+    fs::create_directories(dir_ / "records");
+    WriteTaskRecord(RecordPath(dir_.path(), plan.tasks[i]), record);
+  }
+  FakeSlurm slurm;
+  const std::vector<TaskStatus> status = BatchStatus(dir_.path(), slurm.Client());
+  EXPECT_EQ(status[0].state, "done");
+  EXPECT_EQ(status[1].state, "not run");
+  EXPECT_EQ(status[2].state, "running");
+  EXPECT_EQ(status[3].state, "stopped");
+  EXPECT_TRUE(slurm.calls.empty());  // never submitted: no Slurm client is asked
+}
+
+}  // namespace
+}  // namespace photomat::batch

@@ -1,0 +1,147 @@
+#include "apps/batch/task_plan.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "capture/synthetic/synthetic_capture.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/json_file.h"
+#include "tests/support/synthetic_sets.h"
+#include "tests/support/test_support.h"
+
+namespace photomat::batch {
+namespace {
+
+namespace fs = std::filesystem;
+using photomat::testing::TempDir;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+using Arguments = std::vector<std::string>;
+
+class TaskPlanTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (const char* name : {"c2", "c10", "c1"}) fs::create_directories(dir_ / "captures" / name);
+    fs::create_directories(dir_ / "flat");
+  }
+
+  Recipe Parse(const nlohmann::json& json) const { return ParseRecipe(json, dir_ / "recipe.json"); }
+
+  nlohmann::json Full() const {
+    return {{"captures", {{{"glob", "captures/*"}}}},
+            {"calibration", {{"flat_field", "flat"}, {"semi_calibrated", true}}},
+            {"fit", {{"methods", {"gradient", "ptm"}}, {"robust", true}, {"loss", "tukey"}}},
+            {"exports",
+             {{"maps", {{"method", "ptm"}, {"normal_convention", "directx"}, {"gltf", false}}},
+              {"ptm", true},
+              {"rti", {{"terms", 4}}},
+              {"viewer", true},
+              {"evaluation", {{"prediction", false}, {"report_images", {1, 2}}}}}},
+            {"output", {{"folder", "out"}}}};
+  }
+
+  TempDir dir_;
+};
+
+TEST_F(TaskPlanTest, StepsAreThePhotomatCommandLinesOfTheRecipe) {
+  const Recipe recipe = Parse(Full());
+  const TaskPlan plan = PlanTasks(recipe);
+  ASSERT_EQ(plan.tasks.size(), 3u);
+  const Task& task = plan.tasks[0];
+  EXPECT_EQ(task.name, "c1");
+  EXPECT_EQ(task.folder, (dir_.path() / "out/c1").lexically_normal());
+  const std::string capture = (dir_.path() / "captures/c1").lexically_normal().string();
+  const std::string flat = (dir_.path() / "flat").lexically_normal().string();
+  std::vector<std::string> names;
+  for (const TaskStep& step : task.steps) names.push_back(step.name);
+  EXPECT_THAT(names, ElementsAre("calibrate", "fit", "maps", "interchange", "viewer", "evaluate"));
+  EXPECT_EQ(task.steps[0].arguments,
+            (Arguments{"calibrate", "apply", capture, "--out", "calibrated", "--flat-field", flat,
+                       "--semi-calibrated"}));
+  EXPECT_EQ(task.steps[1].arguments, (Arguments{"fit", "calibrated", "--method", "gradient,ptm",
+                                                "--out", "stacks", "--robust", "--loss", "tukey"}));
+  EXPECT_EQ(task.steps[2].arguments,
+            (Arguments{"export", "stacks", "--method", "ptm", "--out", "maps",
+                       "--normal-convention", "directx", "--height", "poisson", "--no-gltf"}));
+  EXPECT_EQ(task.steps[3].arguments, (Arguments{"export", "calibrated", "--ptm", "c1.ptm", "--rti",
+                                                "c1.rti", "--hsh-terms", "4"}));
+  EXPECT_EQ(task.steps[4].arguments, (Arguments{"export", "stacks", "--viewer", "viewer"}));
+  EXPECT_EQ(task.steps[5].arguments,
+            (Arguments{"evaluate", "calibrated", "--methods", "gradient,ptm", "--json",
+                       "evaluation.json", "--no-prediction", "--report", "report",
+                       "--report-images", "1,2", "--robust", "--loss", "tukey"}));
+}
+
+TEST_F(TaskPlanTest, WithoutStacksTheExportsReadTheCapture) {
+  nlohmann::json json = Full();
+  json.erase("calibration");
+  json["exports"] = {{"stacks", false}, {"maps", true}, {"viewer", true}};
+  const TaskPlan plan = PlanTasks(Parse(json));
+  const std::string capture = (dir_.path() / "captures/c1").lexically_normal().string();
+  ASSERT_EQ(plan.tasks[0].steps.size(), 2u);
+  EXPECT_EQ(plan.tasks[0].steps[0].arguments,
+            (Arguments{"export", capture, "--method", "gradient", "--out", "maps",
+                       "--normal-convention", "opengl", "--height", "poisson"}));
+  EXPECT_EQ(plan.tasks[0].steps[1].arguments, (Arguments{"export", capture, "--viewer", "viewer"}));
+}
+
+TEST_F(TaskPlanTest, PlanIsDeterministicAndItsHashFollowsTheRecipe) {
+  const fs::path a = dir_ / "a", b = dir_ / "b";
+  fs::create_directories(a);
+  fs::create_directories(b);
+  WriteTaskPlan(a, PlanTasks(Parse(Full())));
+  WriteTaskPlan(b, PlanTasks(Parse(Full())));
+  EXPECT_EQ(ReadTextFile(a / kTaskPlanName), ReadTextFile(b / kTaskPlanName));
+
+  const TaskPlan plan = ReadTaskPlan(a);
+  nlohmann::json changed = Full();
+  changed["fit"]["methods"] = {"gradient", "ptm", "eigen3"};
+  const TaskPlan other = PlanTasks(Parse(changed));
+  ASSERT_EQ(plan.tasks.size(), other.tasks.size());
+  for (std::size_t i = 0; i < plan.tasks.size(); ++i) {
+    EXPECT_EQ(plan.tasks[i].hash, TaskHash(plan.tasks[i]));
+    EXPECT_NE(plan.tasks[i].hash, other.tasks[i].hash) << i;
+    for (std::size_t j = 0; j < i; ++j) EXPECT_NE(plan.tasks[i].hash, plan.tasks[j].hash);
+  }
+}
+
+TEST_F(TaskPlanTest, ReadTaskPlanRejectsAnEditedTask) {
+  WriteTaskPlan(dir_.path(), PlanTasks(Parse(Full())));
+  nlohmann::json json = ReadJsonFile(dir_ / kTaskPlanName);
+  json["tasks"][1]["steps"][1]["arguments"][3] = "gradient";
+  WriteJsonFile(dir_ / kTaskPlanName, json);
+  try {
+    ReadTaskPlan(dir_.path());
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(),
+                HasSubstr(kTaskPlanName + std::string(": tasks[1].hash: does not match")));
+  }
+}
+
+TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
+  const photomat::testing::SyntheticSet synthetic =
+      photomat::testing::LambertianSet(SurfacePattern::kBricks, 20);
+  WriteSyntheticCapture(dir_ / "captures/c1", synthetic.material, synthetic.set, {});
+  nlohmann::json json = Full();
+  json.erase("calibration");
+  PlanOptions options;
+  options.large_capture_pixel_images = 20 * 20 * 36 - 1;
+  const TaskPlan plan = PlanTasks(Parse(json), options);
+  EXPECT_EQ(plan.tasks[0].pixel_images, 20u * 20u * 36u);  // the thesis grid has 36 lights
+  EXPECT_TRUE(plan.tasks[0].large);
+  EXPECT_EQ(plan.tasks[1].pixel_images, 0u);  // an empty folder: unknown, its task will say why
+  EXPECT_FALSE(plan.tasks[1].large);
+}
+
+TEST(ShellCommandTest, QuotesWhatAShellWouldSplitOrExpand) {
+  EXPECT_EQ(ShellCommand("photomat", {"fit", "/a/b-c_1.2", "--method", "gradient,ptm"}),
+            "photomat fit /a/b-c_1.2 --method gradient,ptm");
+  EXPECT_EQ(ShellCommand("photomat", {"fit", "my capture", "it's", "$HOME", ""}),
+            "photomat fit 'my capture' 'it'\\''s' '$HOME' ''");
+}
+
+}  // namespace
+}  // namespace photomat::batch
