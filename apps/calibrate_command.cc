@@ -35,9 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 
 bool IsMaskName(const fs::path& path) {
-  std::string stem = path.stem().string();
-  for (char& c : stem) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return stem.find("mask") != std::string::npos;
+  return ToLower(path.stem().string()).find("mask") != std::string::npos;
 }
 
 // The image files of a folder in natural order, and the mask among them (a name with "mask").

@@ -17,6 +17,7 @@
 #include "synthesize/carving/solid_carving.h"
 #include "synthesize/mesh/mesh_io.h"
 #include "synthesize/mesh/mesh_render.h"
+#include "synthesize/volume/volume.h"
 #include "synthesize/volume/volume_io.h"
 
 namespace photomat::app {
@@ -54,7 +55,7 @@ void AddSolidCarveCommand(CLI::App& solid, std::string_view description) {
       ->capture_default_str();
   command->callback([options] {
     const auto limit = LimitThreads(options->threads);
-    const Volume volume = ReadVolume(options->volume);
+    const Image volume = ReadVolume(options->volume);
     const TriangleMesh mesh = ReadMesh(options->mesh);
     CarveOptions carve = options->carve;
     carve.placement.tileable = !options->clamp;
@@ -66,13 +67,13 @@ void AddSolidCarveCommand(CLI::App& solid, std::string_view description) {
         "carved {} ({} vertices, {} subdivision levels: {} vertices) out of a {} solid "
         "({:.2f} s)\n",
         options->mesh.filename().string(), mesh.vertex_count(), carved.subdivision_levels,
-        carved.mesh.vertex_count(), ToString(volume.size()), Seconds(start));
+        carved.mesh.vertex_count(), ToString(volume.extent()), Seconds(start));
     CreateFolder(options->out);
     WriteMesh(options->out / "carved.ply", carved.mesh, colours);
     WriteMesh(options->out / "carved.glb", carved.mesh, colours);
     // Every channel at every vertex (representation maps carry more than a colour).
     std::string table;
-    const std::vector<std::string> names = volume.ChannelNamesOrDefault();
+    const std::vector<std::string> names = ChannelNamesOrDefault(volume);
     for (std::size_t c = 0; c < names.size(); ++c) table += (c ? "," : "") + names[c];
     table += "\n";
     for (int v = 0; v < carved.mesh.vertex_count(); ++v) {
@@ -96,7 +97,7 @@ void AddSolidCarveCommand(CLI::App& solid, std::string_view description) {
     WriteJsonFile(
         options->out / "carve.json",
         {{"volume", options->volume.string()},
-         {"volume_size", ToString(volume.size())},
+         {"volume_size", ToString(volume.extent())},
          {"channels", names},
          {"mesh", options->mesh.string()},
          {"input_vertices", mesh.vertex_count()},

@@ -49,10 +49,10 @@ constexpr std::string_view kCarveDescription =
     "preview_{front,right,back,left,top}.png and carve.json.";
 
 void WriteOutputs(const std::filesystem::path& out, const std::filesystem::path& slices,
-                  const Volume& volume) {
+                  const Image& volume) {
   WriteVolume(out, volume);
-  fmt::print("wrote a {} solid of {} channels to {}\n", ToString(volume.size()), volume.channels(),
-             out.string());
+  fmt::print("wrote a {} solid of {} channels to {}\n", ToString(volume.extent()),
+             volume.channels(), out.string());
   if (!slices.empty()) {
     const bool colour = volume.FindChannel("R") >= 0 || volume.channels() <= 3;
     SliceDisplay display;
@@ -193,7 +193,7 @@ void AddFromViews(CLI::App& solid) {
 
 // --- grow ---
 
-Volume LoadExemplar(const std::string& source, int procedural_size, std::uint64_t seed) {
+Image LoadExemplar(const std::string& source, int procedural_size, std::uint64_t seed) {
   constexpr std::string_view kPrefix = "procedural:";
   if (source.rfind(kPrefix, 0) == 0) {
     const std::string name = source.substr(kPrefix.size());
@@ -311,7 +311,7 @@ void AddGrow(CLI::App& solid) {
     const auto limit = LimitThreads(options->threads);
     const auto size = ParseVolumeSize(options->size);
     if (!size) throw Error(fmt::format("--size: \"{}\" is not N or XxYxZ", options->size));
-    const Volume exemplar =
+    const Image exemplar =
         LoadExemplar(options->exemplar, options->procedural_size, options->synthesis.seed);
     options->appearance.boundary =
         options->interior ? ExemplarBoundary::kInterior : ExemplarBoundary::kPeriodic;

@@ -20,7 +20,7 @@ using testing::RunPhotomat;
 using testing::RunResult;
 using testing::TempDir;
 
-bool SameBytes(const Volume& a, const Volume& b) {
+bool SameBytes(const Image& a, const Image& b) {
   return a.SameShape(b) &&
          std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
 }
@@ -30,7 +30,7 @@ TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
   const std::string exemplar = (dir / "cells.vdb").string();
   const RunResult made = RunPhotomat("solid exemplar --pattern cells --size 12 --out " + exemplar);
   ASSERT_EQ(made.exit_code, 0) << made.output;
-  EXPECT_EQ(ReadVolume(exemplar).size(), VolumeSize::Cube(12));
+  EXPECT_EQ(ReadVolume(exemplar).extent(), ImageExtent::Cube(12));
 
   const std::string grow = "solid grow " + exemplar + " --size 16 --field circular --cache " +
                            (dir / "cache").string() + " --report " + (dir / "r.json").string() +
@@ -41,8 +41,8 @@ TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
   const RunResult second = RunPhotomat(grow + " --threads 2 --out " + (dir / "b.vdb").string());
   ASSERT_EQ(second.exit_code, 0) << second.output;
   EXPECT_THAT(second.output, HasSubstr("read from"));
-  const Volume a = ReadVolume(dir / "a.vdb");
-  EXPECT_EQ(a.size(), VolumeSize::Cube(16));
+  const Image a = ReadVolume(dir / "a.vdb");
+  EXPECT_EQ(a.extent(), ImageExtent::Cube(16));
   EXPECT_TRUE(SameBytes(a, ReadVolume(dir / "b.vdb")));
   EXPECT_TRUE(std::filesystem::exists(dir / "slices" / "xz.png"));
   const nlohmann::json report = ReadJsonFile(dir / "r.json");
@@ -62,7 +62,7 @@ TEST(SolidCommandTest, GrowsAProceduralExemplarIntoASliceStack) {
       "--no-cache --field slant --angle 20 --out " +
       (dir / "stack").string() + " --coordinates " + (dir / "coords.vdb").string());
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  EXPECT_EQ(ReadVolume(dir / "stack").size(), (VolumeSize{8, 12, 16}));
+  EXPECT_EQ(ReadVolume(dir / "stack").extent(), (ImageExtent{8, 12, 16}));
   EXPECT_EQ(ReadVolume(dir / "coords.vdb").channels(), 3);
 }
 
@@ -81,7 +81,7 @@ TEST(SolidCommandTest, FromViews) {
                   (dir / "report.json").string());
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_THAT(run.output, HasSubstr("iteration 2"));
-  EXPECT_EQ(ReadVolume(dir / "solid.vdb").size(), VolumeSize::Cube(16));
+  EXPECT_EQ(ReadVolume(dir / "solid.vdb").extent(), ImageExtent::Cube(16));
   EXPECT_EQ(ReadJsonFile(dir / "report.json")["iterations"].size(), 2u);
 }
 

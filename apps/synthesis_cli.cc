@@ -7,19 +7,11 @@
 
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/text_parsing.h"
 #include "synthesize/texture/synthesis_quality.h"
 
 namespace photomat::app {
-namespace {
-
-std::string LowerExtension(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 MapsInput LoadMapsInput(const std::filesystem::path& input,
                         const std::optional<std::string>& stack) {

@@ -156,8 +156,7 @@ Image CeresRobustNormals(const PhotometricSet& set) {
   const Observations observations(set);
   const Eigen::Index m = observations.pixels();
   const int n = set.size(), channels = set.channels();
-  Eigen::Matrix3Xd l(3, n);
-  for (int i = 0; i < n; ++i) l.col(i) = set.light(i).vector();
+  const Eigen::Matrix3Xd l = LightMatrix(set.lights());
   Image normals(set.width(), set.height(), 3);
   tbb::enumerable_thread_specific<CeresPixelSolver> solvers(
       [&] { return CeresPixelSolver(set.lights()); });

@@ -33,14 +33,14 @@ void ReportPeakMemory(benchmark::State& state) {
 void BM_GrowExemplar(benchmark::State& state, ProceduralPattern pattern) {
   const int exemplar_size = static_cast<int>(state.range(0));
   const int output_size = static_cast<int>(state.range(1));
-  const Volume exemplar = MakeProceduralExemplar(pattern, exemplar_size, 1);
+  const Image exemplar = MakeProceduralExemplar(pattern, exemplar_size, 1);
   double prepare = 0, synthesis = 0, match_error = 0, jitter_error = 0;
   for (auto _ : state) {
     const auto start = std::chrono::steady_clock::now();
     const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
     prepare = Since(start);
     ExemplarSolidOptions options;
-    options.size = VolumeSize::Cube(output_size);
+    options.size = ImageExtent::Cube(output_size);
     const auto synthesis_start = std::chrono::steady_clock::now();
     const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
     synthesis = Since(synthesis_start);
@@ -64,19 +64,19 @@ void BM_GrowExemplar(benchmark::State& state, ProceduralPattern pattern) {
 // of 64^3 is a whole number of periods of 16^3 and 32^3 exemplars and not of 24^3 ones. The third
 // argument picks the settings: 0 the defaults, 1 histogram matching off, 2 occupancy matching
 // off.
-void MeasureGrowth(benchmark::State& state, const Volume& exemplar, int output_size, int settings) {
-  const auto spectrum = [&exemplar](const Volume& solid) {
+void MeasureGrowth(benchmark::State& state, const Image& exemplar, int output_size, int settings) {
+  const auto spectrum = [&exemplar](const Image& solid) {
     return LogSpectralDistance(RadialPowerSpectrum(solid, 8), RadialPowerSpectrum(exemplar, 8));
   };
   for (auto _ : state) {
     const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
     ExemplarSolidOptions options;
-    options.size = VolumeSize::Cube(output_size);
+    options.size = ImageExtent::Cube(output_size);
     if (settings == 1) options.histogram_matching = 0.0;
     if (settings == 2) options.occupancy_matching = 0.0;
     const ExemplarSolidResult corrected = SynthesizeExemplarSolid(exemplar, prepared, options);
     options.correction_passes = 0;
-    const Volume jitter = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
+    const Image jitter = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
     state.counters["histogram"] = HistogramDistance(corrected.volume, exemplar);
     state.counters["jitter_histogram"] = HistogramDistance(jitter, exemplar);
     state.counters["emd"] = EarthMoverDistance(corrected.volume, exemplar);
@@ -90,7 +90,7 @@ void MeasureGrowth(benchmark::State& state, const Volume& exemplar, int output_s
     state.counters["largest_patch"] =
         static_cast<double>(
             CoherentPatches(corrected.coordinates, prepared.appearance.domain).largest) /
-        static_cast<double>(corrected.volume.voxel_count());
+        static_cast<double>(corrected.volume.pixel_count());
   }
 }
 
@@ -126,7 +126,7 @@ void BM_GrowRealQuality(benchmark::State& state, const char* photograph) {
   SpectralSolidOptions options;
   options.size = static_cast<int>(state.range(0));
   options.iterations = 3;
-  const Volume exemplar =
+  const Image exemplar =
       SynthesizeSpectralSolid(
           {{SlicePlane::kXY, view}, {SlicePlane::kXZ, view}, {SlicePlane::kYZ, view}}, options)
           .volume;
@@ -146,7 +146,7 @@ std::vector<SolidView> Views(int size) {
     if (views.size() == 3) return views;
     views.clear();
   }
-  const Volume wood = MakeProceduralExemplar(ProceduralPattern::kWood, size, 1);
+  const Image wood = MakeProceduralExemplar(ProceduralPattern::kWood, size, 1);
   for (SlicePlane plane : kAllSlicePlanes) {
     views.push_back({plane, ExtractSlice(wood, plane, size / 3)});
   }

@@ -63,6 +63,17 @@ void WriteFileAtomically(const fs::path& path,
   SyncPath(parent, true);  // Best effort: the rename is done; a failed folder sync loses nothing.
 }
 
+void WriteSerializedAtomically(const fs::path& path,
+                               const std::function<std::string()>& serialize) {
+  std::string bytes;
+  try {
+    bytes = serialize();
+  } catch (const Error& error) {
+    throw error.InFile(path);
+  }
+  WriteTextFileAtomically(path, bytes);
+}
+
 void WriteTextFileAtomically(const fs::path& path, std::string_view contents) {
   WriteFileAtomically(path, [&](const fs::path& temp) {
     std::ofstream out(temp, std::ios::binary);

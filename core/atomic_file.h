@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string>
 #include <string_view>
 
 namespace photomat {
@@ -15,6 +16,11 @@ void WriteFileAtomically(const std::filesystem::path& path,
 
 // WriteFileAtomically for a text or binary blob.
 void WriteTextFileAtomically(const std::filesystem::path& path, std::string_view contents);
+
+// WriteTextFileAtomically of the bytes `serialize` returns (a file format's encoder); an Error it
+// throws is reported as a fault of `path`.
+void WriteSerializedAtomically(const std::filesystem::path& path,
+                               const std::function<std::string()>& serialize);
 
 // Reads a whole file; throws Error naming the file if it is missing or unreadable.
 std::string ReadTextFile(const std::filesystem::path& path);

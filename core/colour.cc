@@ -4,6 +4,8 @@
 #include <cctype>
 #include <cmath>
 
+#include "core/text_parsing.h"
+
 namespace photomat {
 
 std::string_view ToString(ColourSpace space) {
@@ -11,9 +13,7 @@ std::string_view ToString(ColourSpace space) {
 }
 
 std::optional<ColourSpace> ParseColourSpace(std::string_view text) {
-  std::string lower(text);
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string lower = ToLower(text);
   if (lower == "linear") return ColourSpace::kLinear;
   if (lower == "srgb") return ColourSpace::kSrgb;
   return std::nullopt;

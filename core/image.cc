@@ -13,20 +13,30 @@ namespace {
 // RGB frame has 3e8 values); larger requests are corrupt headers, not images.
 constexpr std::size_t kMaxValues = std::size_t{1} << 31;
 
-void CheckShape(int width, int height, int channels) {
-  if (width < 0 || height < 0 || channels < 0 ||
-      static_cast<std::size_t>(width) * height * channels > kMaxValues) {
+void CheckShape(const ImageExtent& extent, int channels) {
+  if (extent.width < 0 || extent.height < 0 || extent.depth < 0 || channels < 0 ||
+      extent.pixel_count() * static_cast<std::size_t>(channels) > kMaxValues) {
     throw Error(
-        fmt::format("unsupported image shape {}x{} with {} channels", width, height, channels));
+        fmt::format("unsupported image shape {} with {} channels", ToString(extent), channels));
   }
 }
 
 }  // namespace
 
-Image::Image(int width, int height, int channels)
-    : width_(width), height_(height), channels_(channels) {
-  CheckShape(width, height, channels);
-  values_.assign(static_cast<std::size_t>(width) * height * channels, 0.0f);
+std::string ToString(const ImageExtent& extent) {
+  return fmt::format("{}x{}x{}", extent.width, extent.height, extent.depth);
+}
+
+void CheckRange(int first, int count, int size, const char* what) {
+  if (first < 0 || count < 0 || first + count > size) {
+    throw Error(
+        fmt::format("{} [{}, {}) are outside an image of {}", what, first, first + count, size));
+  }
+}
+
+Image::Image(int width, int height, int channels) : extent_{width, height, 1}, channels_(channels) {
+  CheckShape(extent_, channels);
+  values_.assign(pixel_count() * static_cast<std::size_t>(channels), 0.0f);
 }
 
 Image::Image(int width, int height, std::vector<std::string> channel_names)
@@ -34,8 +44,55 @@ Image::Image(int width, int height, std::vector<std::string> channel_names)
   channel_names_ = std::move(channel_names);
 }
 
+Image::Image(ImageExtent extent, int channels) : extent_(extent), channels_(channels) {
+  if (extent.width <= 0 || extent.height <= 0 || extent.depth <= 0 || channels <= 0) {
+    throw Error(fmt::format("invalid image size {} with {} channels", ToString(extent), channels));
+  }
+  CheckShape(extent, channels);
+  values_.assign(pixel_count() * static_cast<std::size_t>(channels), 0.0f);
+}
+
+Image::Image(ImageExtent extent, std::vector<std::string> channel_names)
+    : Image(extent, static_cast<int>(channel_names.size())) {
+  channel_names_ = std::move(channel_names);
+}
+
+Image::Image(ConstImageView view) : Image(view.width(), view.height(), view.channels()) {
+  CopyPixels(view, View());
+}
+
+ImageView Image::SliceXY(int z) {
+  CheckRange(z, 1, depth(), "slices");
+  return {values_.data() + Index(0, 0, z), width(), height(), channels_, width(), PlaneStride()};
+}
+
+ConstImageView Image::SliceXY(int z) const {
+  CheckRange(z, 1, depth(), "slices");
+  return {values_.data() + Index(0, 0, z), width(), height(), channels_, width(), PlaneStride()};
+}
+
+ImageView Image::SliceXZ(int y) {
+  CheckRange(y, 1, height(), "rows");
+  return {values_.data() + Index(0, y, 0),
+          width(),
+          depth(),
+          channels_,
+          static_cast<std::ptrdiff_t>(width()) * height(),
+          PlaneStride()};
+}
+
+ConstImageView Image::SliceXZ(int y) const {
+  CheckRange(y, 1, height(), "rows");
+  return {values_.data() + Index(0, y, 0),
+          width(),
+          depth(),
+          channels_,
+          static_cast<std::ptrdiff_t>(width()) * height(),
+          PlaneStride()};
+}
+
 void Image::set_channel_names(std::vector<std::string> names) {
-  if (static_cast<int>(names.size()) != channels_) {
+  if (!names.empty() && static_cast<int>(names.size()) != channels_) {
     throw Error(
         fmt::format("{} channel names given for an image of {} channels", names.size(), channels_));
   }
@@ -48,14 +105,10 @@ int Image::FindChannel(const std::string& name) const {
 }
 
 Image Image::Channels(int first, int count) const {
-  if (first < 0 || count < 0 || first + count > channels_) {
-    throw Error(fmt::format("channels [{}, {}) are outside an image of {} channels", first,
-                            first + count, channels_));
-  }
-  Image out(width_, height_, count);
-  for (std::size_t i = 0; i < pixel_count(); ++i) {
-    std::copy_n(pixel(i).begin() + first, count, out.pixel(i).begin());
-  }
+  CheckRange(first, count, channels_, "channels");
+  Image out(extent_.depth == 1 ? Image(width(), height(), count) : Image(extent_, count));
+  std::copy_n(values_.begin() + static_cast<std::ptrdiff_t>(PlaneOffset(first)), PlaneOffset(count),
+              out.values_.begin());
   if (!channel_names_.empty()) {
     out.channel_names_.assign(channel_names_.begin() + first,
                               channel_names_.begin() + first + count);
@@ -63,8 +116,23 @@ Image Image::Channels(int first, int count) const {
   return out;
 }
 
+void CopyPixels(ConstImageView from, ImageView to) {
+  if (from.width() != to.width() || from.height() != to.height() ||
+      from.channels() != to.channels()) {
+    throw Error(fmt::format("cannot copy {}x{} pixels of {} channels into {}x{} of {}",
+                            from.width(), from.height(), from.channels(), to.width(), to.height(),
+                            to.channels()));
+  }
+  for (int c = 0; c < from.channels(); ++c) {
+    for (int y = 0; y < from.height(); ++y) {
+      const auto source = from.row(c, y);
+      std::copy(source.begin(), source.end(), to.row(c, y).begin());
+    }
+  }
+}
+
 Mask::Mask(int width, int height, bool value) : width_(width), height_(height) {
-  CheckShape(width, height, 1);
+  CheckShape({width, height, 1}, 1);
   bits_.assign(static_cast<std::size_t>(width) * height, value ? 1 : 0);
 }
 

@@ -17,6 +17,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 namespace {
@@ -41,31 +42,101 @@ const std::array<float, 256>& Srgb8ToLinearTable() {
   return table;
 }
 
-template <typename T>
-void ConvertIntegerSamples(const std::vector<T>& samples, int channels, int kept_channels,
-                           ColourSpace space, Image& image, ImageFileInfo& info) {
-  constexpr T kMax = std::numeric_limits<T>::max();
-  constexpr double kScale = 1.0 / static_cast<double>(kMax);
-  const auto& table = Srgb8ToLinearTable();
-  std::span<float> out = image.values();
-  const std::size_t pixels = image.pixel_count();
-  for (std::size_t p = 0; p < pixels; ++p) {
-    bool saturated = false;
-    for (int c = 0; c < kept_channels; ++c) {
-      const T code = samples[p * channels + c];
-      saturated |= code == kMax;
-      float value;
-      if (space == ColourSpace::kLinear) {
-        value = static_cast<float>(code * kScale);
-      } else if constexpr (sizeof(T) == 1) {
-        value = table[code];
-      } else {
-        value = static_cast<float>(SrgbToLinear(code * kScale));
-      }
-      out[p * kept_channels + c] = value;
-    }
-    if (saturated) ++info.saturated_pixels;
+// Rows decoded per call: files are read band by band into a small interleaved buffer whose
+// channels are then spread over the image's planes (OpenImageIO strides cannot express planar
+// storage of several channels, and reading channel by channel would decode the file once per
+// channel). Tiled files are read a row of tiles at a time.
+constexpr int kBandRows = 64;
+
+// Reads rows [first, first + count) of the file's first subimage, every channel, as `type`.
+class BandReader {
+ public:
+  BandReader(OIIO::ImageInput& input, const fs::path& path) : input_(input), path_(path) {}
+
+  int band_rows() const {
+    const int tile = input_.spec().tile_height;
+    return tile > 0 ? std::max(1, kBandRows / tile) * tile : kBandRows;
   }
+  void Read(int first, int count, OIIO::TypeDesc type, void* data) const {
+    const OIIO::ImageSpec& spec = input_.spec();
+    const int y0 = spec.y + first, y1 = spec.y + first + count;
+    const bool ok =
+        spec.tile_width > 0
+            ? input_.read_tiles(0, 0, spec.x, spec.x + spec.width, y0, y1, spec.z, spec.z + 1, 0,
+                                spec.nchannels, type, data)
+            : input_.read_scanlines(0, 0, y0, y1, spec.z, 0, spec.nchannels, type, data);
+    if (!ok) {
+      throw Error(path_, fmt::format("cannot decode image: {}", OiioError(input_.geterror())));
+    }
+  }
+
+ private:
+  OIIO::ImageInput& input_;
+  const fs::path& path_;
+};
+
+// Linear float of every integer code: the sRGB table for 8-bit codes, the curve otherwise.
+template <typename T>
+float DecodeInteger(T code, ColourSpace space) {
+  constexpr double kScale = 1.0 / static_cast<double>(std::numeric_limits<T>::max());
+  if (space == ColourSpace::kLinear) return static_cast<float>(code * kScale);
+  if constexpr (sizeof(T) == 1) {
+    return Srgb8ToLinearTable()[code];
+  } else {
+    return static_cast<float>(SrgbToLinear(code * kScale));
+  }
+}
+
+// Decodes an 8- or 16-bit file band by band into the planes of `image`, counting the pixels with
+// a kept channel at the largest code.
+template <typename T>
+void ReadIntegerSamples(const BandReader& reader, int file_channels, ColourSpace space,
+                        Image& image, ImageFileInfo& info) {
+  constexpr T kMax = std::numeric_limits<T>::max();
+  const int width = image.width(), kept = image.channels();
+  const int band = reader.band_rows();
+  std::vector<T> samples(static_cast<std::size_t>(band) * width * file_channels);
+  for (int first = 0; first < image.height(); first += band) {
+    const int count = std::min(band, image.height() - first);
+    reader.Read(first, count, OIIO::BaseTypeFromC<T>::value, samples.data());
+    for (int r = 0; r < count; ++r) {
+      const T* row = samples.data() + static_cast<std::size_t>(r) * width * file_channels;
+      for (int c = 0; c < kept; ++c) {
+        float* out = image.row(c, first + r).data();
+        for (int x = 0; x < width; ++x) out[x] = DecodeInteger(row[x * file_channels + c], space);
+      }
+      for (int x = 0; x < width; ++x) {
+        const T* pixel = row + static_cast<std::size_t>(x) * file_channels;
+        if (std::find(pixel, pixel + kept, kMax) != pixel + kept) ++info.saturated_pixels;
+      }
+    }
+  }
+}
+
+// Float, half and unusual integer widths: OpenImageIO converts to float (integers to [0, 1]).
+// Returns the number of non-finite samples.
+std::size_t ReadFloatSamples(const BandReader& reader, int file_channels, ColourSpace space,
+                             Image& image) {
+  const int width = image.width(), kept = image.channels();
+  const int band = reader.band_rows();
+  std::vector<float> samples(static_cast<std::size_t>(band) * width * file_channels);
+  std::size_t non_finite = 0;
+  for (int first = 0; first < image.height(); first += band) {
+    const int count = std::min(band, image.height() - first);
+    reader.Read(first, count, OIIO::TypeDesc::FLOAT, samples.data());
+    for (int r = 0; r < count; ++r) {
+      const float* row = samples.data() + static_cast<std::size_t>(r) * width * file_channels;
+      for (int c = 0; c < kept; ++c) {
+        float* out = image.row(c, first + r).data();
+        for (int x = 0; x < width; ++x) {
+          const float value = row[x * file_channels + c];
+          if (!std::isfinite(value)) ++non_finite;
+          out[x] = space == ColourSpace::kSrgb ? static_cast<float>(SrgbToLinear(value)) : value;
+        }
+      }
+    }
+  }
+  return non_finite;
 }
 
 }  // namespace
@@ -99,44 +170,24 @@ LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {
     result.image.set_channel_names(spec.channelnames);
   }
 
-  const auto pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  const auto read = [&](OIIO::TypeDesc type, void* data) {
-    if (!input->read_image(0, 0, 0, spec.nchannels, type, data)) {
-      throw Error(path, fmt::format("cannot decode image: {}", OiioError(input->geterror())));
-    }
-  };
+  const BandReader reader(*input, path);
   if (!info.floating_point &&
       (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::UINT16)) {
     const bool eight_bit = format.basetype == OIIO::TypeDesc::UINT8;
     info.colour_space =
         options.colour_space.value_or(eight_bit ? ColourSpace::kSrgb : ColourSpace::kLinear);
     if (eight_bit) {
-      std::vector<std::uint8_t> samples(pixels * spec.nchannels);
-      read(OIIO::TypeDesc::UINT8, samples.data());
-      ConvertIntegerSamples(samples, spec.nchannels, kept, info.colour_space, result.image, info);
+      ReadIntegerSamples<std::uint8_t>(reader, spec.nchannels, info.colour_space, result.image,
+                                       info);
     } else {
-      std::vector<std::uint16_t> samples(pixels * spec.nchannels);
-      read(OIIO::TypeDesc::UINT16, samples.data());
-      ConvertIntegerSamples(samples, spec.nchannels, kept, info.colour_space, result.image, info);
+      ReadIntegerSamples<std::uint16_t>(reader, spec.nchannels, info.colour_space, result.image,
+                                        info);
     }
   } else {
-    // Float, half and unusual integer widths: OpenImageIO converts to float (integers to [0,1]).
     info.colour_space = info.floating_point ? ColourSpace::kLinear
                                             : options.colour_space.value_or(ColourSpace::kLinear);
-    std::vector<float> samples(pixels * spec.nchannels);
-    read(OIIO::TypeDesc::FLOAT, samples.data());
-    std::span<float> out = result.image.values();
-    std::size_t non_finite = 0;
-    for (std::size_t p = 0; p < pixels; ++p) {
-      for (int c = 0; c < kept; ++c) {
-        float value = samples[p * spec.nchannels + c];
-        if (!std::isfinite(value)) ++non_finite;
-        if (info.colour_space == ColourSpace::kSrgb) {
-          value = static_cast<float>(SrgbToLinear(value));
-        }
-        out[p * kept + c] = value;
-      }
-    }
+    const std::size_t non_finite =
+        ReadFloatSamples(reader, spec.nchannels, info.colour_space, result.image);
     if (non_finite > 0) {
       throw Error(path, fmt::format("{} sample(s) are NaN or infinite", non_finite));
     }
@@ -151,9 +202,11 @@ Mask ReadMask(const fs::path& path) {
   options.keep_alpha = true;
   const Image image = ReadImage(path, options).image;
   Mask mask(image.width(), image.height(), false);
-  for (std::size_t p = 0; p < image.pixel_count(); ++p) {
-    const auto values = image.pixel(p);
-    mask.Set(p, std::any_of(values.begin(), values.end(), [](float v) { return v > 0.5f; }));
+  for (int c = 0; c < image.channels(); ++c) {
+    const std::span<const float> plane = image.plane(c);
+    for (std::size_t p = 0; p < plane.size(); ++p) {
+      if (plane[p] > 0.5f) mask.Set(p, true);
+    }
   }
   return mask;
 }
@@ -192,29 +245,29 @@ std::vector<std::string> DefaultChannelNames(int channels) {
   return names;
 }
 
-// Integer outputs: the values as they will be quantised (encoded and clamped), checked finite.
-std::vector<float> PrepareForQuantising(const fs::path& path, const Image& image,
-                                        ColourSpace encoding) {
-  std::vector<float> values(image.values().begin(), image.values().end());
-  for (float& v : values) {
-    if (!std::isfinite(v)) {
-      throw Error(path, "cannot store NaN or infinite values in an integer image");
-    }
-    v = encoding == ColourSpace::kSrgb ? static_cast<float>(LinearToSrgb(v))
-                                       : std::clamp(v, 0.0f, 1.0f);
-  }
-  return values;
+// Integer outputs: the values as they will be quantised (encoded and clamped).
+float PrepareForQuantising(float value, ColourSpace encoding) {
+  return encoding == ColourSpace::kSrgb ? static_cast<float>(LinearToSrgb(value))
+                                        : std::clamp(value, 0.0f, 1.0f);
 }
 
 }  // namespace
 
 void WriteImage(const fs::path& path, const Image& image, const ImageWriteOptions& options) {
   if (image.empty()) throw Error(path, "cannot write an empty image");
+  if (image.depth() != 1) {
+    throw Error(path, fmt::format("cannot write a {} image as one picture (a solid texture is "
+                                  "written as a volume)",
+                                  ToString(image.extent())));
+  }
   const bool integer =
       options.sample_type == SampleType::kUint8 || options.sample_type == SampleType::kUint16;
-  const std::vector<float> quantisable =
-      integer ? PrepareForQuantising(path, image, options.encoding) : std::vector<float>{};
-  const float* data = integer ? quantisable.data() : image.values().data();
+  if (integer) {
+    const auto values = image.values();
+    if (std::any_of(values.begin(), values.end(), [](float v) { return !std::isfinite(v); })) {
+      throw Error(path, "cannot store NaN or infinite values in an integer image");
+    }
+  }
 
   WriteFileAtomically(path, [&](const fs::path& temp) {
     auto output = OIIO::ImageOutput::create(path.string());
@@ -234,7 +287,30 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     if (!output->open(temp.string(), spec)) {
       throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
     }
-    if (!output->write_image(OIIO::TypeDesc::FLOAT, data) || !output->close()) {
+    // Band by band: the planes of a band interleaved (and, for integer files, encoded) into a
+    // small buffer, which OpenImageIO converts to the file's sample type.
+    const int width = image.width(), channels = image.channels();
+    std::vector<float> band(static_cast<std::size_t>(kBandRows) * width * channels);
+    for (int first = 0; first < image.height(); first += kBandRows) {
+      const int count = std::min(kBandRows, image.height() - first);
+      for (int r = 0; r < count; ++r) {
+        float* row = band.data() + static_cast<std::size_t>(r) * width * channels;
+        for (int c = 0; c < channels; ++c) {
+          const float* in = image.row(c, first + r).data();
+          if (integer) {
+            for (int x = 0; x < width; ++x) {
+              row[x * channels + c] = PrepareForQuantising(in[x], options.encoding);
+            }
+          } else {
+            for (int x = 0; x < width; ++x) row[x * channels + c] = in[x];
+          }
+        }
+      }
+      if (!output->write_scanlines(first, first + count, 0, OIIO::TypeDesc::FLOAT, band.data())) {
+        throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
+      }
+    }
+    if (!output->close()) {
       throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
     }
   });
@@ -242,7 +318,8 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
 
 void WriteMask(const fs::path& path, const Mask& mask) {
   Image image(mask.width(), mask.height(), 1);
-  for (std::size_t p = 0; p < mask.pixel_count(); ++p) image.pixel(p)[0] = mask[p] ? 1.0f : 0.0f;
+  const std::span<float> plane = image.plane(0);
+  for (std::size_t p = 0; p < mask.pixel_count(); ++p) plane[p] = mask[p] ? 1.0f : 0.0f;
   ImageWriteOptions options;
   options.sample_type = SampleType::kUint8;
   WriteImage(path, image, options);
@@ -270,9 +347,7 @@ std::set<std::string> ReadableExtensions() {
 
 // Whether `path`'s extension, in lower case, is one of `extensions` (".png", ...).
 bool HasExtensionIn(const std::filesystem::path& path, const std::set<std::string>& extensions) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extensions.count(extension) > 0;
+  return extensions.count(LowerExtension(path)) > 0;
 }
 
 }  // namespace

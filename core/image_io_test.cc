@@ -1,10 +1,14 @@
 #include "core/image_io.h"
 
+#include <OpenImageIO/imageio.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "core/error.h"
 #include "tests/support/test_support.h"
@@ -97,6 +101,49 @@ TEST(ImageIoTest, ExrKeepsFloatsChannelNamesAndAttributes) {
       EXPECT_EQ(loaded.image.pixel(p)[out], image.pixel(p)[in]);
     }
   }
+}
+
+TEST(ImageIoTest, TiledFilesAndManyBandsReadIntoPlanes) {
+  // Files are decoded band by band (64 rows, or a row of tiles) into the planes: a tiled TIFF
+  // whose tiles do not divide the image, and a scanline file of several bands.
+  TempDir dir;
+  const int width = 70, height = 150, channels = 3;
+  std::vector<std::uint16_t> codes(static_cast<std::size_t>(width) * height * channels);
+  for (std::size_t i = 0; i < codes.size(); ++i) codes[i] = static_cast<std::uint16_t>(i * 37);
+  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT16);
+  spec.tile_width = 32;
+  spec.tile_height = 16;
+  const std::string tiled = (dir / "tiled.tif").string();
+  auto output = OIIO::ImageOutput::create(tiled);
+  ASSERT_TRUE(output && output->open(tiled, spec));
+  ASSERT_TRUE(output->write_image(OIIO::TypeDesc::UINT16, codes.data()));
+  ASSERT_TRUE(output->close());
+  const LoadedImage loaded = ReadImage(tiled);
+  ASSERT_EQ(loaded.image.width(), width);
+  ASSERT_EQ(loaded.image.height(), height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < channels; ++c) {
+        const std::size_t i = (static_cast<std::size_t>(y) * width + x) * channels + c;
+        ASSERT_EQ(std::lround(loaded.image.at(x, y, c) * 65535.0), codes[i]) << x << " " << y;
+      }
+    }
+  }
+  // Written back as scanlines and read again: the same values.
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  WriteImage(dir / "lines.png", loaded.image, options);
+  const Image again = ReadImage(dir / "lines.png").image;
+  EXPECT_TRUE(
+      std::equal(again.values().begin(), again.values().end(), loaded.image.values().begin()));
+}
+
+TEST(ImageIoTest, SolidTexturesAreNotPictures) {
+  TempDir dir;
+  EXPECT_THAT(MessageOf([&] {
+                WriteImage(dir / "v.exr", Image(ImageExtent{2, 2, 2}, 1));
+              }),
+              HasSubstr("2x2x2"));
 }
 
 TEST(ImageIoTest, MissingFileIsNamed) {

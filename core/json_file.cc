@@ -95,4 +95,28 @@ void JsonReader::Fail(const std::string& fault) const {
   throw Error(file_, where_.empty() ? fault : fmt::format("{}: {}", where_, fault));
 }
 
+nlohmann::json MatrixToJson(const Eigen::MatrixXd& matrix) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Eigen::MatrixXd MatrixFromJson(const JsonReader& json, Eigen::Index columns) {
+  const std::size_t rows = json.ArraySize();
+  if (rows == 0) json.Fail("empty matrix");
+  Eigen::MatrixXd matrix(rows, columns);
+  for (std::size_t r = 0; r < rows; ++r) {
+    const std::vector<double> row = json[r].Numbers();
+    if (static_cast<Eigen::Index>(row.size()) != columns) {
+      json[r].Fail(fmt::format("expected {} numbers", columns));
+    }
+    for (Eigen::Index c = 0; c < columns; ++c) matrix(r, c) = row[c];
+  }
+  return matrix;
+}
+
 }  // namespace photomat

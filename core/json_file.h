@@ -1,5 +1,6 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -39,5 +40,10 @@ class JsonReader {
   std::filesystem::path file_;
   std::string where_;
 };
+
+// A matrix as an array of its rows (arrays of numbers), and back; reading throws Error (through
+// `json`) for an empty matrix or a row of another length than `columns`.
+nlohmann::json MatrixToJson(const Eigen::MatrixXd& matrix);
+Eigen::MatrixXd MatrixFromJson(const JsonReader& json, Eigen::Index columns);
 
 }  // namespace photomat

@@ -51,6 +51,23 @@ double AngleBetweenDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) / kDegree;
 }
 
+Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights) {
+  Eigen::Matrix3Xd l(3, static_cast<Eigen::Index>(lights.size()));
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    l.col(static_cast<Eigen::Index>(i)) = lights[i].vector();
+  }
+  return l;
+}
+
+Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights,
+                             std::span<const int> selected) {
+  Eigen::Matrix3Xd l(3, static_cast<Eigen::Index>(selected.size()));
+  for (std::size_t i = 0; i < selected.size(); ++i) {
+    l.col(static_cast<Eigen::Index>(i)) = lights[static_cast<std::size_t>(selected[i])].vector();
+  }
+  return l;
+}
+
 std::vector<LightDirection> ThesisLightGrid() {
   std::vector<LightDirection> lights;
   for (double slant : {30.0, 45.0, 60.0}) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <span>
 #include <vector>
 
 namespace photomat {
@@ -42,6 +43,11 @@ class LightDirection {
 // The light grid of Dong's thesis: 12 tilts every 30 degrees (0..330) for each of the slants 30,
 // 45 and 60 degrees, slant-major (36 lights).
 std::vector<LightDirection> ThesisLightGrid();
+
+// The 3 x n matrix whose columns are the light vectors (the L of photometric stereo), of all
+// `lights` or of the `selected` ones, in that order.
+Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights);
+Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights, std::span<const int> selected);
 
 // Angle in degrees between two unit vectors, robust for nearly parallel vectors (atan2 form).
 double AngleBetweenDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b);

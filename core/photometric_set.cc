@@ -74,10 +74,11 @@ void PhotometricSet::set_intensities(std::vector<std::vector<float>> intensities
 
 void PhotometricSet::ApplyIntensities() {
   if (intensities_.empty()) return;
-  const auto channels = static_cast<std::size_t>(this->channels());
   for (std::size_t i = 0; i < images_.size(); ++i) {
-    std::span<float> values = images_[i].values();
-    for (std::size_t v = 0; v < values.size(); ++v) values[v] /= intensities_[i][v % channels];
+    for (int c = 0; c < channels(); ++c) {
+      const float intensity = intensities_[i][static_cast<std::size_t>(c)];
+      for (float& v : images_[i].plane(c)) v /= intensity;
+    }
   }
   intensities_.clear();
 }

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/image.h"
+
 namespace photomat {
 
 double Random::Normal() {
@@ -16,6 +18,12 @@ double Random::Normal() {
   spare_ = radius * std::sin(2.0 * std::numbers::pi * u2);
   has_spare_ = true;
   return radius * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+void AddGaussianNoise(Image& image, double sigma, Random& random) {
+  for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+    for (float& v : image.pixel(p)) v += static_cast<float>(sigma * random.Normal());
+  }
 }
 
 }  // namespace photomat

@@ -27,4 +27,11 @@ class Random {
   double spare_ = 0.0;
 };
 
+class Image;
+
+// Adds sigma * Normal() to every value of `image`, drawn pixel by pixel in raster order with the
+// channels of a pixel innermost (the order of a sensor's interleaved samples, so a seed gives the
+// same noise whatever the image's storage).
+void AddGaussianNoise(Image& image, double sigma, Random& random);
+
 }  // namespace photomat

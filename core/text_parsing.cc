@@ -1,7 +1,13 @@
 #include "core/text_parsing.h"
 
+#include <fmt/format.h>
+
+#include <cctype>
 #include <charconv>
 #include <cmath>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
 
 namespace photomat {
 
@@ -52,6 +58,33 @@ std::optional<double> ParseNumber(std::string_view token) {
 bool IsBlankOrComment(std::string_view line) {
   const auto first = line.find_first_not_of(" \t");
   return first == std::string_view::npos || line[first] == '#';
+}
+
+std::string ToLower(std::string_view text) {
+  std::string lower(text);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower;
+}
+
+std::string LowerExtension(const std::filesystem::path& path) {
+  return ToLower(path.extension().string());
+}
+
+std::vector<NumberLine> ReadNumberLines(const std::filesystem::path& path) {
+  std::vector<NumberLine> lines;
+  int number = 0;
+  for (const std::string& line : SplitLines(ReadTextFile(path))) {
+    ++number;
+    if (IsBlankOrComment(line)) continue;
+    NumberLine parsed{number, {}};
+    for (std::string_view token : SplitWhitespace(line)) {
+      const auto value = ParseNumber(token);
+      if (!value) throw Error(path, fmt::format("line {}: '{}' is not a number", number, token));
+      parsed.numbers.push_back(*value);
+    }
+    lines.push_back(std::move(parsed));
+  }
+  return lines;
 }
 
 }  // namespace photomat

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,7 +20,22 @@ std::vector<std::string_view> SplitWhitespace(std::string_view line);
 // files exported with some locales have; rejects anything else that is not wholly a number.
 std::optional<double> ParseNumber(std::string_view token);
 
+// `text` in ASCII lower case (names, extensions and keywords compare case-insensitively).
+std::string ToLower(std::string_view text);
+// The extension of `path` with its dot, in lower case (".png"; empty when there is none).
+std::string LowerExtension(const std::filesystem::path& path);
+
 // True for lines that carry nothing: empty, whitespace only, or a '#' comment.
 bool IsBlankOrComment(std::string_view line);
+
+// A line of numbers of a text file: its number (from 1) and its numbers.
+struct NumberLine {
+  int line = 0;
+  std::vector<double> numbers;
+};
+// The lines of the file at `path` that are not blank or a comment, each split at whitespace into
+// numbers (ParseNumber). Throws Error naming the file and the line for a token that is not a
+// number ("line 3: 'x' is not a number") and for a file that cannot be read.
+std::vector<NumberLine> ReadNumberLines(const std::filesystem::path& path);
 
 }  // namespace photomat

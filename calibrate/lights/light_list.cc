@@ -16,23 +16,9 @@ std::vector<LightDirection> ReadLightList(const fs::path& path) {
       path.filename() == "light_directions.txt" || path.filename() == "filenames.txt") {
     return ReadLightDirections(path);
   }
-  const std::string text = ReadTextFile(path);
   std::vector<LightDirection> lights;
   std::optional<int> count;
-  int line_number = 0;
-  for (const std::string& line : SplitLines(text)) {
-    ++line_number;
-    if (IsBlankOrComment(line)) continue;
-    const auto tokens = SplitWhitespace(line);
-    std::vector<double> numbers;
-    for (std::string_view token : tokens) {
-      const auto value = ParseNumber(token);
-      if (!value) {
-        throw Error(path, fmt::format("line {}: '{}' is not a number (expected \"x y z\")",
-                                      line_number, token));
-      }
-      numbers.push_back(*value);
-    }
+  for (const auto& [line_number, numbers] : ReadNumberLines(path)) {
     if (numbers.size() == 1 && lights.empty() && !count) {
       if (numbers[0] < 1 || numbers[0] != static_cast<int>(numbers[0])) {
         throw Error(path,
@@ -61,18 +47,14 @@ std::vector<LightDirection> ReadLightList(const fs::path& path) {
 
 std::vector<std::vector<float>> ReadLightIntensities(const fs::path& path) {
   std::vector<std::vector<float>> rows;
-  int line_number = 0;
-  for (const std::string& line : SplitLines(ReadTextFile(path))) {
-    ++line_number;
-    if (IsBlankOrComment(line)) continue;
+  for (const auto& [line_number, numbers] : ReadNumberLines(path)) {
     std::vector<float> row;
-    for (std::string_view token : SplitWhitespace(line)) {
-      const auto value = ParseNumber(token);
-      if (!value || !(*value > 0.0)) {
+    for (const double value : numbers) {
+      if (!(value > 0.0)) {
         throw Error(path,
-                    fmt::format("line {}: '{}' is not a positive number", line_number, token));
+                    fmt::format("line {}: '{}' is not a positive number", line_number, value));
       }
-      row.push_back(static_cast<float>(*value));
+      row.push_back(static_cast<float>(value));
     }
     if (!rows.empty() && row.size() != rows.front().size()) {
       throw Error(path, fmt::format("line {}: {} values, but the first line has {}", line_number,

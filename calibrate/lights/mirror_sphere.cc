@@ -12,7 +12,6 @@
 #include <queue>
 
 #include "calibrate/lights/mirror_sphere_refinement.h"
-#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/text_parsing.h"
 
@@ -33,14 +32,14 @@ constexpr double kMaximumDetectedRelativeRms = 0.01;
 
 // The mean of an image's channels at every pixel, as an OpenCV float matrix.
 cv::Mat GreyMat(const Image& image) {
-  cv::Mat grey(image.height(), image.width(), CV_32F);
+  cv::Mat grey = cv::Mat::zeros(image.height(), image.width(), CV_32F);
   for (int y = 0; y < image.height(); ++y) {
     auto* row = grey.ptr<float>(y);
-    for (int x = 0; x < image.width(); ++x) {
-      float sum = 0.0f;
-      for (float v : image.pixel(x, y)) sum += v;
-      row[x] = sum / static_cast<float>(image.channels());
+    for (int c = 0; c < image.channels(); ++c) {
+      const float* values = image.row(c, y).data();
+      for (int x = 0; x < image.width(); ++x) row[x] += values[x];
     }
+    for (int x = 0; x < image.width(); ++x) row[x] /= static_cast<float>(image.channels());
   }
   return grey;
 }
@@ -161,19 +160,9 @@ SphereCircle FitCircle(const SphereCircle& start, const std::vector<Eigen::Vecto
 }  // namespace
 
 CameraIntrinsics ReadCameraIntrinsics(const fs::path& path) {
-  const std::string text = ReadTextFile(path);
   std::vector<double> values;
-  int line_number = 0;
-  for (const std::string& line : SplitLines(text)) {
-    ++line_number;
-    if (IsBlankOrComment(line)) continue;
-    for (std::string_view token : SplitWhitespace(line)) {
-      const auto value = ParseNumber(token);
-      if (!value) {
-        throw Error(path, fmt::format("line {}: '{}' is not a number", line_number, token));
-      }
-      values.push_back(*value);
-    }
+  for (const NumberLine& line : ReadNumberLines(path)) {
+    values.insert(values.end(), line.numbers.begin(), line.numbers.end());
   }
   if (values.size() != 9) {
     throw Error(path,

@@ -13,10 +13,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool Clipped(std::span<const float> pixel, double level) {
+bool Clipped(PixelValues<const float> pixel, double level) {
   return std::any_of(pixel.begin(), pixel.end(), [&](float v) { return v >= level; });
 }
-bool UnderExposed(std::span<const float> pixel, double level) {
+bool UnderExposed(PixelValues<const float> pixel, double level) {
   return std::all_of(pixel.begin(), pixel.end(), [&](float v) { return v <= level; });
 }
 
@@ -93,10 +93,10 @@ PhotometricSet SubtractDarkFrame(const PhotometricSet& set, const Image& dark) {
   std::vector<Image> images(set.size());
   tbb::parallel_for(0, set.size(), [&](int i) {
     Image image = set.image(i);
-    for (std::size_t p = 0; p < image.pixel_count(); ++p) {
-      const auto pixel = image.pixel(p);
-      const auto d = dark.pixel(p);
-      for (std::size_t c = 0; c < pixel.size(); ++c) pixel[c] -= d[dark.channels() == 1 ? 0 : c];
+    for (int c = 0; c < image.channels(); ++c) {
+      const std::span<const float> d = dark.plane(dark.channels() == 1 ? 0 : c);
+      const std::span<float> values = image.plane(c);
+      for (std::size_t p = 0; p < values.size(); ++p) values[p] -= d[p];
     }
     images[i] = std::move(image);
   });

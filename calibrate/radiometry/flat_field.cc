@@ -96,12 +96,12 @@ void NormaliseGains(std::vector<Image>& gains) {
     double sum = 0.0;
     std::size_t count = 0;
     for (const Image& gain : gains) {
-      for (std::size_t p = 0; p < gain.pixel_count(); ++p) sum += gain.pixel(p)[c];
+      for (float v : gain.plane(c)) sum += v;
       count += gain.pixel_count();
     }
     const auto scale = static_cast<float>(count / sum);
     for (Image& gain : gains) {
-      for (std::size_t p = 0; p < gain.pixel_count(); ++p) gain.pixel(p)[c] *= scale;
+      for (float& v : gain.plane(c)) v *= scale;
     }
   }
 }
@@ -164,11 +164,10 @@ FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions
     Image gain(width, height, channels);
     const double z = target.light(i).z();
     for (int c = 0; c < channels; ++c) {
-      cv::Mat values(height, width, CV_32F);
-      for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x)
-          values.at<float>(y, x) = image.at(x, y, c) * mask.at<float>(y, x);
-      }
+      // The plane as an OpenCV matrix (a header on the image's storage), times the mask.
+      const cv::Mat plane(height, width, CV_32F, const_cast<float*>(image.plane(c).data()));
+      cv::Mat values;
+      cv::multiply(plane, mask, values);
       const cv::Mat polynomial = PolynomialFit(values, mask, options.polynomial_degree);
       cv::Mat smoothed;
       if (options.model == FlatFieldModel::kSmoothed) {

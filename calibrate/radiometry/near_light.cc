@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/text_parsing.h"
 
@@ -25,18 +24,7 @@ std::vector<LightDirection> NominalDirections(const std::vector<NearLight>& ligh
 std::vector<NearLight> ReadNearLights(const std::filesystem::path& path) {
   std::vector<NearLight> lights;
   std::optional<std::size_t> count;
-  int line_number = 0;
-  for (const std::string& line : SplitLines(ReadTextFile(path))) {
-    ++line_number;
-    if (IsBlankOrComment(line)) continue;
-    std::vector<double> numbers;
-    for (std::string_view token : SplitWhitespace(line)) {
-      const auto value = ParseNumber(token);
-      if (!value) {
-        throw Error(path, fmt::format("line {}: '{}' is not a number", line_number, token));
-      }
-      numbers.push_back(*value);
-    }
+  for (const auto& [line_number, numbers] : ReadNumberLines(path)) {
     if (numbers.size() == 1 && lights.empty() && !count && numbers[0] >= 1) {
       count = static_cast<std::size_t>(numbers[0]);
       continue;

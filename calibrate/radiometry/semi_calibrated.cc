@@ -37,12 +37,6 @@ Eigen::VectorXd SmallestPositiveEigenvector(const Eigen::MatrixXd& matrix) {
   return v.sum() < 0.0 ? (-v).eval() : v;
 }
 
-Eigen::Matrix3Xd LightMatrix(const PhotometricSet& set) {
-  Eigen::Matrix3Xd l(3, set.size());
-  for (int i = 0; i < set.size(); ++i) l.col(i) = set.light(i).vector();
-  return l;
-}
-
 // The current intensities of a set as an images x channels matrix (1 where the set has none).
 Eigen::MatrixXd IntensityMatrix(const PhotometricSet& set) {
   Eigen::MatrixXd e = Eigen::MatrixXd::Ones(set.size(), set.channels());
@@ -140,7 +134,7 @@ std::vector<Eigen::MatrixXd> NullSpaceSums(const PhotometricSet& samples, const 
 Eigen::MatrixXf RankWindowWeights(const PhotometricSet& samples, double dark_fraction,
                                   double bright_fraction) {
   const int n = samples.size(), m = samples.width(), channels = samples.channels();
-  const Eigen::Matrix3Xd l = LightMatrix(samples);
+  const Eigen::Matrix3Xd l = LightMatrix(samples.lights());
   const Eigen::MatrixXd e = IntensityMatrix(samples);
   Eigen::MatrixXf weights = Eigen::MatrixXf::Zero(m, n);
   std::vector<double> shares(m, -1.0);  // -1: the pixel takes no part
@@ -194,7 +188,7 @@ SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
     set.Fail(
         fmt::format("semi-calibrated photometric stereo needs at least 4 images; {} given", n));
   }
-  const Eigen::Matrix3Xd l = LightMatrix(set);
+  const Eigen::Matrix3Xd l = LightMatrix(set.lights());
   const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(l);
   if (svd.singularValues()[2] < 0.02 * svd.singularValues()[0]) {
     set.Fail("semi-calibrated photometric stereo: the lights are coplanar");

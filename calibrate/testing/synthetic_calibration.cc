@@ -19,7 +19,7 @@ constexpr double kPi = std::numbers::pi;
 void AddNoise(Image& image, double sigma, std::uint64_t seed) {
   if (sigma <= 0.0) return;
   Random random(seed);
-  for (float& v : image.values()) v += static_cast<float>(sigma * random.Normal());
+  AddGaussianNoise(image, sigma, random);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "capture/io/capture_manifest.h"
 #include "capture/io/diligent.h"
 #include "capture/io/lp_file.h"
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/image_io.h"
 
@@ -76,15 +77,11 @@ SetDescription DescribeDiligentSet(const fs::path& folder) {
 }  // namespace
 
 std::string_view ToString(InputKind kind) {
-  switch (kind) {
-    case InputKind::kLpFile:
-      return "lp";
-    case InputKind::kDiligent:
-      return "diligent";
-    case InputKind::kManifest:
-      break;
-  }
-  return "manifest";
+  static constexpr std::array<NamedValue<InputKind>, 3> kNames = {
+      {{InputKind::kLpFile, "lp"},
+       {InputKind::kDiligent, "diligent"},
+       {InputKind::kManifest, "manifest"}}};
+  return NameOf(kind, kNames);
 }
 
 InputLocation DetectInput(const fs::path& path) {

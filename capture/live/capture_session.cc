@@ -232,7 +232,7 @@ class Session {
         const double dark = darks_.empty() ? 0.0 : darks_[shortest].values()[i];
         signal = exposures[shortest].mean.values()[i] - dark;
         weight = factors[shortest];
-        pixel_clipped[i / first.channels()] = 1;
+        pixel_clipped[i % first.pixel_count()] = 1;  // values are planar
       }
       out[i] = static_cast<float>(signal / weight);
     }

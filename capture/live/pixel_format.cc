@@ -15,6 +15,31 @@
 namespace photomat {
 namespace {
 
+// What photomat knows of each format: its name, its V4L2 code (0: none) and its bytes per pixel
+// (0: compressed).
+struct FormatFacts {
+  PixelFormat format;
+  std::string_view name;
+  std::uint32_t fourcc;
+  int bytes_per_pixel;
+};
+constexpr std::array<FormatFacts, 7> kFormatFacts = {{
+    {PixelFormat::kGrey, "GREY", V4L2_PIX_FMT_GREY, 1},
+    {PixelFormat::kY16, "Y16", V4L2_PIX_FMT_Y16, 2},
+    {PixelFormat::kYuyv, "YUYV", V4L2_PIX_FMT_YUYV, 2},
+    {PixelFormat::kMjpeg, "MJPG", V4L2_PIX_FMT_MJPEG, 0},
+    {PixelFormat::kRgb24, "RGB3", V4L2_PIX_FMT_RGB24, 3},
+    {PixelFormat::kBgr24, "BGR3", V4L2_PIX_FMT_BGR24, 3},
+    {PixelFormat::kFloat, "FLOAT", 0, 12},
+}};
+
+const FormatFacts& Facts(PixelFormat format) {
+  for (const FormatFacts& facts : kFormatFacts) {
+    if (facts.format == format) return facts;
+  }
+  throw Error("internal: a pixel format without facts");
+}
+
 constexpr std::array<PixelFormat, 6> kAllFormats = {PixelFormat::kY16,   PixelFormat::kRgb24,
                                                     PixelFormat::kBgr24, PixelFormat::kYuyv,
                                                     PixelFormat::kGrey,  PixelFormat::kMjpeg};
@@ -154,25 +179,7 @@ Image DecodeMjpeg(const FrameLayout& layout, std::span<const std::uint8_t> bytes
 
 }  // namespace
 
-std::string_view ToString(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::kGrey:
-      return "GREY";
-    case PixelFormat::kY16:
-      return "Y16";
-    case PixelFormat::kYuyv:
-      return "YUYV";
-    case PixelFormat::kMjpeg:
-      return "MJPG";
-    case PixelFormat::kRgb24:
-      return "RGB3";
-    case PixelFormat::kBgr24:
-      return "BGR3";
-    case PixelFormat::kFloat:
-      return "FLOAT";
-  }
-  return "?";
-}
+std::string_view ToString(PixelFormat format) { return Facts(format).name; }
 
 std::optional<PixelFormat> ParsePixelFormat(std::string_view name) {
   std::string upper(name);
@@ -202,45 +209,9 @@ int ChannelCount(PixelFormat format) {
   return format == PixelFormat::kGrey || format == PixelFormat::kY16 ? 1 : 3;
 }
 
-int BytesPerPixel(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::kGrey:
-      return 1;
-    case PixelFormat::kY16:
-      return 2;
-    case PixelFormat::kYuyv:
-      return 2;
-    case PixelFormat::kMjpeg:
-      return 0;
-    case PixelFormat::kRgb24:
-      return 3;
-    case PixelFormat::kBgr24:
-      return 3;
-    case PixelFormat::kFloat:
-      return 12;
-  }
-  return 0;
-}
+int BytesPerPixel(PixelFormat format) { return Facts(format).bytes_per_pixel; }
 
-std::uint32_t V4l2FourCc(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::kGrey:
-      return V4L2_PIX_FMT_GREY;
-    case PixelFormat::kY16:
-      return V4L2_PIX_FMT_Y16;
-    case PixelFormat::kYuyv:
-      return V4L2_PIX_FMT_YUYV;
-    case PixelFormat::kMjpeg:
-      return V4L2_PIX_FMT_MJPEG;
-    case PixelFormat::kRgb24:
-      return V4L2_PIX_FMT_RGB24;
-    case PixelFormat::kBgr24:
-      return V4L2_PIX_FMT_BGR24;
-    case PixelFormat::kFloat:
-      return 0;
-  }
-  return 0;
-}
+std::uint32_t V4l2FourCc(PixelFormat format) { return Facts(format).fourcc; }
 
 std::optional<PixelFormat> PixelFormatFromV4l2(std::uint32_t fourcc) {
   for (PixelFormat format : kAllFormats) {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <numbers>
 
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/random.h"
@@ -226,25 +227,17 @@ bool InCastShadow(const Image& height, double max_height, double u, double v,
   return false;
 }
 
+constexpr std::array<NamedValue<SurfacePattern>, 3> kPatternNames = {
+    {{SurfacePattern::kBumps, "bumps"},
+     {SurfacePattern::kGrooves, "grooves"},
+     {SurfacePattern::kBricks, "bricks"}}};
+
 }  // namespace
 
-std::string_view ToString(SurfacePattern pattern) {
-  switch (pattern) {
-    case SurfacePattern::kBumps:
-      return "bumps";
-    case SurfacePattern::kGrooves:
-      return "grooves";
-    case SurfacePattern::kBricks:
-      break;
-  }
-  return "bricks";
-}
+std::string_view ToString(SurfacePattern pattern) { return NameOf(pattern, kPatternNames); }
 
 std::optional<SurfacePattern> ParseSurfacePattern(std::string_view name) {
-  for (auto pattern : {SurfacePattern::kBumps, SurfacePattern::kGrooves, SurfacePattern::kBricks}) {
-    if (name == ToString(pattern)) return pattern;
-  }
-  return std::nullopt;
+  return FindValueNamed(name, kPatternNames);
 }
 
 SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options) {
@@ -327,8 +320,7 @@ PhotometricSet RenderSyntheticCapture(const SyntheticMaterial& material,
     if (options.noise_sigma > 0.0) {
       // One stream per image, so the noise does not depend on the thread schedule.
       Random random(options.noise_seed * 1000003ULL + i);
-      for (float& v : image.values())
-        v += static_cast<float>(options.noise_sigma * random.Normal());
+      AddGaussianNoise(image, options.noise_sigma, random);
     }
     images[i] = std::move(image);
   });

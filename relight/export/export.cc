@@ -54,11 +54,9 @@ Image ExtraLayers(const Representation& r, const MaterialMaps& maps) {
     names.insert(names.end(), part->channel_names().begin(), part->channel_names().end());
   }
   Image extra(r.width(), r.height(), names);
-  for (std::size_t p = 0; p < extra.pixel_count(); ++p) {
-    auto out = extra.pixel(p).begin();
-    for (const Image* part : parts)
-      out = std::copy(part->pixel(p).begin(), part->pixel(p).end(), out);
-  }
+  auto out = extra.values().begin();  // planar: the parts' planes one after another
+  for (const Image* part : parts)
+    out = std::copy(part->values().begin(), part->values().end(), out);
   return extra;
 }
 

@@ -27,7 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-double AngleDegrees(std::span<const float> a, std::span<const float> b) {
+double AngleDegrees(PixelValues<const float> a, PixelValues<const float> b) {
   return AngleBetweenDegrees(Eigen::Vector3d(a[0], a[1], a[2]), Eigen::Vector3d(b[0], b[1], b[2]));
 }
 

@@ -34,8 +34,9 @@ Image NamedMaps(const Representation& r, const std::vector<std::string>& names) 
     source.push_back(r.maps().FindChannel(name));
     if (source.back() < 0) return {};
   }
-  for (std::size_t p = 0; p < out.pixel_count(); ++p) {
-    for (std::size_t c = 0; c < names.size(); ++c) out.pixel(p)[c] = r.maps().pixel(p)[source[c]];
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const std::span<const float> plane = r.maps().plane(source[c]);
+    std::copy(plane.begin(), plane.end(), out.plane(static_cast<int>(c)).begin());
   }
   return out;
 }
@@ -44,8 +45,7 @@ Image NamedMaps(const Representation& r, const std::vector<std::string>& names) 
 // are (nearly) coplanar.
 std::optional<Eigen::MatrixXd> LambertianSolve(const std::vector<LightDirection>& lights) {
   if (lights.size() < 3) return std::nullopt;
-  Eigen::MatrixXd l(3, lights.size());
-  for (std::size_t i = 0; i < lights.size(); ++i) l.col(i) = lights[i].vector();
+  const Eigen::MatrixXd l = LightMatrix(lights);
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(l, Eigen::ComputeThinU | Eigen::ComputeThinV);
   if (svd.singularValues()[2] < 0.02 * svd.singularValues()[0]) return std::nullopt;
   return svd.matrixU() * svd.singularValues().cwiseInverse().asDiagonal() *

@@ -2,21 +2,27 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 
+#include "core/enum_names.h"
 #include "core/error.h"
 
 namespace photomat {
 
+namespace {
+
+constexpr std::array<NamedValue<NormalConvention>, 2> kConventionNames = {
+    {{NormalConvention::kOpenGl, "opengl"}, {NormalConvention::kDirectX, "directx"}}};
+
+}  // namespace
+
 std::string_view ToString(NormalConvention convention) {
-  return convention == NormalConvention::kDirectX ? "directx" : "opengl";
+  return NameOf(convention, kConventionNames);
 }
 
 NormalConvention ParseNormalConvention(std::string_view name) {
-  if (name == "opengl") return NormalConvention::kOpenGl;
-  if (name == "directx") return NormalConvention::kDirectX;
-  throw Error(
-      fmt::format("unknown normal-map convention \"{}\": expected opengl or directx", name));
+  return ValueNamed(name, kConventionNames, "normal-map convention");
 }
 
 Image EncodeNormalMap(const Image& normals, NormalConvention convention) {

@@ -352,13 +352,7 @@ std::string SerializePtm(const PtmFile& ptm) {
 }
 
 void WritePtmFile(const fs::path& path, const PtmFile& ptm) {
-  std::string bytes;
-  try {
-    bytes = SerializePtm(ptm);
-  } catch (const Error& error) {
-    throw error.InFile(path);
-  }
-  WriteTextFileAtomically(path, bytes);
+  WriteSerializedAtomically(path, [&] { return SerializePtm(ptm); });
 }
 
 Representation RepresentationFromPtm(const PtmFile& ptm) {

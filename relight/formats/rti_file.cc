@@ -132,13 +132,7 @@ std::string SerializeRti(const RtiFile& rti) {
 }
 
 void WriteRtiFile(const fs::path& path, const RtiFile& rti) {
-  std::string bytes;
-  try {
-    bytes = SerializeRti(rti);
-  } catch (const Error& error) {
-    throw error.InFile(path);
-  }
-  WriteTextFileAtomically(path, bytes);
+  WriteSerializedAtomically(path, [&] { return SerializeRti(rti); });
 }
 
 Representation RepresentationFromRti(const RtiFile& rti) {

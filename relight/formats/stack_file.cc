@@ -5,6 +5,7 @@
 #include <cctype>
 
 #include "core/error.h"
+#include "core/text_parsing.h"
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/rti_file.h"
 
@@ -12,12 +13,6 @@ namespace photomat {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string LowerExtension(const fs::path& path) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extension;
-}
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include "capture/io/capture_manifest.h"
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/image_io.h"
 
@@ -37,6 +38,9 @@ Image RelightLinear(const Representation& representation, const LightDirection& 
   return image;
 }
 
+constexpr std::array<NamedValue<RelitFormat>, 3> kFormatNames = {
+    {{RelitFormat::kPng8, "png8"}, {RelitFormat::kPng16, "png16"}, {RelitFormat::kExr, "exr"}}};
+
 }  // namespace
 
 std::vector<LightDirection> LightSweep(int count, double slant_degrees) {
@@ -51,23 +55,10 @@ std::vector<LightDirection> LightSweep(int count, double slant_degrees) {
   return lights;
 }
 
-std::string_view ToString(RelitFormat format) {
-  switch (format) {
-    case RelitFormat::kPng8:
-      return "png8";
-    case RelitFormat::kPng16:
-      return "png16";
-    case RelitFormat::kExr:
-      break;
-  }
-  return "exr";
-}
+std::string_view ToString(RelitFormat format) { return NameOf(format, kFormatNames); }
 
 RelitFormat ParseRelitFormat(std::string_view name) {
-  for (auto format : {RelitFormat::kPng8, RelitFormat::kPng16, RelitFormat::kExr}) {
-    if (name == ToString(format)) return format;
-  }
-  throw Error(fmt::format("unknown image format \"{}\": expected png8, png16 or exr", name));
+  return ValueNamed(name, kFormatNames, "image format");
 }
 
 std::string_view Extension(RelitFormat format) {

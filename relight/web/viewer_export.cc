@@ -28,16 +28,6 @@ constexpr const char* kViewerManifest = "viewer.json";
 // Exact formulas are held to rounding: basis.js computes in double precision, as C++ does.
 constexpr double kExactTolerance = 1e-9;
 
-nlohmann::json MatrixRows(const Eigen::MatrixXd& matrix) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
-    nlohmann::json row = nlohmann::json::array();
-    for (Eigen::Index c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
-    rows.push_back(std::move(row));
-  }
-  return rows;
-}
-
 nlohmann::json Vector(const Eigen::VectorXd& v) {
   return std::vector<double>(v.data(), v.data() + v.size());
 }
@@ -49,7 +39,7 @@ nlohmann::json InterpolatedJson(const InterpolatedLightBasis& basis) {
   nlohmann::json json = {{"kind", "interpolated"},
                          {"scheme", ToString(interpolator.scheme())},
                          {"nodes", std::move(nodes)},
-                         {"values", MatrixRows(basis.values().transpose())}};
+                         {"values", MatrixToJson(basis.values().transpose())}};
   if (interpolator.scheme() == LightInterpolator::Scheme::kSlantRings) {
     nlohmann::json rings = nlohmann::json::array();
     for (const LightInterpolator::Ring& ring : interpolator.rings()) {
@@ -337,7 +327,7 @@ bool ViewerEvaluatesExactly(const LightBasis& basis) {
 
 nlohmann::json ViewerBasisJson(const LightBasis& basis) {
   if (const auto* linear = dynamic_cast<const LinearLightBasis*>(&basis)) {
-    return {{"kind", "linear"}, {"matrix", MatrixRows(*linear->LinearInLight())}};
+    return {{"kind", "linear"}, {"matrix", MatrixToJson(*linear->LinearInLight())}};
   }
   if (dynamic_cast<const PtmLightBasis*>(&basis)) return {{"kind", "ptm"}};
   if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {

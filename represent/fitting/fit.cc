@@ -56,15 +56,17 @@ struct FitContext {
   std::size_t PixelIndex(Eigen::Index k) const { return observations.pixel_indices()[k]; }
 };
 
-// Copies a (C*m) x k coefficient matrix, channel-major rows, into per-pixel maps j * C + c.
+// Copies a (C*m) x k coefficient matrix, channel-major rows, into the maps j * C + c: each map
+// plane takes m consecutive values of one column.
 void StorePerChannelTerms(const FitContext& fit, const Eigen::MatrixXf& terms, Image& maps) {
   const int channels = fit.channels();
   const Eigen::Index m = fit.m();
-  tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index k) {
-    const auto pixel = maps.pixel(fit.PixelIndex(k));
-    for (Eigen::Index j = 0; j < terms.cols(); ++j) {
-      for (int c = 0; c < channels; ++c) pixel[j * channels + c] = terms(c * m + k, j);
-    }
+  const auto planes = static_cast<int>(terms.cols()) * channels;
+  tbb::parallel_for(0, planes, [&](int map) {
+    const Eigen::Index j = map / channels, c = map % channels;
+    const float* values = terms.col(j).data() + c * m;
+    float* plane = maps.plane(map).data();
+    for (Eigen::Index k = 0; k < m; ++k) plane[fit.PixelIndex(k)] = values[k];
   });
 }
 
@@ -80,8 +82,7 @@ Eigen::MatrixXd PseudoInverseTransposed(const Eigen::JacobiSVD<Eigen::MatrixXd>&
 
 Representation FitGradient(const FitContext& fit) {
   const auto lights = fit.SelectedLights();
-  Eigen::MatrixXd l(3, lights.size());
-  for (std::size_t i = 0; i < lights.size(); ++i) l.col(i) = lights[i].vector();
+  const Eigen::MatrixXd l = LightMatrix(lights);
   const auto svd = CheckedSvd(l);
   const Eigen::VectorXd s = svd.singularValues();
   if (s[2] < kGradientConditionLimit * s[0]) {

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace photomat {
@@ -22,35 +23,26 @@ Observations::Observations(const PhotometricSet& set)
       height_(set.height()) {
   const auto m = static_cast<Eigen::Index>(pixel_indices_.size());
   matrix_.resize(m * channels_, set.size());
+  // A column is the image's planes restricted to the selected pixels: the planes themselves when
+  // every pixel is selected.
+  const bool all = static_cast<std::size_t>(m) == static_cast<std::size_t>(width_) * height_;
   tbb::parallel_for(0, set.size(), [&](int image) {
     const Image& source = set.image(image);
     float* column = matrix_.col(image).data();
-    for (Eigen::Index k = 0; k < m; ++k) {
-      const auto pixel = source.pixel(pixel_indices_[k]);
-      for (int c = 0; c < channels_; ++c) column[c * m + k] = pixel[c];
+    if (all) {
+      std::copy(source.values().begin(), source.values().end(), column);
+      return;
+    }
+    for (int c = 0; c < channels_; ++c) {
+      const float* plane = source.plane(c).data();
+      float* out = column + c * m;
+      for (Eigen::Index k = 0; k < m; ++k) out[k] = plane[pixel_indices_[k]];
     }
   });
 }
 
 const Eigen::MatrixXd& Observations::Gram() const {
-  std::call_once(gram_once_, [this] {
-    const Eigen::Index rows = matrix_.rows(), n = matrix_.cols();
-    gram_ = tbb::parallel_reduce(
-        tbb::blocked_range<Eigen::Index>(0, rows, kRowBlock), Eigen::MatrixXd::Zero(n, n).eval(),
-        [&](const tbb::blocked_range<Eigen::Index>& range, Eigen::MatrixXd sum) {
-          for (Eigen::Index start = range.begin(); start < range.end(); start += kRowBlock) {
-            const Eigen::Index count = std::min(kRowBlock, range.end() - start);
-            const auto block = matrix_.middleRows(start, count);
-            Eigen::MatrixXf partial = Eigen::MatrixXf::Zero(n, n);
-            partial.selfadjointView<Eigen::Lower>().rankUpdate(block.transpose());
-            sum += partial.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
-          }
-          return sum;
-        },
-        [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) -> Eigen::MatrixXd {
-          return a + b;
-        });
-  });
+  std::call_once(gram_once_, [this] { gram_ = ParallelGram(matrix_); });
   return gram_;
 }
 
@@ -62,6 +54,23 @@ Eigen::VectorXd Observations::ColumnStandardDeviations() const {
     deviations[j] = std::sqrt((column.array() - mean).square().mean());
   }
   return deviations;
+}
+
+Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix) {
+  const Eigen::Index rows = matrix.rows(), n = matrix.cols();
+  return tbb::parallel_reduce(
+      tbb::blocked_range<Eigen::Index>(0, rows, kRowBlock), Eigen::MatrixXd::Zero(n, n).eval(),
+      [&](const tbb::blocked_range<Eigen::Index>& range, Eigen::MatrixXd sum) {
+        for (Eigen::Index start = range.begin(); start < range.end(); start += kRowBlock) {
+          const Eigen::Index count = std::min(kRowBlock, range.end() - start);
+          Eigen::MatrixXf partial = Eigen::MatrixXf::Zero(n, n);
+          partial.selfadjointView<Eigen::Lower>().rankUpdate(
+              matrix.middleRows(start, count).transpose());
+          sum += partial.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
+        }
+        return sum;
+      },
+      [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) -> Eigen::MatrixXd { return a + b; });
 }
 
 Eigen::MatrixXf ParallelProduct(const Eigen::MatrixXf& left, const Eigen::MatrixXf& right) {

@@ -49,6 +49,10 @@ class Observations {
   mutable Eigen::MatrixXd gram_;
 };
 
+// A^T A over the rows of a tall float matrix, in double: float products of blocks of 4096 rows
+// (accurate at that length), summed in double.
+Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix);
+
 // rows x cols product computed in parallel row blocks (Eigen's own products are single-threaded
 // without OpenMP). `left` is the large tall matrix.
 Eigen::MatrixXf ParallelProduct(const Eigen::MatrixXf& left, const Eigen::MatrixXf& right);

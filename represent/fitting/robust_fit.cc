@@ -4,7 +4,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -16,8 +15,11 @@
 #include <numeric>
 #include <string>
 
+#include "core/enum_names.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 #include "represent/fitting/fit.h"
+#include "represent/fitting/observations.h"
 #include "represent/model/hsh.h"
 #include "represent/model/light_basis.h"
 
@@ -34,16 +36,6 @@ constexpr Eigen::Index kPixelGrain = 256;
 // EM iterations of the weighted low-rank approximation (robust Eigen-k). The reconstruction
 // error of the imputed entries changes by under 1e-3 (relative) after 8 on DiLiGenT.
 constexpr int kEigenEmIterations = 8;
-
-// The lights in `selected` as the columns of a 3 x n matrix.
-Eigen::Matrix3Xd LightMatrix(const std::vector<LightDirection>& lights,
-                             std::span<const int> selected) {
-  Eigen::Matrix3Xd l(3, static_cast<Eigen::Index>(selected.size()));
-  for (std::size_t i = 0; i < selected.size(); ++i) {
-    l.col(static_cast<Eigen::Index>(i)) = lights[selected[i]].vector();
-  }
-  return l;
-}
 
 double Median(std::vector<double>& values) {
   const std::size_t n = values.size();
@@ -181,46 +173,16 @@ class PixelSolver {
   std::vector<double> residuals_;
 };
 
-// A^T A over the rows of a tall float matrix, in double (blocks of float products).
-Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix) {
-  constexpr Eigen::Index kRowBlock = 4096;
-  const Eigen::Index rows = matrix.rows(), n = matrix.cols();
-  return tbb::parallel_reduce(
-      tbb::blocked_range<Eigen::Index>(0, rows, kRowBlock), Eigen::MatrixXd::Zero(n, n).eval(),
-      [&](const tbb::blocked_range<Eigen::Index>& range, Eigen::MatrixXd sum) {
-        for (Eigen::Index start = range.begin(); start < range.end(); start += kRowBlock) {
-          const Eigen::Index count = std::min(kRowBlock, range.end() - start);
-          Eigen::MatrixXf partial = Eigen::MatrixXf::Zero(n, n);
-          partial.selfadjointView<Eigen::Lower>().rankUpdate(
-              matrix.middleRows(start, count).transpose());
-          sum += partial.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
-        }
-        return sum;
-      },
-      [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) -> Eigen::MatrixXd { return a + b; });
-}
+constexpr std::array<NamedValue<RobustLoss>, 3> kLossNames = {{{RobustLoss::kHuber, "huber"},
+                                                               {RobustLoss::kCauchy, "cauchy"},
+                                                               {RobustLoss::kTukey, "tukey"}}};
 
 }  // namespace
 
-std::string_view ToString(RobustLoss loss) {
-  switch (loss) {
-    case RobustLoss::kHuber:
-      return "huber";
-    case RobustLoss::kTukey:
-      return "tukey";
-    case RobustLoss::kCauchy:
-      break;
-  }
-  return "cauchy";
-}
+std::string_view ToString(RobustLoss loss) { return NameOf(loss, kLossNames); }
 
 std::optional<RobustLoss> ParseRobustLoss(std::string_view name) {
-  std::string lower(name);
-  for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  for (auto loss : {RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {
-    if (lower == ToString(loss)) return loss;
-  }
-  return std::nullopt;
+  return FindValueNamed(ToLower(name), kLossNames);
 }
 
 double DefaultLossScale(RobustLoss loss) {

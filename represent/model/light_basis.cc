@@ -3,36 +3,10 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "represent/model/hsh.h"
 
 namespace photomat {
-namespace {
-
-nlohmann::json MatrixToJson(const Eigen::MatrixXd& matrix) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (Eigen::Index r = 0; r < matrix.rows(); ++r) {
-    nlohmann::json row = nlohmann::json::array();
-    for (Eigen::Index c = 0; c < matrix.cols(); ++c) row.push_back(matrix(r, c));
-    rows.push_back(std::move(row));
-  }
-  return rows;
-}
-
-Eigen::MatrixXd MatrixFromJson(const JsonReader& json, Eigen::Index expected_cols) {
-  const std::size_t rows = json.ArraySize();
-  if (rows == 0) json.Fail("empty matrix");
-  Eigen::MatrixXd matrix(rows, expected_cols);
-  for (std::size_t r = 0; r < rows; ++r) {
-    const std::vector<double> row = json[r].Numbers();
-    if (static_cast<Eigen::Index>(row.size()) != expected_cols) {
-      json[r].Fail(fmt::format("expected {} numbers", expected_cols));
-    }
-    for (Eigen::Index c = 0; c < expected_cols; ++c) matrix(r, c) = row[c];
-  }
-  return matrix;
-}
-
-}  // namespace
 
 LinearLightBasis::LinearLightBasis(Eigen::MatrixXd matrix) : matrix_(std::move(matrix)) {
   if (matrix_.cols() != 3 || matrix_.rows() == 0 || !matrix_.allFinite()) {

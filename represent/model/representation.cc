@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -56,8 +57,8 @@ Representation::Representation(std::string method, Image maps, MapLayout layout,
   }
 }
 
-void Representation::RelightPixel(std::span<const float> maps, const Eigen::VectorXf& coefficients,
-                                  std::span<float> out) const {
+void Representation::RelightPixel(PixelValues<const float> maps,
+                                  const Eigen::VectorXf& coefficients, std::span<float> out) const {
   const int per_term = layout_.BasisMapsPerTerm();
   for (int o = 0; o < layout_.output_channels; ++o) {
     const int b = layout_.basis_per_channel ? o : 0;
@@ -70,12 +71,26 @@ void Representation::RelightPixel(std::span<const float> maps, const Eigen::Vect
 Image Representation::Relight(const LightDirection& light, const RelightOptions& options) const {
   const Eigen::VectorXf coefficients = basis_->Coefficients(light).cast<float>();
   Image image(maps_.width(), maps_.height(), OutputChannelNames(layout_.output_channels));
+  // Row by row, plane by plane: out_o = gain_o * sum_j c_j B_j,o is an axpy per basis map (the
+  // same sums, in the same order, as RelightPixel).
+  const int per_term = layout_.BasisMapsPerTerm();
+  const int width = maps_.width();
   tbb::parallel_for(0, maps_.height(), [&](int y) {
-    for (int x = 0; x < maps_.width(); ++x) {
-      const auto out = image.pixel(x, y);
-      RelightPixel(maps_.pixel(x, y), coefficients, out);
+    for (int o = 0; o < layout_.output_channels; ++o) {
+      const int b = layout_.basis_per_channel ? o : 0;
+      float* out = image.row(o, y).data();
+      std::fill(out, out + width, 0.0f);
+      for (int j = 0; j < layout_.basis_size; ++j) {
+        const float c = coefficients[j];
+        const float* basis = maps_.row(j * per_term + b, y).data();
+        for (int x = 0; x < width; ++x) out[x] += c * basis[x];
+      }
+      if (layout_.has_gain) {
+        const float* gain = maps_.row(layout_.GainOffset() + o, y).data();
+        for (int x = 0; x < width; ++x) out[x] *= gain[x];
+      }
       if (options.clamp_negative) {
-        for (float& v : out) v = std::max(v, 0.0f);
+        for (int x = 0; x < width; ++x) out[x] = std::max(out[x], 0.0f);
       }
     }
   });
@@ -104,7 +119,7 @@ void StoreNormal(Image& normals, std::size_t p, Eigen::Vector3d n) {
 }
 
 // Sum over output channels of gain_o * B_j,o: the luminance-like weight of basis term j.
-double CombinedBasis(const Representation& r, std::span<const float> maps, int j) {
+double CombinedBasis(const Representation& r, PixelValues<const float> maps, int j) {
   const MapLayout& layout = r.layout();
   double sum = 0.0;
   for (int o = 0; o < layout.output_channels; ++o) {

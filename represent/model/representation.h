@@ -66,7 +66,7 @@ class Representation {
   // The image under `light` (output channels named R, G, B or Y).
   Image Relight(const LightDirection& light, const RelightOptions& options = {}) const;
   // One pixel: `maps` is the pixel's n-vector, `coefficients` = basis().Coefficients(light).
-  void RelightPixel(std::span<const float> maps, const Eigen::VectorXf& coefficients,
+  void RelightPixel(PixelValues<const float> maps, const Eigen::VectorXf& coefficients,
                     std::span<float> out) const;
 
   // The same method and light basis over other maps of the same layout (a synthesised texture).

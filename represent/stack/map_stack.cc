@@ -73,10 +73,9 @@ void SaveRepresentation(const fs::path& path, const Representation& representati
   }
   description["extra_layers"] = extra_layers.channel_names();
   Image all(maps.width(), maps.height(), names);
-  for (std::size_t p = 0; p < all.pixel_count(); ++p) {
-    const auto out = std::copy(maps.pixel(p).begin(), maps.pixel(p).end(), all.pixel(p).begin());
-    std::copy(extra_layers.pixel(p).begin(), extra_layers.pixel(p).end(), out);
-  }
+  // Planar: the maps' planes, then the extra layers'.
+  std::copy(extra_layers.values().begin(), extra_layers.values().end(),
+            std::copy(maps.values().begin(), maps.values().end(), all.values().begin()));
   options.attributes[kStackAttribute] = description.dump();
   WriteImage(path, all, options);
 }
@@ -95,10 +94,9 @@ Image SelectChannels(const Image& stored, const JsonReader& list) {
     }
   }
   Image selected(stored.width(), stored.height(), names);
-  for (std::size_t p = 0; p < selected.pixel_count(); ++p) {
-    const auto in = stored.pixel(p);
-    const auto out = selected.pixel(p);
-    for (std::size_t c = 0; c < names.size(); ++c) out[c] = in[source_channel[c]];
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const std::span<const float> in = stored.plane(source_channel[c]);
+    std::copy(in.begin(), in.end(), selected.plane(static_cast<int>(c)).begin());
   }
   return selected;
 }

@@ -7,9 +7,10 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
-#include <opencv2/core.hpp>
+#include <vector>
 
 #include "core/error.h"
+#include "core/fft.h"
 
 namespace photomat {
 namespace {
@@ -26,43 +27,57 @@ double Frequency(int k, int n) {
   return 2.0 * std::numbers::pi * signed_k / n;
 }
 
-// Spectra of p and of the row derivative -q (rows run down, y up), complex, one per channel.
+// Half spectra (real transforms: height rows of width / 2 + 1 frequencies) of p and of the row
+// derivative -q (rows run down, y up).
 struct Spectra {
-  cv::Mat p, q_rows;
+  std::vector<std::complex<double>> p, q_rows;
 };
 
-Spectra Transform(const Image& gradients) {
-  const int w = gradients.width(), h = gradients.height();
-  cv::Mat p(h, w, CV_64F), q_rows(h, w, CV_64F);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      p.at<double>(y, x) = gradients.at(x, y, 0);
-      q_rows.at<double>(y, x) = -gradients.at(x, y, 1);
-    }
-  }
-  Spectra spectra;
-  cv::dft(p, spectra.p, cv::DFT_COMPLEX_OUTPUT);
-  cv::dft(q_rows, spectra.q_rows, cv::DFT_COMPLEX_OUTPUT);
+Spectra Transform(const RealFft2d<double>& fft, const Image& gradients) {
+  std::vector<double> p(gradients.plane(0).begin(), gradients.plane(0).end());
+  std::vector<double> q_rows(fft.size());
+  std::transform(gradients.plane(1).begin(), gradients.plane(1).end(), q_rows.begin(),
+                 [](float q) { return -static_cast<double>(q); });
+  Spectra spectra{std::vector<std::complex<double>>(fft.spectrum_size()),
+                  std::vector<std::complex<double>>(fft.spectrum_size())};
+  fft.Forward(p, spectra.p);
+  fft.Forward(q_rows, spectra.q_rows);
   return spectra;
 }
 
-// S(u, v) of Frankot-Chellappa, in row/column frequencies.
-cv::Mat HeightSpectrum(const Spectra& spectra) {
-  const int h = spectra.p.rows, w = spectra.p.cols;
-  cv::Mat s(h, w, CV_64FC2);
-  for (int y = 0; y < h; ++y) {
-    const double v = Frequency(y, h);
-    for (int x = 0; x < w; ++x) {
-      const double u = Frequency(x, w);
-      const double d = u * u + v * v;
-      const auto& pv = spectra.p.at<cv::Vec2d>(y, x);
-      const auto& qv = spectra.q_rows.at<cv::Vec2d>(y, x);
-      const std::complex<double> P(pv[0], pv[1]), Q(qv[0], qv[1]), j(0.0, 1.0);
-      const std::complex<double> S = d == 0.0 ? 0.0 : (-j * u * P - j * v * Q) / d;
-      s.at<cv::Vec2d>(y, x) = {S.real(), S.imag()};
+// Calls visit(u, v, k) with the row and column angular frequencies of every half-spectrum bin k.
+template <typename Visit>
+void ForEachFrequency(const RealFft2d<double>& fft, Visit visit) {
+  const int half = fft.spectrum_width();
+  for (int y = 0; y < fft.height(); ++y) {
+    const double v = Frequency(y, fft.height());
+    for (int x = 0; x < half; ++x) {
+      visit(Frequency(x, fft.width()), v, static_cast<std::size_t>(y) * half + x);
     }
   }
+}
+
+// S(u, v) of Frankot-Chellappa, in row/column frequencies.
+std::vector<std::complex<double>> HeightSpectrum(const RealFft2d<double>& fft,
+                                                 const Spectra& spectra) {
+  std::vector<std::complex<double>> s(fft.spectrum_size());
+  const std::complex<double> j(0.0, 1.0);
+  ForEachFrequency(fft, [&](double u, double v, std::size_t k) {
+    const double d = u * u + v * v;
+    s[k] = d == 0.0 ? 0.0 : (-j * u * spectra.p[k] - j * v * spectra.q_rows[k]) / d;
+  });
   return s;
+}
+
+// The inverse transform of `spectrum`, scaled by 1 / (width * height) and by `sign`, into
+// channel `channel` of `out`.
+void InverseInto(const RealFft2d<double>& fft, std::vector<std::complex<double>> spectrum,
+                 double sign, Image& out, int channel) {
+  std::vector<double> values(fft.size());
+  fft.Inverse(spectrum, values);
+  const double scale = sign / static_cast<double>(fft.size());
+  std::transform(values.begin(), values.end(), out.plane(channel).begin(),
+                 [scale](double value) { return static_cast<float>(value * scale); });
 }
 
 }  // namespace
@@ -95,43 +110,25 @@ Image NormalsFromGradients(const Image& gradients) {
 
 Image IntegrateFrankotChellappa(const Image& gradients) {
   CheckGradients(gradients);
-  cv::Mat height;
-  cv::dft(HeightSpectrum(Transform(gradients)), height,
-          cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
+  const RealFft2d<double> fft(gradients.width(), gradients.height());
   Image out(gradients.width(), gradients.height(), std::vector<std::string>{"height"});
-  for (int y = 0; y < out.height(); ++y) {
-    for (int x = 0; x < out.width(); ++x)
-      out.at(x, y, 0) = static_cast<float>(height.at<double>(y, x));
-  }
+  InverseInto(fft, HeightSpectrum(fft, Transform(fft, gradients)), 1.0, out, 0);
   return out;
 }
 
 Image ProjectToIntegrable(const Image& gradients) {
   CheckGradients(gradients);
-  const cv::Mat s = HeightSpectrum(Transform(gradients));
-  const int h = s.rows, w = s.cols;
-  cv::Mat p_spectrum(h, w, CV_64FC2), q_spectrum(h, w, CV_64FC2);
-  for (int y = 0; y < h; ++y) {
-    const double v = Frequency(y, h);
-    for (int x = 0; x < w; ++x) {
-      const double u = Frequency(x, w);
-      const auto& sv = s.at<cv::Vec2d>(y, x);
-      const std::complex<double> S(sv[0], sv[1]), j(0.0, 1.0);
-      const std::complex<double> P = j * u * S, Q_rows = j * v * S;
-      p_spectrum.at<cv::Vec2d>(y, x) = {P.real(), P.imag()};
-      q_spectrum.at<cv::Vec2d>(y, x) = {Q_rows.real(), Q_rows.imag()};
-    }
-  }
-  cv::Mat p, q_rows;
-  cv::dft(p_spectrum, p, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
-  cv::dft(q_spectrum, q_rows, cv::DFT_INVERSE | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
-  Image out(w, h, std::vector<std::string>{"p", "q"});
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      out.at(x, y, 0) = static_cast<float>(p.at<double>(y, x));
-      out.at(x, y, 1) = static_cast<float>(-q_rows.at<double>(y, x));
-    }
-  }
+  const RealFft2d<double> fft(gradients.width(), gradients.height());
+  const std::vector<std::complex<double>> s = HeightSpectrum(fft, Transform(fft, gradients));
+  std::vector<std::complex<double>> p_spectrum(s.size()), q_spectrum(s.size());
+  const std::complex<double> j(0.0, 1.0);
+  ForEachFrequency(fft, [&](double u, double v, std::size_t k) {
+    p_spectrum[k] = j * u * s[k];
+    q_spectrum[k] = j * v * s[k];
+  });
+  Image out(gradients.width(), gradients.height(), std::vector<std::string>{"p", "q"});
+  InverseInto(fft, std::move(p_spectrum), 1.0, out, 0);
+  InverseInto(fft, std::move(q_spectrum), -1.0, out, 1);
   return out;
 }
 

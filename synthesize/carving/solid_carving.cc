@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/wrap.h"
 #include "synthesize/volume/volume_io.h"
 
 namespace photomat {
@@ -28,7 +29,7 @@ Taps AxisTaps(double at, int length, bool tileable) {
   taps.weight = static_cast<float>(t - base);
   const int low = static_cast<int>(base);
   if (tileable) {
-    taps.low = ((low % length) + length) % length;
+    taps.low = Wrap(low, length);
     taps.high = (taps.low + 1) % length;
   } else {
     taps.low = std::clamp(low, 0, length - 1);
@@ -39,7 +40,7 @@ Taps AxisTaps(double at, int length, bool tileable) {
 
 }  // namespace
 
-CarveMapping PlaceMesh(const TriangleMesh& mesh, const VolumeSize& volume,
+CarveMapping PlaceMesh(const TriangleMesh& mesh, const ImageExtent& volume,
                        const CarvePlacement& placement) {
   if (!(placement.periods > 0.0) || !std::isfinite(placement.periods)) {
     throw Error(fmt::format("the texture periods across the mesh must be positive (got {})",
@@ -52,39 +53,39 @@ CarveMapping PlaceMesh(const TriangleMesh& mesh, const VolumeSize& volume,
   }
   const BoundingBox box = ComputeBoundingBox(mesh);
   const double longest = (box.max - box.min).maxCoeff();
-  const int smallest = std::min({volume.x, volume.y, volume.z});
+  const int smallest = std::min({volume.width, volume.height, volume.depth});
   CarveMapping mapping;
   mapping.scale = longest > 0.0 ? placement.periods * smallest / longest : 1.0;
   mapping.mesh_centre = box.Centre();
-  mapping.volume_centre = 0.5 * Eigen::Vector3d(volume.x, volume.y, volume.z);
+  mapping.volume_centre = 0.5 * Eigen::Vector3d(volume.width, volume.height, volume.depth);
   return mapping;
 }
 
-void SampleTrilinear(const Volume& volume, const Eigen::Vector3d& at, bool tileable,
+void SampleTrilinear(const Image& volume, const Eigen::Vector3d& at, bool tileable,
                      std::span<float> out) {
-  const VolumeSize& size = volume.size();
-  const Taps x = AxisTaps(at.x(), size.x, tileable);
-  const Taps y = AxisTaps(at.y(), size.y, tileable);
-  const Taps z = AxisTaps(at.z(), size.z, tileable);
+  const ImageExtent& size = volume.extent();
+  const Taps x = AxisTaps(at.x(), size.width, tileable);
+  const Taps y = AxisTaps(at.y(), size.height, tileable);
+  const Taps z = AxisTaps(at.z(), size.depth, tileable);
   std::fill(out.begin(), out.end(), 0.0f);
   for (int corner = 0; corner < 8; ++corner) {
     const bool ux = corner & 1, uy = corner & 2, uz = corner & 4;
     const float weight = (ux ? x.weight : 1.0f - x.weight) * (uy ? y.weight : 1.0f - y.weight) *
                          (uz ? z.weight : 1.0f - z.weight);
     if (weight == 0.0f) continue;
-    const auto voxel = volume.voxel(ux ? x.high : x.low, uy ? y.high : y.low, uz ? z.high : z.low);
+    const auto voxel = volume.pixel(ux ? x.high : x.low, uy ? y.high : y.low, uz ? z.high : z.low);
     for (std::size_t c = 0; c < out.size(); ++c) out[c] += weight * voxel[c];
   }
 }
 
-CarvedMesh CarveMesh(const TriangleMesh& mesh, const Volume& volume, const CarveOptions& options,
+CarvedMesh CarveMesh(const TriangleMesh& mesh, const Image& volume, const CarveOptions& options,
                      Progress* progress) {
   if (volume.empty()) throw Error("cannot carve out of an empty volume");
   ValidateMesh(mesh, "the mesh to carve");
   NullProgress null_progress;
   Progress& report = OrNull(progress, null_progress);
   CarvedMesh carved;
-  carved.mapping = PlaceMesh(mesh, volume.size(), options.placement);
+  carved.mapping = PlaceMesh(mesh, volume.extent(), options.placement);
   // Subdivision halves the mean edge at each level.
   const double mean_edge = MeanEdgeLength(mesh) * carved.mapping.scale;
   std::size_t triangles = static_cast<std::size_t>(mesh.triangle_count());
@@ -117,7 +118,7 @@ CarvedMesh CarveMesh(const TriangleMesh& mesh, const Volume& volume, const Carve
   return carved;
 }
 
-std::vector<Eigen::Vector3f> CarvedColours(const CarvedMesh& carved, const Volume& volume,
+std::vector<Eigen::Vector3f> CarvedColours(const CarvedMesh& carved, const Image& volume,
                                            bool normalise) {
   if (carved.channels != volume.channels()) {
     throw Error(fmt::format("the carved mesh has {} channels, the volume {}", carved.channels,

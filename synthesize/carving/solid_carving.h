@@ -51,12 +51,12 @@ struct CarveMapping {
 };
 
 // Throws Error for a non-positive `periods`, or periods above 1 for a volume that does not tile.
-CarveMapping PlaceMesh(const TriangleMesh& mesh, const VolumeSize& volume,
+CarveMapping PlaceMesh(const TriangleMesh& mesh, const ImageExtent& volume,
                        const CarvePlacement& placement);
 
 // Every channel of `volume` at continuous volume coordinates `at` (voxel units), trilinearly
 // interpolated between voxel centres, wrapping (tileable) or clamped at the faces.
-void SampleTrilinear(const Volume& volume, const Eigen::Vector3d& at, bool tileable,
+void SampleTrilinear(const Image& volume, const Eigen::Vector3d& at, bool tileable,
                      std::span<float> out);
 
 struct CarvedMesh {
@@ -75,14 +75,14 @@ struct CarvedMesh {
 
 // Carves `mesh` out of `volume`. Throws Error for an empty volume, an invalid mesh (ValidateMesh)
 // or a bad placement.
-CarvedMesh CarveMesh(const TriangleMesh& mesh, const Volume& volume, const CarveOptions& options,
+CarvedMesh CarveMesh(const TriangleMesh& mesh, const Image& volume, const CarveOptions& options,
                      Progress* progress = nullptr);
 
 // Linear RGB colours to show: the volume's R, G, B channels when it names them, else its first
 // three, else its first as grey (volume_io.h's DisplayChannels); with `normalise` the shown
 // channels' joint range over the vertices is stretched over [0, 1] (for non-colour channels:
 // normals, PTM terms), as for slice pictures; otherwise colours are clamped to [0, 1].
-std::vector<Eigen::Vector3f> CarvedColours(const CarvedMesh& carved, const Volume& volume,
+std::vector<Eigen::Vector3f> CarvedColours(const CarvedMesh& carved, const Image& volume,
                                            bool normalise);
 
 }  // namespace photomat

@@ -18,11 +18,11 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 // A volume whose three channels are the continuous coordinates of each voxel centre.
-Volume CoordinateVolume(VolumeSize size) {
-  Volume volume(size, std::vector<std::string>{"x", "y", "z"});
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+Image CoordinateVolume(ImageExtent size) {
+  Image volume(size, std::vector<std::string>{"x", "y", "z"});
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         volume.at(x, y, z, 0) = static_cast<float>(x) + 0.5f;
         volume.at(x, y, z, 1) = static_cast<float>(y) + 0.5f;
         volume.at(x, y, z, 2) = static_cast<float>(z) + 0.5f;
@@ -38,8 +38,8 @@ double Wave(const Eigen::Vector3d& p, int n) {
          0.1 * std::sin(kTwoPi * (p.z() + p.x()) / n);
 }
 
-Volume WaveVolume(int n) {
-  Volume volume(VolumeSize::Cube(n), std::vector<std::string>{"R", "G", "B"});
+Image WaveVolume(int n) {
+  Image volume(ImageExtent::Cube(n), std::vector<std::string>{"R", "G", "B"});
   for (int z = 0; z < n; ++z) {
     for (int y = 0; y < n; ++y) {
       for (int x = 0; x < n; ++x) {
@@ -52,8 +52,8 @@ Volume WaveVolume(int n) {
 }
 
 TEST(SolidCarvingTest, TrilinearSamplingIsExactOnARampAndWrapsWhenTileable) {
-  const VolumeSize size{8, 10, 12};
-  const Volume ramp = CoordinateVolume(size);
+  const ImageExtent size{8, 10, 12};
+  const Image ramp = CoordinateVolume(size);
   std::vector<float> value(3);
   for (const Eigen::Vector3d& at : {Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3d(3.25, 7.9, 2.0),
                                     Eigen::Vector3d(7.5, 9.5, 11.5)}) {
@@ -92,18 +92,18 @@ TEST(SolidCarvingTest, MidpointSubdivisionKeepsTheSurface) {
 
 TEST(SolidCarvingTest, PlacementCentresTheMeshAndScalesItsLongestSide) {
   const TriangleMesh torus = MakeTorus(2.0, 0.5, 32, 12);  // 5 x 5 x 1 around the origin
-  const CarveMapping mapping = PlaceMesh(torus, VolumeSize{40, 50, 60}, {});
+  const CarveMapping mapping = PlaceMesh(torus, ImageExtent{40, 50, 60}, {});
   EXPECT_NEAR(mapping.scale, 40.0 / 5.0, 1e-9);
   EXPECT_TRUE(mapping.ToVolume(Eigen::Vector3d::Zero()).isApprox(Eigen::Vector3d(20, 25, 30)));
   EXPECT_NEAR(mapping.ToVolume(Eigen::Vector3d(2.5, 0, 0)).x(), 40.0, 1e-9);
-  EXPECT_NEAR(PlaceMesh(torus, VolumeSize::Cube(40), {.periods = 3.0}).scale, 24.0, 1e-9);
-  EXPECT_THROW(PlaceMesh(torus, VolumeSize::Cube(40), {.periods = 0.0}), Error);
-  EXPECT_THROW(PlaceMesh(torus, VolumeSize::Cube(40), {.periods = 2.0, .tileable = false}), Error);
+  EXPECT_NEAR(PlaceMesh(torus, ImageExtent::Cube(40), {.periods = 3.0}).scale, 24.0, 1e-9);
+  EXPECT_THROW(PlaceMesh(torus, ImageExtent::Cube(40), {.periods = 0.0}), Error);
+  EXPECT_THROW(PlaceMesh(torus, ImageExtent::Cube(40), {.periods = 2.0, .tileable = false}), Error);
 }
 
 TEST(SolidCarvingTest, CarvedSphereAndTorusCarryTheVolumeAtTheirSurface) {
   constexpr int n = 32;
-  const Volume volume = WaveVolume(n);
+  const Image volume = WaveVolume(n);
   for (const TriangleMesh& mesh : {MakeIcosphere(1.0, 2), MakeTorus(2.0, 0.7, 24, 10)}) {
     for (double periods : {1.0, 2.5}) {
       CarveOptions options;
@@ -129,7 +129,7 @@ TEST(SolidCarvingTest, CarvedSphereAndTorusCarryTheVolumeAtTheirSurface) {
 }
 
 TEST(SolidCarvingTest, WritesColouredMeshesAndPreviewsOfAProceduralSolid) {
-  const Volume marble = MakeProceduralExemplar(ProceduralPattern::kMarble, 32, 4);
+  const Image marble = MakeProceduralExemplar(ProceduralPattern::kMarble, 32, 4);
   const CarvedMesh carved = CarveMesh(MakeTorus(2.0, 0.8, 32, 12), marble, {});
   const std::vector<Eigen::Vector3f> colours = CarvedColours(carved, marble, false);
   ASSERT_EQ(colours.size(), static_cast<std::size_t>(carved.mesh.vertex_count()));
@@ -158,10 +158,10 @@ TEST(SolidCarvingTest, WritesColouredMeshesAndPreviewsOfAProceduralSolid) {
 }
 
 TEST(SolidCarvingTest, NormalisedColoursOfNonColourChannels) {
-  Volume normals(VolumeSize::Cube(8), std::vector<std::string>{"normal.X", "normal.Y"});
-  for (std::size_t i = 0; i < normals.voxel_count(); ++i) {
-    normals.voxel(i)[0] = -1.0f + 2.0f * static_cast<float>(i % 8) / 7.0f;
-    normals.voxel(i)[1] = 0.0f;
+  Image normals(ImageExtent::Cube(8), std::vector<std::string>{"normal.X", "normal.Y"});
+  for (std::size_t i = 0; i < normals.pixel_count(); ++i) {
+    normals.pixel(i)[0] = -1.0f + 2.0f * static_cast<float>(i % 8) / 7.0f;
+    normals.pixel(i)[1] = 0.0f;
   }
   const CarvedMesh carved = CarveMesh(MakeIcosphere(1.0, 2), normals, {});
   const auto colours = CarvedColours(carved, normals, true);
@@ -173,14 +173,14 @@ TEST(SolidCarvingTest, NormalisedColoursOfNonColourChannels) {
   }
   EXPECT_EQ(low, 0.0f);
   EXPECT_EQ(high, 1.0f);
-  EXPECT_THROW(CarveMesh(MakeIcosphere(1.0, 1), Volume(), {}), Error);
+  EXPECT_THROW(CarveMesh(MakeIcosphere(1.0, 1), Image(), {}), Error);
 }
 
 TEST(SolidCarvingTest, CarvesSpot) {
   PHOTOMAT_TEST_DATA_OR_SKIP(file, "meshes/spot.obj");
   const TriangleMesh spot = ReadMesh(file);
   ASSERT_EQ(spot.vertex_count(), 2930);
-  const Volume wood = MakeProceduralExemplar(ProceduralPattern::kWood, 64, 2);
+  const Image wood = MakeProceduralExemplar(ProceduralPattern::kWood, 64, 2);
   const CarvedMesh carved = CarveMesh(spot, wood, {});
   // spot's mean edge spans 1.78 voxels of a 64^3 block (3.6 of a 128^3 one): one level of
   // subdivision brings it under a voxel, 11,714 vertices instead of 2,930.

@@ -76,14 +76,7 @@ TriangleMesh LoopSubdivideOnce(const TriangleMesh& mesh) {
     const auto it = std::lower_bound(edge_index.begin(), edge_index.end(), std::make_pair(key, -1));
     return it->second;
   };
-  out.triangles.reserve(mesh.triangles.size() * 4);
-  for (const auto& t : mesh.triangles) {
-    const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
-    out.triangles.push_back({t[0], ab, ca});
-    out.triangles.push_back({t[1], bc, ab});
-    out.triangles.push_back({t[2], ca, bc});
-    out.triangles.push_back({ab, bc, ca});
-  }
+  out.triangles = SplitTriangles(mesh.triangles, midpoint);
   return out;
 }
 

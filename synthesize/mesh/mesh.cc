@@ -187,19 +187,27 @@ TriangleMesh SplitMidpoints(const TriangleMesh& mesh) {
     if (inserted) out.positions.push_back(0.5 * (mesh.positions[a] + mesh.positions[b]));
     return it->second;
   };
-  for (const auto& t : mesh.triangles) {
-    const int ab = middle(t[0], t[1]);
-    const int bc = middle(t[1], t[2]);
-    const int ca = middle(t[2], t[0]);
-    out.triangles.push_back({t[0], ab, ca});
-    out.triangles.push_back({t[1], bc, ab});
-    out.triangles.push_back({t[2], ca, bc});
-    out.triangles.push_back({ab, bc, ca});
-  }
+  out.triangles = SplitTriangles(mesh.triangles, middle);
   return out;
 }
 
 }  // namespace
+
+std::vector<std::array<int, 3>> SplitTriangles(const std::vector<std::array<int, 3>>& triangles,
+                                               const std::function<int(int, int)>& edge_vertex) {
+  std::vector<std::array<int, 3>> out;
+  out.reserve(triangles.size() * 4);
+  for (const auto& t : triangles) {
+    const int ab = edge_vertex(t[0], t[1]);
+    const int bc = edge_vertex(t[1], t[2]);
+    const int ca = edge_vertex(t[2], t[0]);
+    out.push_back({t[0], ab, ca});
+    out.push_back({t[1], bc, ab});
+    out.push_back({t[2], ca, bc});
+    out.push_back({ab, bc, ca});
+  }
+  return out;
+}
 
 TriangleMesh SubdivideMidpoints(const TriangleMesh& mesh, int levels) {
   TriangleMesh current = mesh;

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,13 @@ enum class MeshNormalization {
 void NormalizeMesh(TriangleMesh& mesh, MeshNormalization normalization, double size);
 // "bbox" or "area"; Error otherwise.
 MeshNormalization ParseMeshNormalization(const std::string& text);
+
+// The four triangles each of `triangles` splits into at the new vertices of its edges,
+// edge_vertex(a, b) for the edge from a to b (called for the edges a-b, b-c, c-a of each triangle
+// in turn): the three corners, then the middle one, all oriented as the triangle. The topology of
+// midpoint and Loop subdivision; they differ in where the vertices go.
+std::vector<std::array<int, 3>> SplitTriangles(const std::vector<std::array<int, 3>>& triangles,
+                                               const std::function<int(int, int)>& edge_vertex);
 
 // Splits every triangle into four at its edge midpoints, `levels` times (a midpoint shared by two
 // triangles is one vertex). Positions of existing vertices are kept (they stay the first

@@ -16,6 +16,7 @@
 #include "core/atomic_file.h"
 #include "core/colour.h"
 #include "core/error.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 namespace {
@@ -147,9 +148,7 @@ std::unique_ptr<aiScene> MakeScene(const TriangleMesh& mesh,
 
 void WriteMesh(const std::filesystem::path& path, const TriangleMesh& mesh,
                std::span<const Eigen::Vector3f> linear_colours) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = LowerExtension(path);
   std::string format;
   if (extension == ".ply") {
     // ASCII: assimp 5.2's binary PLY exporter writes colours as floats under a uchar header.

@@ -19,28 +19,27 @@ constexpr std::size_t kGroups = 8;
 
 using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-int Wrap(int value, int length) {
-  const int r = value % length;
-  return r < 0 ? r + length : r;
-}
-
 // The exemplar's channels reduced to at most `max_channels` by PCA (identity when already few).
-void FitChannelReduction(const Volume& exemplar, int max_channels, AppearanceSpace& space) {
+void FitChannelReduction(const Image& exemplar, int max_channels, AppearanceSpace& space) {
   const int channels = exemplar.channels();
   if (channels <= max_channels) {
     space.channel_mean = Eigen::VectorXf::Zero(channels);
     space.channel_basis = Eigen::MatrixXf::Identity(channels, channels);
     return;
   }
+  // The voxels as a voxels x channels matrix (its columns are the planes), in blocks of rows.
+  const Eigen::Map<const Eigen::MatrixXf> voxels(
+      exemplar.values().data(), static_cast<Eigen::Index>(exemplar.pixel_count()), channels);
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(channels);
   Eigen::MatrixXd outer = Eigen::MatrixXd::Zero(channels, channels);
-  for (std::size_t i = 0; i < exemplar.voxel_count(); ++i) {
-    const Eigen::Map<const Eigen::VectorXf> v(exemplar.voxel(i).data(), channels);
-    const Eigen::VectorXd x = v.cast<double>();
-    sum += x;
-    outer.noalias() += x * x.transpose();
+  for (Eigen::Index first = 0; first < voxels.rows(); first += kBlock) {
+    const Eigen::MatrixXd x =
+        voxels.middleRows(first, std::min<Eigen::Index>(kBlock, voxels.rows() - first))
+            .cast<double>();
+    sum += x.colwise().sum().transpose();
+    outer.noalias() += x.transpose() * x;
   }
-  const double count = static_cast<double>(exemplar.voxel_count());
+  const double count = static_cast<double>(exemplar.pixel_count());
   const Eigen::VectorXd mean = sum / count;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(outer / count -
                                                               mean * mean.transpose());
@@ -50,10 +49,11 @@ void FitChannelReduction(const Volume& exemplar, int max_channels, AppearanceSpa
 }
 
 // voxel_count x reduced channels.
-RowMatrixXf ReducedChannels(const Volume& volume, const AppearanceSpace& space) {
+RowMatrixXf ReducedChannels(const Image& volume, const AppearanceSpace& space) {
   const int channels = volume.channels();
-  const Eigen::Map<const RowMatrixXf> values(
-      volume.values().data(), static_cast<Eigen::Index>(volume.voxel_count()), channels);
+  // Planar storage: the voxels x channels matrix is column-major.
+  const Eigen::Map<const Eigen::MatrixXf> values(
+      volume.values().data(), static_cast<Eigen::Index>(volume.pixel_count()), channels);
   if (space.channel_basis.isIdentity(0.0f)) return values;
   return (values.rowwise() - space.channel_mean.transpose()) * space.channel_basis;
 }
@@ -65,17 +65,18 @@ int Edge(int value, int length, bool periodic) {
 
 // Writes the neighbourhood of (x, y, z) of `reduced` (a volume of `size`), samples `spacing`
 // apart, into `out`, z outermost, then y, then x, channels innermost.
-void Gather(const RowMatrixXf& reduced, const VolumeSize& size, int x, int y, int z, int side,
+void Gather(const RowMatrixXf& reduced, const ImageExtent& size, int x, int y, int z, int side,
             int spacing, bool periodic, float* out) {
   const int half = side / 2;
   const int channels = static_cast<int>(reduced.cols());
   for (int dz = -half; dz <= half; ++dz) {
-    const int zz = Edge(z + spacing * dz, size.z, periodic);
+    const int zz = Edge(z + spacing * dz, size.depth, periodic);
     for (int dy = -half; dy <= half; ++dy) {
-      const int yy = Edge(y + spacing * dy, size.y, periodic);
+      const int yy = Edge(y + spacing * dy, size.height, periodic);
       for (int dx = -half; dx <= half; ++dx) {
-        const int xx = Edge(x + spacing * dx, size.x, periodic);
-        const std::size_t index = (static_cast<std::size_t>(zz) * size.y + yy) * size.x + xx;
+        const int xx = Edge(x + spacing * dx, size.width, periodic);
+        const std::size_t index =
+            (static_cast<std::size_t>(zz) * size.height + yy) * size.width + xx;
         const float* source = reduced.data() + index * static_cast<std::size_t>(channels);
         out = std::copy(source, source + channels, out);
       }
@@ -87,9 +88,9 @@ void Gather(const RowMatrixXf& reduced, const VolumeSize& size, int x, int y, in
 
 std::vector<std::size_t> ExemplarDomain::ValidIndices() const {
   std::vector<std::size_t> indices;
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         if (Contains(x, y, z)) indices.push_back(Index(x, y, z));
       }
     }
@@ -97,22 +98,23 @@ std::vector<std::size_t> ExemplarDomain::ValidIndices() const {
   return indices;
 }
 
-void AppearanceSpace::Project(const Volume& volume, int x, int y, int z,
+void AppearanceSpace::Project(const Image& volume, int x, int y, int z,
                               std::span<float> out) const {
   const int channels = volume.channels();
   const int side = neighbourhood;
   const int half = side / 2;
-  const VolumeSize& size = volume.size();
+  const ImageExtent& size = volume.extent();
   Eigen::VectorXf feature(feature_mean.size());
   Eigen::Index k = 0;
   Eigen::VectorXf reduced(reduced_channels());
+  Eigen::VectorXf v(channels);
   for (int dz = -half; dz <= half; ++dz) {
     for (int dy = -half; dy <= half; ++dy) {
       for (int dx = -half; dx <= half; ++dx) {
         const auto voxel =
-            volume.voxel(Wrap(x + spacing * dx, size.x), Wrap(y + spacing * dy, size.y),
-                         Wrap(z + spacing * dz, size.z));
-        const Eigen::Map<const Eigen::VectorXf> v(voxel.data(), channels);
+            volume.pixel(Wrap(x + spacing * dx, size.width), Wrap(y + spacing * dy, size.height),
+                         Wrap(z + spacing * dz, size.depth));
+        std::copy(voxel.begin(), voxel.end(), v.data());
         reduced = channel_basis.transpose() * (v - channel_mean);
         feature.segment(k, reduced.size()) = reduced;
         k += reduced.size();
@@ -123,7 +125,7 @@ void AppearanceSpace::Project(const Volume& volume, int x, int y, int z,
   std::copy(projected.data(), projected.data() + dimensions, out.begin());
 }
 
-AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceOptions& options,
+AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOptions& options,
                                        Progress* progress) {
   NullProgress null_progress;
   Progress& report = OrNull(progress, null_progress);
@@ -137,14 +139,14 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
   AppearanceSpace space;
   space.neighbourhood = options.neighbourhood;
   space.spacing = options.spacing;
-  space.domain.size = exemplar.size();
+  space.domain.size = exemplar.extent();
   space.domain.periodic = options.boundary == ExemplarBoundary::kPeriodic;
   space.domain.border = space.domain.periodic ? 0 : options.neighbourhood / 2;
   const auto extent = space.domain.extent();
-  if (std::min({exemplar.size().x, exemplar.size().y, exemplar.size().z}) < options.neighbourhood ||
+  if (std::min({exemplar.width(), exemplar.height(), exemplar.depth()}) < options.neighbourhood ||
       std::min({extent[0], extent[1], extent[2]}) < 1) {
     throw Error(fmt::format("a {} exemplar is too small for {}^3 neighbourhoods{}",
-                            ToString(exemplar.size()), options.neighbourhood,
+                            ToString(exemplar.extent()), options.neighbourhood,
                             space.domain.periodic ? "" : " inside its border"));
   }
   FitChannelReduction(exemplar, options.max_channels, space);
@@ -175,7 +177,7 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
       for (std::size_t i = begin; i < end; ++i) {
         const auto [x, y, z] = space.domain.Coordinates(samples[i]);
         float* row = block.row(static_cast<Eigen::Index>(i - begin)).data();
-        Gather(reduced, exemplar.size(), x, y, z, side, options.spacing, space.domain.periodic,
+        Gather(reduced, exemplar.extent(), x, y, z, side, options.spacing, space.domain.periodic,
                row);
         for (Eigen::Index f = 0; f < features; ++f) row[f] -= centre[f % reduced.cols()];
       }
@@ -213,7 +215,7 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
 
   // Projection of every valid voxel.
   const std::size_t d = static_cast<std::size_t>(space.dimensions);
-  space.values.assign(exemplar.voxel_count() * d, 0.0f);
+  space.values.assign(exemplar.pixel_count() * d, 0.0f);
   const std::size_t projection_blocks = (valid.size() + kBlock - 1) / kBlock;
   tbb::parallel_for(std::size_t{0}, projection_blocks, [&](std::size_t b) {
     const std::size_t begin = b * kBlock, end = std::min(valid.size(), begin + kBlock);
@@ -221,7 +223,7 @@ AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceO
     block.setZero();
     for (std::size_t i = begin; i < end; ++i) {
       const auto [x, y, z] = space.domain.Coordinates(valid[i]);
-      Gather(reduced, exemplar.size(), x, y, z, side, options.spacing, space.domain.periodic,
+      Gather(reduced, exemplar.extent(), x, y, z, side, options.spacing, space.domain.periodic,
              block.row(static_cast<Eigen::Index>(i - begin)).data());
     }
     const RowMatrixXf projected =

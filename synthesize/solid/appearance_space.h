@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/progress.h"
+#include "core/wrap.h"
 #include "synthesize/volume/volume.h"
 
 namespace photomat {
@@ -19,18 +20,17 @@ enum class ExemplarBoundary {
 };
 
 struct ExemplarDomain {
-  VolumeSize size;  // the exemplar array
+  ImageExtent size;  // the exemplar array
   bool periodic = true;
   int border = 0;  // voxels left out on each face (0 when periodic)
 
   int origin() const { return border; }
   std::array<int, 3> extent() const {
-    return {size.x - 2 * border, size.y - 2 * border, size.z - 2 * border};
+    return {size.width - 2 * border, size.height - 2 * border, size.depth - 2 * border};
   }
+  // `value` wrapped into the valid range of `axis` (the interior box, or the whole array).
   int Wrap(int value, int axis) const {
-    const int length = extent()[static_cast<std::size_t>(axis)];
-    const int offset = (value - border) % length;
-    return border + (offset < 0 ? offset + length : offset);
+    return border + photomat::Wrap(value - border, extent()[static_cast<std::size_t>(axis)]);
   }
   bool Contains(int x, int y, int z) const {
     const auto e = extent();
@@ -38,12 +38,12 @@ struct ExemplarDomain {
            z < border + e[2];
   }
   std::size_t Index(int x, int y, int z) const {
-    return (static_cast<std::size_t>(z) * size.y + y) * size.x + x;
+    return (static_cast<std::size_t>(z) * size.height + y) * size.width + x;
   }
   std::array<int, 3> Coordinates(std::size_t index) const {
-    const std::size_t plane = static_cast<std::size_t>(size.x) * size.y;
-    return {static_cast<int>(index % size.x), static_cast<int>((index / size.x) % size.y),
-            static_cast<int>(index / plane)};
+    const std::size_t plane = static_cast<std::size_t>(size.width) * size.height;
+    return {static_cast<int>(index % size.width),
+            static_cast<int>((index / size.width) % size.height), static_cast<int>(index / plane)};
   }
   // Linear indices of the valid voxels, ascending.
   std::vector<std::size_t> ValidIndices() const;
@@ -96,12 +96,12 @@ struct AppearanceSpace {
   int reduced_channels() const { return static_cast<int>(channel_basis.cols()); }
   // The d-vector of the neighbourhood of (x, y, z) in any volume with the exemplar's channels,
   // samples `spacing` apart, wrapping around that volume (synthesised solids are toroidal).
-  void Project(const Volume& volume, int x, int y, int z, std::span<float> out) const;
+  void Project(const Image& volume, int x, int y, int z, std::span<float> out) const;
 };
 
 // Throws Error when the exemplar is too small for the neighbourhood (and, in interior mode,
 // leaves no valid voxel) or the options are out of range.
-AppearanceSpace ComputeAppearanceSpace(const Volume& exemplar, const AppearanceOptions& options,
+AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOptions& options,
                                        Progress* progress = nullptr);
 
 }  // namespace photomat

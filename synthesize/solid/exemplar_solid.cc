@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/wrap.h"
 #include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
@@ -29,11 +30,6 @@ constexpr std::array<Int3, kDiagonals> kDiagonal = {{{-1, -1, -1},
                                                      {1, 1, 1}}};
 
 int Round(float value) { return static_cast<int>(std::floor(value + 0.5f)); }
-
-int WrapInt(int value, int length) {
-  const int r = value % length;
-  return r < 0 ? r + length : r;
-}
 
 // The warped neighbourhood of one voxel (spec sections 4.4 and 5.3). Output-space offsets:
 // neighbour[i] = round(phi(D_i)) and predictor[i][m] = round(phi(D_i) + phi(M_m D_i)), m = 0 the
@@ -175,22 +171,22 @@ class HistogramControl {
  public:
   HistogramControl() = default;
   // The exemplar's own channels (the per-channel histograms users compare), valid voxels only.
-  HistogramControl(const Volume& exemplar, const ExemplarDomain& domain, double first_step)
+  HistogramControl(const Image& exemplar, const ExemplarDomain& domain, double first_step)
       : channels_(static_cast<std::size_t>(exemplar.channels())), first_step_(first_step) {
     const std::vector<std::size_t> valid = domain.ValidIndices();
-    bins_.assign(exemplar.voxel_count() * channels_, 0);
+    bins_.assign(exemplar.pixel_count() * channels_, 0);
     target_.assign(channels_ * kHistogramBins, 0.0);
     log_prices_.assign(target_.size(), 0.0f);
     for (std::size_t c = 0; c < channels_; ++c) {
       float low = std::numeric_limits<float>::max(), high = std::numeric_limits<float>::lowest();
       for (std::size_t u : valid) {
-        low = std::min(low, exemplar.voxel(u)[c]);
-        high = std::max(high, exemplar.voxel(u)[c]);
+        low = std::min(low, exemplar.pixel(u)[c]);
+        high = std::max(high, exemplar.pixel(u)[c]);
       }
       const float range = high > low ? high - low : 1.0f;
       for (std::size_t u : valid) {
         const int bin =
-            std::clamp(static_cast<int>((exemplar.voxel(u)[c] - low) / range * kHistogramBins), 0,
+            std::clamp(static_cast<int>((exemplar.pixel(u)[c] - low) / range * kHistogramBins), 0,
                        kHistogramBins - 1);
         bins_[u * channels_ + c] = static_cast<std::uint8_t>(bin);
         target_[Slot(c, static_cast<std::size_t>(bin))] += 1.0 / static_cast<double>(valid.size());
@@ -357,7 +353,7 @@ class OccupancyWeights {
 
 class Synthesizer {
  public:
-  Synthesizer(const Volume& exemplar, const PreparedExemplar& prepared,
+  Synthesizer(const Image& exemplar, const PreparedExemplar& prepared,
               const ExemplarSolidOptions& options)
       : exemplar_(exemplar),
         prepared_(prepared),
@@ -375,9 +371,9 @@ class Synthesizer {
   }
 
   ExemplarSolidResult Run(Progress& report) {
-    const VolumeSize& size = options_.size;
+    const ImageExtent& size = options_.size;
     int levels = 0;
-    while ((1 << levels) < std::max({size.x, size.y, size.z})) ++levels;
+    while ((1 << levels) < std::max({size.width, size.height, size.depth})) ++levels;
     std::vector<FrameField> fields;
     if (options_.field) fields = FieldPyramid(levels);
 
@@ -415,7 +411,7 @@ class Synthesizer {
   std::vector<FrameField> FieldPyramid(int levels) const {
     std::vector<FrameField> fields(static_cast<std::size_t>(levels) + 1);
     fields[static_cast<std::size_t>(levels)] =
-        options_.field->Resampled(VolumeSize::Cube(1 << levels));
+        options_.field->Resampled(ImageExtent::Cube(1 << levels));
     for (int level = levels - 1; level >= 0; --level) {
       fields[static_cast<std::size_t>(level)] =
           fields[static_cast<std::size_t>(level) + 1].Downsampled();
@@ -498,7 +494,7 @@ class Synthesizer {
 
   // N_E(u) = concat over the diagonals D of V~[u + h D], for every valid voxel u.
   std::vector<float> ExemplarNeighbourhoods(int spacing) const {
-    std::vector<float> result(domain_.size.voxel_count() * kDiagonals * d_, 0.0f);
+    std::vector<float> result(domain_.size.pixel_count() * kDiagonals * d_, 0.0f);
     const std::vector<std::size_t> valid = domain_.ValidIndices();
     tbb::parallel_for(std::size_t{0}, valid.size(), [&](std::size_t i) {
       const auto u = domain_.Coordinates(valid[i]);
@@ -558,9 +554,8 @@ class Synthesizer {
 
   const float* At(const std::vector<float>& coordinates, int side, const Int3& p,
                   const Int3& offset) const {
-    return &coordinates[3 * Index(side, WrapInt(p[0] + offset[0], side),
-                                  WrapInt(p[1] + offset[1], side),
-                                  WrapInt(p[2] + offset[2], side))];
+    return &coordinates[3 * Index(side, Wrap(p[0] + offset[0], side), Wrap(p[1] + offset[1], side),
+                                  Wrap(p[2] + offset[2], side))];
   }
 
   // The candidates of the voxels `members`, their distances and costs.
@@ -650,19 +645,19 @@ class Synthesizer {
   }
 
   void Output(const std::vector<float>& coordinates, int side, ExemplarSolidResult& result) const {
-    const VolumeSize& size = options_.size;
-    result.volume = Volume(size, exemplar_.channels());
+    const ImageExtent& size = options_.size;
+    result.volume = Image(size, exemplar_.channels());
     if (!exemplar_.channel_names().empty()) {
       result.volume.set_channel_names(exemplar_.channel_names());
     }
     result.coordinates =
-        Volume(size, std::vector<std::string>{"exemplar.x", "exemplar.y", "exemplar.z"});
-    tbb::parallel_for(0, size.z, [&](int z) {
-      for (int y = 0; y < size.y; ++y) {
-        for (int x = 0; x < size.x; ++x) {
+        Image(size, std::vector<std::string>{"exemplar.x", "exemplar.y", "exemplar.z"});
+    tbb::parallel_for(0, size.depth, [&](int z) {
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
           const std::size_t u = Lookup(&coordinates[3 * Index(side, x, y, z)]);
-          const auto source = exemplar_.voxel(u);
-          std::copy(source.begin(), source.end(), result.volume.voxel(x, y, z).begin());
+          const auto source = exemplar_.pixel(u);
+          std::copy(source.begin(), source.end(), result.volume.pixel(x, y, z).begin());
           const auto c = domain_.Coordinates(u);
           for (int axis = 0; axis < 3; ++axis) {
             result.coordinates.at(x, y, z, axis) =
@@ -673,7 +668,7 @@ class Synthesizer {
     });
   }
 
-  const Volume& exemplar_;
+  const Image& exemplar_;
   const PreparedExemplar& prepared_;
   const AppearanceSpace* appearance_;  // of the level being corrected
   const SimilaritySet* similarity_;
@@ -689,11 +684,10 @@ class Synthesizer {
 
 }  // namespace
 
-ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
-                                            const PreparedExemplar& prepared,
+ExemplarSolidResult SynthesizeExemplarSolid(const Image& exemplar, const PreparedExemplar& prepared,
                                             const ExemplarSolidOptions& options,
                                             Progress* progress) {
-  if (options.size.x < 1 || options.size.y < 1 || options.size.z < 1) {
+  if (options.size.width < 1 || options.size.height < 1 || options.size.depth < 1) {
     throw Error(fmt::format("invalid output size {}", ToString(options.size)));
   }
   if (!(options.jitter >= 0.0) || options.correction_passes < 0 ||
@@ -701,11 +695,11 @@ ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
     throw Error("jitter, correction passes, histogram and occupancy matching must not be negative");
   }
   const auto fits = [&](const AppearanceSpace& appearance, const SimilaritySet& similarity) {
-    return appearance.domain.size == exemplar.size() &&
+    return appearance.domain.size == exemplar.extent() &&
            appearance.domain.border == prepared.appearance.domain.border &&
            appearance.dimensions == prepared.appearance.dimensions &&
            similarity.indices.size() ==
-               exemplar.voxel_count() * static_cast<std::size_t>(similarity.k);
+               exemplar.pixel_count() * static_cast<std::size_t>(similarity.k);
   };
   bool consistent = fits(prepared.appearance, prepared.similarity);
   for (const PreparedLevel& level : prepared.stack) {
@@ -719,17 +713,17 @@ ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
   return synthesizer.Run(OrNull(progress, null_progress));
 }
 
-ExemplarSolidResult RandomCoordinateSolid(const Volume& exemplar, const ExemplarDomain& domain,
-                                          VolumeSize size, std::uint64_t seed) {
+ExemplarSolidResult RandomCoordinateSolid(const Image& exemplar, const ExemplarDomain& domain,
+                                          ImageExtent size, std::uint64_t seed) {
   ExemplarSolidResult result;
-  result.volume = Volume(size, exemplar.channels());
+  result.volume = Image(size, exemplar.channels());
   if (!exemplar.channel_names().empty()) result.volume.set_channel_names(exemplar.channel_names());
   result.coordinates =
-      Volume(size, std::vector<std::string>{"exemplar.x", "exemplar.y", "exemplar.z"});
+      Image(size, std::vector<std::string>{"exemplar.x", "exemplar.y", "exemplar.z"});
   const auto extent = domain.extent();
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         Int3 u;
         for (std::size_t axis = 0; axis < 3; ++axis) {
           const std::uint64_t h = HashVoxel(seed, 100 + axis, x, y, z);
@@ -737,8 +731,8 @@ ExemplarSolidResult RandomCoordinateSolid(const Volume& exemplar, const Exemplar
               domain.origin() + static_cast<int>(h % static_cast<std::uint64_t>(extent[axis]));
           result.coordinates.at(x, y, z, static_cast<int>(axis)) = static_cast<float>(u[axis]);
         }
-        const auto source = exemplar.voxel(domain.Index(u[0], u[1], u[2]));
-        std::copy(source.begin(), source.end(), result.volume.voxel(x, y, z).begin());
+        const auto source = exemplar.pixel(domain.Index(u[0], u[1], u[2]));
+        std::copy(source.begin(), source.end(), result.volume.pixel(x, y, z).begin());
       }
     }
   }

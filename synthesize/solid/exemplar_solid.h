@@ -23,7 +23,7 @@ namespace photomat {
 // classes of voxels one after another (Gauss-Seidel), and voxels of one class never read each
 // other, so the result is the same bytes for any thread count.
 struct ExemplarSolidOptions {
-  VolumeSize size = VolumeSize::Cube(128);
+  ImageExtent size = ImageExtent::Cube(128);
   double jitter = 0.7;  // r: jitter of h_l * r per level
   // Correction passes per level (Lefebvre and Hoppe's 2; the thesis gives none). 0 turns
   // correction off (upsampling and jitter only).
@@ -69,21 +69,20 @@ struct PassReport {
 };
 
 struct ExemplarSolidResult {
-  Volume volume;       // the exemplar's channels
-  Volume coordinates;  // "exemplar.x/y/z": the exemplar voxel of each output voxel
+  Image volume;       // the exemplar's channels
+  Image coordinates;  // "exemplar.x/y/z": the exemplar voxel of each output voxel
   std::vector<PassReport> passes;
 };
 
 // `prepared` must come from `exemplar` (PrepareExemplar); its Gaussian-stack levels, when it has
 // them, are matched at the levels of their spacing. Throws Error for sizes below 1 or a negative
 // jitter or histogram weight.
-ExemplarSolidResult SynthesizeExemplarSolid(const Volume& exemplar,
-                                            const PreparedExemplar& prepared,
+ExemplarSolidResult SynthesizeExemplarSolid(const Image& exemplar, const PreparedExemplar& prepared,
                                             const ExemplarSolidOptions& options,
                                             Progress* progress = nullptr);
 
 // The baseline of uniformly random exemplar coordinates (a hash of seed and voxel).
-ExemplarSolidResult RandomCoordinateSolid(const Volume& exemplar, const ExemplarDomain& domain,
-                                          VolumeSize size, std::uint64_t seed);
+ExemplarSolidResult RandomCoordinateSolid(const Image& exemplar, const ExemplarDomain& domain,
+                                          ImageExtent size, std::uint64_t seed);
 
 }  // namespace photomat

@@ -24,15 +24,15 @@ namespace photomat {
 namespace {
 
 // Smooth periodic noise plus a per-voxel hash: no two neighbourhoods are equal.
-Volume UniqueExemplar(int n) {
-  Volume volume = MakeProceduralExemplar(ProceduralPattern::kNoise, n, 5);
+Image UniqueExemplar(int n) {
+  Image volume = MakeProceduralExemplar(ProceduralPattern::kNoise, n, 5);
   for (std::size_t i = 0; i < volume.values().size(); ++i) {
     volume.values()[i] += 0.01f * HashToSigned(HashVoxel(6, 0, static_cast<std::int64_t>(i), 0, 0));
   }
   return volume;
 }
 
-bool SameBytes(const Volume& a, const Volume& b) {
+bool SameBytes(const Image& a, const Image& b) {
   return a.SameShape(b) &&
          std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
 }
@@ -43,10 +43,10 @@ double AngleDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 TEST(ExemplarSolidTest, IdentityReproduction) {
-  const Volume exemplar = UniqueExemplar(16);
+  const Image exemplar = UniqueExemplar(16);
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(16);
+  options.size = ImageExtent::Cube(16);
   options.jitter = 0.0;
   for (int passes : {0, 2, 3}) {
     options.correction_passes = passes;
@@ -95,7 +95,7 @@ void ExpectValidSimilaritySet(const AppearanceSpace& appearance, const Similarit
 
 TEST(SimilaritySetTest, AgreesWithBruteForceAndKeepsItsInvariants) {
   for (ExemplarBoundary boundary : {ExemplarBoundary::kPeriodic, ExemplarBoundary::kInterior}) {
-    const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 12, 2);
+    const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 12, 2);
     AppearanceOptions appearance_options;
     appearance_options.boundary = boundary;
     const AppearanceSpace appearance = ComputeAppearanceSpace(exemplar, appearance_options);
@@ -109,7 +109,7 @@ TEST(SimilaritySetTest, AgreesWithBruteForceAndKeepsItsInvariants) {
     }
   }
   // More candidates and a larger box.
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 4);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 4);
   const AppearanceSpace appearance = ComputeAppearanceSpace(exemplar, {});
   const SimilarityOptions wide{5, 5};
   EXPECT_EQ(BuildSimilaritySet(appearance, wide).indices,
@@ -118,7 +118,7 @@ TEST(SimilaritySetTest, AgreesWithBruteForceAndKeepsItsInvariants) {
 }
 
 TEST(AppearanceSpaceTest, KeepsMoreVarianceWithMoreDimensions) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 1);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 1);
   double previous = 0;
   for (int d : {2, 4, 8, 16}) {
     AppearanceOptions options;
@@ -161,14 +161,14 @@ struct Quality {
   double spectrum_db;
 };
 
-Quality Measure(const Volume& solid, const Volume& exemplar, const AppearanceSpace& appearance) {
+Quality Measure(const Image& solid, const Image& exemplar, const AppearanceSpace& appearance) {
   return {NeighbourhoodMatchError(solid, exemplar, appearance), HistogramDistance(solid, exemplar),
           EarthMoverDistance(solid, exemplar),
           LogSpectralDistance(RadialPowerSpectrum(solid, 8), RadialPowerSpectrum(exemplar, 8))};
 }
 
 // The quality of the solid grown from `exemplar` with `options`.
-Quality GrowAndMeasure(const Volume& exemplar, const PreparedExemplar& prepared,
+Quality GrowAndMeasure(const Image& exemplar, const PreparedExemplar& prepared,
                        const ExemplarSolidOptions& options) {
   return Measure(SynthesizeExemplarSolid(exemplar, prepared, options).volume, exemplar,
                  prepared.appearance);
@@ -184,7 +184,7 @@ struct Comparison {
   double coherence, random_coherence;
 };
 
-Comparison Compare(const Volume& exemplar, VolumeSize size, const char* name) {
+Comparison Compare(const Image& exemplar, ImageExtent size, const char* name) {
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   ExemplarSolidOptions options;
   options.size = size;
@@ -228,7 +228,7 @@ void ExpectGrownLikeTheExemplar(const Comparison& c) {
     }
   }
   EXPECT_GE(c.patches.patches, 32);
-  EXPECT_LT(c.patches.largest, c.result.coordinates.voxel_count() * 3 / 4);
+  EXPECT_LT(c.patches.largest, c.result.coordinates.pixel_count() * 3 / 4);
   EXPECT_GT(c.coherence, 2 * c.random_coherence);
 }
 
@@ -248,8 +248,9 @@ class GrownFromProceduralTest : public ::testing::TestWithParam<Growth> {};
 TEST_P(GrownFromProceduralTest, CorrectionBeatsJitterOnlyWhichBeatsRandomCoordinates) {
   const Growth& growth = GetParam();
   const std::string name(ToString(growth.pattern));
-  const Volume exemplar = MakeProceduralExemplar(growth.pattern, growth.exemplar_side, 3);
-  ExpectGrownLikeTheExemplar(Compare(exemplar, VolumeSize::Cube(growth.output_side), name.c_str()));
+  const Image exemplar = MakeProceduralExemplar(growth.pattern, growth.exemplar_side, 3);
+  ExpectGrownLikeTheExemplar(
+      Compare(exemplar, ImageExtent::Cube(growth.output_side), name.c_str()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Patterns, GrownFromProceduralTest,
@@ -268,7 +269,7 @@ INSTANTIATE_TEST_SUITE_P(Patterns, GrownFromProceduralTest,
 // is a third of the jitter-only one (0.014 against 0.037 for Exemplar_14, 0.013 against 0.039 for
 // Exemplar_20), below the sampling floor of 32^3 random copies of exemplar voxels (0.022), but
 // only asserted below it; spectrum 0.88 against 3.39 dB and 0.46 against 3.09 dB.
-Volume SolidFromPhotograph(const std::filesystem::path& file) {
+Image SolidFromPhotograph(const std::filesystem::path& file) {
   const Image view = ReadImage(file).image;
   SpectralSolidOptions options;
   options.size = 16;
@@ -281,20 +282,20 @@ Volume SolidFromPhotograph(const std::filesystem::path& file) {
 TEST(GrownFromRealExemplarTest, SwirledMarble) {
   PHOTOMAT_TEST_DATA_OR_SKIP(file, "textures/solid-exemplars/Exemplar_14.jpg");
   ExpectGrownLikeTheExemplar(
-      Compare(SolidFromPhotograph(file), VolumeSize::Cube(32), "Exemplar_14"));
+      Compare(SolidFromPhotograph(file), ImageExtent::Cube(32), "Exemplar_14"));
 }
 
 TEST(GrownFromRealExemplarTest, WoodPlanks) {
   PHOTOMAT_TEST_DATA_OR_SKIP(file, "textures/solid-exemplars/Exemplar_20.jpg");
   ExpectGrownLikeTheExemplar(
-      Compare(SolidFromPhotograph(file), VolumeSize::Cube(32), "Exemplar_20"));
+      Compare(SolidFromPhotograph(file), ImageExtent::Cube(32), "Exemplar_20"));
 }
 
 // The thesis's single-resolution exemplar drifts: on cells its colour histogram moves far from
 // the exemplar's (correction settles on average-looking neighbourhoods), further than jitter
 // only; the Gaussian stack (the default) removes the drift.
 TEST(ExemplarSolidTest, GaussianStackRemovesTheHistogramDriftOfASingleResolution) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 16, 3);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 16, 3);
   AppearanceOptions single;
   single.gaussian_stack = false;
   const PreparedExemplar flat = PrepareExemplar(exemplar, single, {}, std::nullopt);
@@ -303,7 +304,7 @@ TEST(ExemplarSolidTest, GaussianStackRemovesTheHistogramDriftOfASingleResolution
   ASSERT_EQ(stack.stack.size(), 2u);  // spacing 2 and 4 (8 is half the exemplar: jitter only)
   EXPECT_EQ(stack.stack[1].appearance.spacing, 4);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(32);
+  options.size = ImageExtent::Cube(32);
   options.occupancy_matching = 0.0;  // the stack alone
   options.histogram_matching = 0.0;
   const double thesis =
@@ -321,16 +322,16 @@ TEST(ExemplarSolidTest, GaussianStackRemovesTheHistogramDriftOfASingleResolution
 
 // The share of the result copied from the most used tenth of the exemplar voxels (0.1 for a
 // perfectly even use).
-double MostUsedTenthShare(const ExemplarSolidResult& result, const Volume& exemplar) {
-  std::vector<std::size_t> uses(exemplar.voxel_count(), 0);
-  for (std::size_t i = 0; i < result.coordinates.voxel_count(); ++i) {
-    const auto c = result.coordinates.voxel(i);
+double MostUsedTenthShare(const ExemplarSolidResult& result, const Image& exemplar) {
+  std::vector<std::size_t> uses(exemplar.pixel_count(), 0);
+  for (std::size_t i = 0; i < result.coordinates.pixel_count(); ++i) {
+    const auto c = result.coordinates.pixel(i);
     ++uses[exemplar.Index(static_cast<int>(c[0]), static_cast<int>(c[1]), static_cast<int>(c[2]))];
   }
   std::sort(uses.begin(), uses.end(), std::greater<>());
   std::size_t top = 0;
   for (std::size_t i = 0; i < uses.size() / 10; ++i) top += uses[i];
-  return static_cast<double>(top) / static_cast<double>(result.coordinates.voxel_count());
+  return static_cast<double>(top) / static_cast<double>(result.coordinates.pixel_count());
 }
 
 // Occupancy matching (IMPLEMENTER CHOICE, on by default): without it, wood (whose neighbourhoods
@@ -338,10 +339,10 @@ double MostUsedTenthShare(const ExemplarSolidResult& result, const Volume& exemp
 // drifts; with it the result uses the exemplar far more evenly, and matches as well. Histogram
 // matching is off here, to see occupancy matching alone.
 TEST(ExemplarSolidTest, OccupancyMatchingSpreadsTheResultOverTheExemplar) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 16, 3);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 16, 3);
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(32);
+  options.size = ImageExtent::Cube(32);
   options.histogram_matching = 0.0;
   const ExemplarSolidResult on = SynthesizeExemplarSolid(exemplar, prepared, options);
   options.occupancy_matching = 0.0;
@@ -366,10 +367,10 @@ TEST(ExemplarSolidTest, OccupancyMatchingSpreadsTheResultOverTheExemplar) {
 // per-channel histograms come to the exemplar's (in 32-bin L1 and in the bin-free earth mover's
 // distance, while the prices use 64 bins), the match error within 10 % of the plain one.
 TEST(ExemplarSolidTest, HistogramMatchingBringsTheHistogramToTheExemplars) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 16, 3);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 16, 3);
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(64);
+  options.size = ImageExtent::Cube(64);
   const Quality on = GrowAndMeasure(exemplar, prepared, options);
   options.histogram_matching = 0.0;
   const Quality off = GrowAndMeasure(exemplar, prepared, options);
@@ -391,10 +392,10 @@ TEST(ExemplarSolidTest, HistogramMatchingBringsTheHistogramToTheExemplars) {
 // that match less well. Prices bounded by e keep that small; a bound of e^4 spread a speckle of
 // single off-colour voxels inside the cells of this case, its match error 1.8 times the plain one.
 TEST(ExemplarSolidTest, HistogramMatchingRaisesTheMatchErrorByLessThanHalf) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 16, 3);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 16, 3);
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(32);
+  options.size = ImageExtent::Cube(32);
   const Quality on = GrowAndMeasure(exemplar, prepared, options);
   options.histogram_matching = 0.0;
   const Quality off = GrowAndMeasure(exemplar, prepared, options);
@@ -407,10 +408,10 @@ TEST(ExemplarSolidTest, HistogramMatchingRaisesTheMatchErrorByLessThanHalf) {
 }
 
 TEST(ExemplarSolidTest, ConstantRotationFieldRotatesTheStatistics) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kStripes, 32, 3);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kStripes, 32, 3);
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(32);
+  options.size = ImageExtent::Cube(32);
   const Eigen::Vector3d isometric = PrincipalDirection(
       StructureTensor(SynthesizeExemplarSolid(exemplar, prepared, options).volume));
   EXPECT_LT(AngleDegrees(isometric, Eigen::Vector3d::UnitX()), 2.0);
@@ -422,7 +423,7 @@ TEST(ExemplarSolidTest, ConstantRotationFieldRotatesTheStatistics) {
   for (const Eigen::Matrix3f& rotation : {slant, tilted}) {
     const FrameField field = ConstantFrameField(options.size, rotation);
     options.field = &field;
-    const Volume rotated = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
+    const Image rotated = SynthesizeExemplarSolid(exemplar, prepared, options).volume;
     // The sheets' normal (the exemplar's x) follows the frame's first column.
     const Eigen::Vector3d expected = rotation.col(0).cast<double>();
     const double error = AngleDegrees(PrincipalDirection(StructureTensor(rotated)), expected);
@@ -432,9 +433,9 @@ TEST(ExemplarSolidTest, ConstantRotationFieldRotatesTheStatistics) {
 }
 
 TEST(ExemplarSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 7);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 7);
   ExemplarSolidOptions options;
-  options.size = VolumeSize{24, 16, 12};
+  options.size = ImageExtent{24, 16, 12};
   const FrameField field = MakeFrameField(FieldKind::kCircular, options.size, {});
   for (const FrameField* control : {static_cast<const FrameField*>(nullptr), &field}) {
     options.field = control;
@@ -449,7 +450,7 @@ TEST(ExemplarSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
       two = SynthesizeExemplarSolid(exemplar, PrepareExemplar(exemplar, {}, {}, std::nullopt),
                                     options);
     }
-    EXPECT_EQ(one.volume.size(), options.size);
+    EXPECT_EQ(one.volume.extent(), options.size);
     EXPECT_TRUE(SameBytes(one.volume, two.volume));
     EXPECT_TRUE(SameBytes(one.coordinates, two.coordinates));
     options.seed = 2;
@@ -463,32 +464,32 @@ TEST(ExemplarSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
 TEST(ExemplarSolidTest, GrowsAnyNumberOfChannels) {
   // An 18-channel exemplar (as a PTM map stack's six terms per colour): every output voxel is an
   // exemplar voxel, all channels together.
-  const Volume colour = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 8);
+  const Image colour = MakeProceduralExemplar(ProceduralPattern::kMarble, 16, 8);
   std::vector<std::string> names;
   for (int term = 0; term < 6; ++term) {
     for (const char* c : {"R", "G", "B"}) names.push_back("ptm.a" + std::to_string(term) + "." + c);
   }
-  Volume exemplar(colour.size(), names);
-  for (std::size_t i = 0; i < exemplar.voxel_count(); ++i) {
+  Image exemplar(colour.extent(), names);
+  for (std::size_t i = 0; i < exemplar.pixel_count(); ++i) {
     for (int k = 0; k < 18; ++k) {
-      exemplar.voxel(i)[static_cast<std::size_t>(k)] =
-          colour.voxel(i)[static_cast<std::size_t>(k % 3)] * (1.0f + 0.3f * (k / 3)) -
+      exemplar.pixel(i)[static_cast<std::size_t>(k)] =
+          colour.pixel(i)[static_cast<std::size_t>(k % 3)] * (1.0f + 0.3f * (k / 3)) -
           0.1f * (k / 3);
     }
   }
   const PreparedExemplar prepared = PrepareExemplar(exemplar, {}, {}, std::nullopt);
   EXPECT_EQ(prepared.appearance.reduced_channels(), 4);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(16);
+  options.size = ImageExtent::Cube(16);
   const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
   EXPECT_EQ(result.volume.channel_names(), names);
   for (int z = 0; z < 16; ++z) {
     for (int y = 0; y < 16; ++y) {
       for (int x = 0; x < 16; ++x) {
-        const auto source = exemplar.voxel(static_cast<int>(result.coordinates.at(x, y, z, 0)),
+        const auto source = exemplar.pixel(static_cast<int>(result.coordinates.at(x, y, z, 0)),
                                            static_cast<int>(result.coordinates.at(x, y, z, 1)),
                                            static_cast<int>(result.coordinates.at(x, y, z, 2)));
-        const auto out = result.volume.voxel(x, y, z);
+        const auto out = result.volume.pixel(x, y, z);
         ASSERT_TRUE(std::equal(source.begin(), source.end(), out.begin()));
       }
     }
@@ -501,15 +502,15 @@ TEST(ExemplarSolidTest, GrowsAnyNumberOfChannels) {
 }
 
 TEST(ExemplarSolidTest, InteriorModeKeepsCoordinatesInside) {
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 20, 2);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 20, 2);
   AppearanceOptions appearance;
   appearance.boundary = ExemplarBoundary::kInterior;
   const PreparedExemplar prepared = PrepareExemplar(exemplar, appearance, {}, std::nullopt);
   ExemplarSolidOptions options;
-  options.size = VolumeSize::Cube(24);
+  options.size = ImageExtent::Cube(24);
   const ExemplarSolidResult result = SynthesizeExemplarSolid(exemplar, prepared, options);
-  for (std::size_t i = 0; i < result.coordinates.voxel_count(); ++i) {
-    for (float c : result.coordinates.voxel(i)) {
+  for (std::size_t i = 0; i < result.coordinates.pixel_count(); ++i) {
+    for (float c : result.coordinates.pixel(i)) {
       EXPECT_GE(c, 2.0f);
       EXPECT_LE(c, 17.0f);
     }
@@ -518,7 +519,7 @@ TEST(ExemplarSolidTest, InteriorModeKeepsCoordinatesInside) {
 
 TEST(SimilaritySetTest, CacheIsReusedAndSurvivesDamage) {
   testing::TempDir dir;
-  const Volume exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 1);
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kCells, 12, 1);
   const PreparedExemplar first = PrepareExemplar(exemplar, {}, {}, dir.path());
   EXPECT_FALSE(first.from_cache);
   ASSERT_TRUE(std::filesystem::exists(first.cache_file));
@@ -534,7 +535,7 @@ TEST(SimilaritySetTest, CacheIsReusedAndSurvivesDamage) {
   EXPECT_EQ(second.stack[1].similarity.indices, first.stack[1].similarity.indices);
 
   // The key names the content and every parameter.
-  Volume changed = exemplar;
+  Image changed = exemplar;
   changed.values()[100] += 1e-3f;
   EXPECT_NE(SimilarityCacheKey(changed, {}, {}), SimilarityCacheKey(exemplar, {}, {}));
   EXPECT_NE(SimilarityCacheKey(exemplar, {.dimensions = 6}, {}),
@@ -557,7 +558,7 @@ TEST(SimilaritySetTest, CacheIsReusedAndSurvivesDamage) {
 }
 
 TEST(FrameFieldTest, GeneratorsGiveOrthonormalFramesThatFollowTheirShapes) {
-  const VolumeSize size = VolumeSize::Cube(16);
+  const ImageExtent size = ImageExtent::Cube(16);
   for (FieldKind kind : {FieldKind::kCircular, FieldKind::kOval, FieldKind::kSlant,
                          FieldKind::kZigzag, FieldKind::kSlant3d}) {
     const FrameField field = MakeFrameField(kind, size, {});
@@ -582,15 +583,15 @@ TEST(FrameFieldTest, GeneratorsGiveOrthonormalFramesThatFollowTheirShapes) {
   const FrameField back = FrameFieldFromVolume(FrameFieldToVolume(circular));
   EXPECT_TRUE(back.at(3, 4, 5).isApprox(circular.at(3, 4, 5), 1e-5f));
   const FrameField half = circular.Downsampled();
-  EXPECT_EQ(half.size(), VolumeSize::Cube(8));
+  EXPECT_EQ(half.size(), ImageExtent::Cube(8));
   EXPECT_TRUE((half.at(6, 4, 1).transpose() * half.at(6, 4, 1)).isIdentity(1e-4f));
-  EXPECT_THROW(FrameFieldFromVolume(Volume(size, 3)), Error);
+  EXPECT_THROW(FrameFieldFromVolume(Image(size, 3)), Error);
 }
 
 TEST(ProceduralExemplarTest, PatternsTileAndDiffer) {
   for (ProceduralPattern pattern : {ProceduralPattern::kMarble, ProceduralPattern::kCells,
                                     ProceduralPattern::kStripes, ProceduralPattern::kNoise}) {
-    const Volume volume = MakeProceduralExemplar(pattern, 16, 1);
+    const Image volume = MakeProceduralExemplar(pattern, 16, 1);
     // Across the wrap the steps are no larger than inside (periodic).
     double inside = 0, across = 0;
     for (int z = 0; z < 16; ++z) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/enum_names.h"
 #include "core/error.h"
 
 namespace photomat {
@@ -32,11 +33,11 @@ Eigen::Matrix3f PlanarFrame(const Eigen::Vector2f& tangent) {
 
 }  // namespace
 
-FrameField::FrameField(VolumeSize size) : size_(size) {
-  if (size.x <= 0 || size.y <= 0 || size.z <= 0) {
+FrameField::FrameField(ImageExtent size) : size_(size) {
+  if (size.width <= 0 || size.height <= 0 || size.depth <= 0) {
     throw Error(fmt::format("invalid frame field size {}", ToString(size)));
   }
-  frames_.assign(size.voxel_count(), Eigen::Matrix3f::Identity());
+  frames_.assign(size.pixel_count(), Eigen::Matrix3f::Identity());
 }
 
 Eigen::Matrix3f Orthonormalise(const Eigen::Matrix3f& matrix) {
@@ -46,18 +47,18 @@ Eigen::Matrix3f Orthonormalise(const Eigen::Matrix3f& matrix) {
 }
 
 FrameField FrameField::Downsampled() const {
-  const VolumeSize half{(size_.x + 1) / 2, (size_.y + 1) / 2, (size_.z + 1) / 2};
+  const ImageExtent half{(size_.width + 1) / 2, (size_.height + 1) / 2, (size_.depth + 1) / 2};
   FrameField result(half);
-  for (int z = 0; z < half.z; ++z) {
-    for (int y = 0; y < half.y; ++y) {
-      for (int x = 0; x < half.x; ++x) {
+  for (int z = 0; z < half.depth; ++z) {
+    for (int y = 0; y < half.height; ++y) {
+      for (int x = 0; x < half.width; ++x) {
         Eigen::Matrix3f sum = Eigen::Matrix3f::Zero();
         for (int dz = 0; dz < 2; ++dz) {
           for (int dy = 0; dy < 2; ++dy) {
             for (int dx = 0; dx < 2; ++dx) {
-              const int cx = std::min(2 * x + dx, size_.x - 1);
-              const int cy = std::min(2 * y + dy, size_.y - 1);
-              const int cz = std::min(2 * z + dz, size_.z - 1);
+              const int cx = std::min(2 * x + dx, size_.width - 1);
+              const int cy = std::min(2 * y + dy, size_.height - 1);
+              const int cz = std::min(2 * z + dz, size_.depth - 1);
               sum += at(cx, cy, cz);
             }
           }
@@ -69,14 +70,17 @@ FrameField FrameField::Downsampled() const {
   return result;
 }
 
-FrameField FrameField::Resampled(VolumeSize size) const {
+FrameField FrameField::Resampled(ImageExtent size) const {
   FrameField result(size);
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
-        const int sx = std::min(size_.x - 1, static_cast<int>((x + 0.5) * size_.x / size.x));
-        const int sy = std::min(size_.y - 1, static_cast<int>((y + 0.5) * size_.y / size.y));
-        const int sz = std::min(size_.z - 1, static_cast<int>((z + 0.5) * size_.z / size.z));
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
+        const int sx =
+            std::min(size_.width - 1, static_cast<int>((x + 0.5) * size_.width / size.width));
+        const int sy =
+            std::min(size_.height - 1, static_cast<int>((y + 0.5) * size_.height / size.height));
+        const int sz =
+            std::min(size_.depth - 1, static_cast<int>((z + 0.5) * size_.depth / size.depth));
         result.at(x, y, z) = at(sx, sy, sz);
       }
     }
@@ -84,42 +88,35 @@ FrameField FrameField::Resampled(VolumeSize size) const {
   return result;
 }
 
+namespace {
+
+constexpr std::array<NamedValue<FieldKind>, 5> kFieldKindNames = {
+    {{FieldKind::kCircular, "circular"},
+     {FieldKind::kOval, "oval"},
+     {FieldKind::kSlant, "slant"},
+     {FieldKind::kZigzag, "zigzag"},
+     {FieldKind::kSlant3d, "slant3d"}}};
+
+}  // namespace
+
 std::optional<FieldKind> ParseFieldKind(std::string_view text) {
-  for (FieldKind kind : {FieldKind::kCircular, FieldKind::kOval, FieldKind::kSlant,
-                         FieldKind::kZigzag, FieldKind::kSlant3d}) {
-    if (text == ToString(kind)) return kind;
-  }
-  return std::nullopt;
+  return FindValueNamed(text, kFieldKindNames);
 }
 
-std::string_view ToString(FieldKind kind) {
-  switch (kind) {
-    case FieldKind::kCircular:
-      return "circular";
-    case FieldKind::kOval:
-      return "oval";
-    case FieldKind::kSlant:
-      return "slant";
-    case FieldKind::kZigzag:
-      return "zigzag";
-    case FieldKind::kSlant3d:
-      return "slant3d";
-  }
-  return "?";
-}
+std::string_view ToString(FieldKind kind) { return NameOf(kind, kFieldKindNames); }
 
-FrameField ConstantFrameField(VolumeSize size, const Eigen::Matrix3f& rotation) {
+FrameField ConstantFrameField(ImageExtent size, const Eigen::Matrix3f& rotation) {
   FrameField field(size);
   const Eigen::Matrix3f frame = Orthonormalise(rotation);
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) field.at(x, y, z) = frame;
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) field.at(x, y, z) = frame;
     }
   }
   return field;
 }
 
-FrameField MakeFrameField(FieldKind kind, VolumeSize size, const FieldParameters& parameters) {
+FrameField MakeFrameField(FieldKind kind, ImageExtent size, const FieldParameters& parameters) {
   if (kind == FieldKind::kSlant) {
     return ConstantFrameField(size, RotationAboutZ(parameters.angle_degrees));
   }
@@ -134,11 +131,11 @@ FrameField MakeFrameField(FieldKind kind, VolumeSize size, const FieldParameters
     throw Error("field band must be positive and the oval ratio above 0");
   }
   FrameField field(size);
-  const float cx = 0.5f * size.x, cy = 0.5f * size.y;
+  const float cx = 0.5f * size.width, cy = 0.5f * size.height;
   const float a2 = static_cast<float>(parameters.ratio * parameters.ratio);
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         const float px = x + 0.5f - cx, py = y + 0.5f - cy;
         Eigen::Matrix3f frame = Eigen::Matrix3f::Identity();
         switch (kind) {
@@ -169,15 +166,15 @@ FrameField MakeFrameField(FieldKind kind, VolumeSize size, const FieldParameters
   return field;
 }
 
-Volume FrameFieldToVolume(const FrameField& field) {
+Image FrameFieldToVolume(const FrameField& field) {
   std::vector<std::string> names;
   for (const char* column : {"f1", "f2", "f3"}) {
     for (const char* axis : {"X", "Y", "Z"}) names.push_back(fmt::format("{}.{}", column, axis));
   }
-  Volume volume(field.size(), names);
-  for (int z = 0; z < field.size().z; ++z) {
-    for (int y = 0; y < field.size().y; ++y) {
-      for (int x = 0; x < field.size().x; ++x) {
+  Image volume(field.size(), names);
+  for (int z = 0; z < field.size().depth; ++z) {
+    for (int y = 0; y < field.size().height; ++y) {
+      for (int x = 0; x < field.size().width; ++x) {
         const Eigen::Matrix3f& frame = field.at(x, y, z);
         for (int column = 0; column < 3; ++column) {
           for (int row = 0; row < 3; ++row)
@@ -189,16 +186,16 @@ Volume FrameFieldToVolume(const FrameField& field) {
   return volume;
 }
 
-FrameField FrameFieldFromVolume(const Volume& volume) {
+FrameField FrameFieldFromVolume(const Image& volume) {
   if (volume.channels() != 9 && volume.channels() != 6) {
     throw Error(
         fmt::format("a frame field volume has 9 channels (f1, f2, f3) or 6 (f1, f2), not {}",
                     volume.channels()));
   }
-  FrameField field(volume.size());
-  for (int z = 0; z < volume.size().z; ++z) {
-    for (int y = 0; y < volume.size().y; ++y) {
-      for (int x = 0; x < volume.size().x; ++x) {
+  FrameField field(volume.extent());
+  for (int z = 0; z < volume.depth(); ++z) {
+    for (int y = 0; y < volume.height(); ++y) {
+      for (int x = 0; x < volume.width(); ++x) {
         Eigen::Matrix3f frame;
         for (int column = 0; column < 2; ++column) {
           for (int row = 0; row < 3; ++row)

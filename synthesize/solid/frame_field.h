@@ -19,22 +19,22 @@ class FrameField {
  public:
   FrameField() = default;
   // Identity frames.
-  explicit FrameField(VolumeSize size);
+  explicit FrameField(ImageExtent size);
 
-  const VolumeSize& size() const { return size_; }
+  const ImageExtent& size() const { return size_; }
   const Eigen::Matrix3f& at(int x, int y, int z) const { return frames_[Index(x, y, z)]; }
   Eigen::Matrix3f& at(int x, int y, int z) { return frames_[Index(x, y, z)]; }
 
   // Half the resolution (rounded up): each frame the orthonormalised mean of its up to 8 children.
   FrameField Downsampled() const;
   // Nearest-voxel resampling to `size` (coordinates scaled by the size ratio).
-  FrameField Resampled(VolumeSize size) const;
+  FrameField Resampled(ImageExtent size) const;
 
  private:
   std::size_t Index(int x, int y, int z) const {
-    return (static_cast<std::size_t>(z) * size_.y + y) * size_.x + x;
+    return (static_cast<std::size_t>(z) * size_.height + y) * size_.width + x;
   }
-  VolumeSize size_;
+  ImageExtent size_;
   std::vector<Eigen::Matrix3f> frames_;
 };
 
@@ -60,14 +60,14 @@ struct FieldParameters {
   int band = 16;       // zigzag band width in voxels
 };
 
-FrameField MakeFrameField(FieldKind kind, VolumeSize size, const FieldParameters& parameters);
+FrameField MakeFrameField(FieldKind kind, ImageExtent size, const FieldParameters& parameters);
 // R everywhere.
-FrameField ConstantFrameField(VolumeSize size, const Eigen::Matrix3f& rotation);
+FrameField ConstantFrameField(ImageExtent size, const Eigen::Matrix3f& rotation);
 
 // A field as a volume of 9 channels f1.X f1.Y f1.Z f2.X ... f3.Z (so it can be saved and edited
 // as any volume), and back; a 6-channel volume (f1, f2) takes f3 = f1 x f2. Frames are
 // orthonormalised on reading. Throws Error for other channel counts.
-Volume FrameFieldToVolume(const FrameField& field);
-FrameField FrameFieldFromVolume(const Volume& volume);
+Image FrameFieldToVolume(const FrameField& field);
+FrameField FrameFieldFromVolume(const Image& volume);
 
 }  // namespace photomat

@@ -7,7 +7,9 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/enum_names.h"
 #include "core/error.h"
+#include "core/wrap.h"
 #include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
@@ -20,8 +22,6 @@ Rgb Mix(const Rgb& a, const Rgb& b, float t) {
 }
 
 float Smooth(float t) { return t * t * (3.0f - 2.0f * t); }
-
-int Wrap(int value, int period) { return ((value % period) + period) % period; }
 
 // Shortest distance between a and b on a circle of length `period`.
 double PeriodicDelta(double a, double b, double period) {
@@ -106,32 +106,20 @@ Rgb Noise(int x, int y, int z, int n, std::uint64_t seed) {
           0.5f + 0.45f * PeriodicFractalNoise(x, y, z, n, 4, 3, seed, 9)};
 }
 
+constexpr std::array<NamedValue<ProceduralPattern>, 5> kProceduralNames = {
+    {{ProceduralPattern::kMarble, "marble"},
+     {ProceduralPattern::kWood, "wood"},
+     {ProceduralPattern::kCells, "cells"},
+     {ProceduralPattern::kStripes, "stripes"},
+     {ProceduralPattern::kNoise, "noise"}}};
+
 }  // namespace
 
 std::optional<ProceduralPattern> ParseProceduralPattern(std::string_view text) {
-  for (ProceduralPattern pattern :
-       {ProceduralPattern::kMarble, ProceduralPattern::kWood, ProceduralPattern::kCells,
-        ProceduralPattern::kStripes, ProceduralPattern::kNoise}) {
-    if (text == ToString(pattern)) return pattern;
-  }
-  return std::nullopt;
+  return FindValueNamed(text, kProceduralNames);
 }
 
-std::string_view ToString(ProceduralPattern pattern) {
-  switch (pattern) {
-    case ProceduralPattern::kMarble:
-      return "marble";
-    case ProceduralPattern::kWood:
-      return "wood";
-    case ProceduralPattern::kCells:
-      return "cells";
-    case ProceduralPattern::kStripes:
-      return "stripes";
-    case ProceduralPattern::kNoise:
-      return "noise";
-  }
-  return "?";
-}
+std::string_view ToString(ProceduralPattern pattern) { return NameOf(pattern, kProceduralNames); }
 
 float PeriodicNoise(double x, double y, double z, int size, int cells, std::uint64_t seed,
                     std::uint64_t stream) {
@@ -165,9 +153,9 @@ float PeriodicFractalNoise(double x, double y, double z, int size, int cells, in
   return sum;
 }
 
-Volume MakeProceduralExemplar(ProceduralPattern pattern, int size, std::uint64_t seed) {
+Image MakeProceduralExemplar(ProceduralPattern pattern, int size, std::uint64_t seed) {
   if (size < 8) throw Error(fmt::format("procedural exemplar size {} is below 8", size));
-  Volume volume(VolumeSize::Cube(size), std::vector<std::string>{"R", "G", "B"});
+  Image volume(ImageExtent::Cube(size), std::vector<std::string>{"R", "G", "B"});
   tbb::parallel_for(0, size, [&](int z) {
     for (int y = 0; y < size; ++y) {
       for (int x = 0; x < size; ++x) {

@@ -23,7 +23,7 @@ std::optional<ProceduralPattern> ParseProceduralPattern(std::string_view text);
 std::string_view ToString(ProceduralPattern pattern);
 
 // A size^3 exemplar (size >= 8). Same seed, same bytes.
-Volume MakeProceduralExemplar(ProceduralPattern pattern, int size, std::uint64_t seed);
+Image MakeProceduralExemplar(ProceduralPattern pattern, int size, std::uint64_t seed);
 
 // Periodic value noise in [-1, 1] at voxel (x, y, z) of a volume of `size`, with `cells` lattice
 // cells per period, smoothly interpolated; `stream` gives independent noises.

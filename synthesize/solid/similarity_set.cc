@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <xxhash.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -197,9 +198,9 @@ class Reader {
 };
 
 void PutLevel(Writer& out, const AppearanceSpace& a, const SimilaritySet& similarity) {
-  out.Put(a.domain.size.x);
-  out.Put(a.domain.size.y);
-  out.Put(a.domain.size.z);
+  out.Put(a.domain.size.width);
+  out.Put(a.domain.size.height);
+  out.Put(a.domain.size.depth);
   out.Put(static_cast<std::uint8_t>(a.domain.periodic));
   out.Put(a.domain.border);
   out.Put(a.neighbourhood);
@@ -216,9 +217,9 @@ void PutLevel(Writer& out, const AppearanceSpace& a, const SimilaritySet& simila
 }
 
 void GetLevel(Reader& in, AppearanceSpace& a, SimilaritySet& similarity) {
-  a.domain.size.x = in.Get<int>();
-  a.domain.size.y = in.Get<int>();
-  a.domain.size.z = in.Get<int>();
+  a.domain.size.width = in.Get<int>();
+  a.domain.size.height = in.Get<int>();
+  a.domain.size.depth = in.Get<int>();
   a.domain.periodic = in.Get<std::uint8_t>() != 0;
   a.domain.border = in.Get<int>();
   a.neighbourhood = in.Get<int>();
@@ -229,11 +230,12 @@ void GetLevel(Reader& in, AppearanceSpace& a, SimilaritySet& similarity) {
   a.channel_basis = in.GetMatrix();
   a.feature_mean = in.GetMatrix();
   a.feature_basis = in.GetMatrix();
-  const std::size_t voxels = a.domain.size.voxel_count();
+  const std::size_t voxels = a.domain.size.pixel_count();
   const auto extent = a.domain.extent();
-  if (a.domain.size.x < 1 || a.domain.size.y < 1 || a.domain.size.z < 1 || a.dimensions < 1 ||
-      a.spacing < 1 || a.domain.border < 0 || std::min({extent[0], extent[1], extent[2]}) < 1 ||
-      a.feature_basis.cols() != a.dimensions || a.feature_basis.rows() != a.feature_mean.rows() ||
+  if (a.domain.size.width < 1 || a.domain.size.height < 1 || a.domain.size.depth < 1 ||
+      a.dimensions < 1 || a.spacing < 1 || a.domain.border < 0 ||
+      std::min({extent[0], extent[1], extent[2]}) < 1 || a.feature_basis.cols() != a.dimensions ||
+      a.feature_basis.rows() != a.feature_mean.rows() ||
       a.channel_basis.rows() != a.channel_mean.rows()) {
     in.Fail("inconsistent sizes");
   }
@@ -341,7 +343,7 @@ SimilaritySet BuildSimilaritySet(const AppearanceSpace& appearance,
                             nanoflann::KDTreeSingleIndexAdaptorParams(16));
   SimilaritySet set;
   set.k = options.candidates;
-  set.indices.assign(appearance.domain.size.voxel_count() * static_cast<std::size_t>(set.k), -1);
+  set.indices.assign(appearance.domain.size.pixel_count() * static_cast<std::size_t>(set.k), -1);
   const int radius = options.exclusion / 2;
   constexpr std::size_t kChunk = 1024;
   const std::size_t chunks = (valid.size() + kChunk - 1) / kChunk;
@@ -386,7 +388,7 @@ SimilaritySet BuildSimilaritySetBruteForce(const AppearanceSpace& appearance,
   const std::vector<std::size_t> valid = appearance.domain.ValidIndices();
   SimilaritySet set;
   set.k = options.candidates;
-  set.indices.assign(appearance.domain.size.voxel_count() * static_cast<std::size_t>(set.k), -1);
+  set.indices.assign(appearance.domain.size.pixel_count() * static_cast<std::size_t>(set.k), -1);
   const int radius = options.exclusion / 2;
   for (std::size_t voxel : valid) {
     FillCandidates(voxel, set.k, set.indices.data() + voxel * static_cast<std::size_t>(set.k),
@@ -408,14 +410,14 @@ SimilaritySet BuildSimilaritySetBruteForce(const AppearanceSpace& appearance,
   return set;
 }
 
-std::string SimilarityCacheKey(const Volume& exemplar, const AppearanceOptions& appearance,
+std::string SimilarityCacheKey(const Image& exemplar, const AppearanceOptions& appearance,
                                const SimilarityOptions& similarity) {
   Writer description;
   description.PutString("photomat solid similarity set");
   description.Put(kCacheVersion);
-  description.Put(exemplar.size().x);
-  description.Put(exemplar.size().y);
-  description.Put(exemplar.size().z);
+  description.Put(exemplar.width());
+  description.Put(exemplar.height());
+  description.Put(exemplar.depth());
   description.Put(exemplar.channels());
   for (const std::string& name : exemplar.channel_names()) description.PutString(name);
   description.Put(appearance.neighbourhood);
@@ -430,7 +432,18 @@ std::string SimilarityCacheKey(const Volume& exemplar, const AppearanceOptions& 
   XXH3_state_t* state = XXH3_createState();
   XXH3_64bits_reset(state);
   XXH3_64bits_update(state, description.bytes().data(), description.bytes().size());
-  XXH3_64bits_update(state, exemplar.values().data(), exemplar.values().size_bytes());
+  // The values voxel by voxel, channels innermost (the interleaved order the keys were made in,
+  // so caches written before the storage became planar stay valid), a block at a time.
+  constexpr std::size_t kVoxelsPerUpdate = 4096;
+  std::vector<float> interleaved;
+  for (std::size_t first = 0; first < exemplar.pixel_count(); first += kVoxelsPerUpdate) {
+    const std::size_t last = std::min(exemplar.pixel_count(), first + kVoxelsPerUpdate);
+    interleaved.clear();
+    for (std::size_t i = first; i < last; ++i) {
+      for (const float v : exemplar.pixel(i)) interleaved.push_back(v);
+    }
+    XXH3_64bits_update(state, interleaved.data(), interleaved.size() * sizeof(float));
+  }
   const XXH64_hash_t hash = XXH3_64bits_digest(state);
   XXH3_freeState(state);
   return fmt::format("{:016x}", hash);
@@ -480,7 +493,7 @@ PreparedExemplar LoadPreparedExemplar(const std::filesystem::path& path, const s
   return prepared;
 }
 
-PreparedExemplar PrepareExemplar(const Volume& exemplar, const AppearanceOptions& appearance,
+PreparedExemplar PrepareExemplar(const Image& exemplar, const AppearanceOptions& appearance,
                                  const SimilarityOptions& similarity,
                                  const std::optional<std::filesystem::path>& cache_folder,
                                  Progress* progress) {

@@ -87,13 +87,13 @@ struct PreparedExemplar {
 
 // The cache key: a hash (XXH3, 64 bits) of the exemplar's size, channel names and values and of
 // every option, with a format version; two exemplars or settings differing in any byte differ.
-std::string SimilarityCacheKey(const Volume& exemplar, const AppearanceOptions& appearance,
+std::string SimilarityCacheKey(const Image& exemplar, const AppearanceOptions& appearance,
                                const SimilarityOptions& similarity);
 
 // Computes both (and, with appearance.gaussian_stack, those of the coarser stack levels), or loads
 // them from `cache_folder`/solid-<key>.bin when present (a damaged cache file is reported on the
 // log and recomputed), and stores new results there atomically.
-PreparedExemplar PrepareExemplar(const Volume& exemplar, const AppearanceOptions& appearance,
+PreparedExemplar PrepareExemplar(const Image& exemplar, const AppearanceOptions& appearance,
                                  const SimilarityOptions& similarity,
                                  const std::optional<std::filesystem::path>& cache_folder,
                                  Progress* progress = nullptr);

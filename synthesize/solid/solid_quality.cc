@@ -11,37 +11,32 @@
 
 #include "core/error.h"
 #include "core/fft.h"
+#include "core/wrap.h"
 #include "synthesize/solid/similarity_set.h"
 #include "synthesize/volume/voxel_hash.h"
 
 namespace photomat {
-namespace {
+namespace {}  // namespace
 
-int Wrap(int value, int length) {
-  const int r = value % length;
-  return r < 0 ? r + length : r;
-}
-
-}  // namespace
-
-double NeighbourhoodMatchError(const Volume& solid, const Volume& exemplar,
+double NeighbourhoodMatchError(const Image& solid, const Image& exemplar,
                                const AppearanceSpace& appearance, int samples, std::uint64_t seed) {
   if (solid.channels() != exemplar.channels()) {
     throw Error(fmt::format("a solid of {} channels cannot match an exemplar of {}",
                             solid.channels(), exemplar.channels()));
   }
   const AppearanceIndex index(appearance);
-  const std::size_t voxels = solid.voxel_count();
+  const std::size_t voxels = solid.pixel_count();
   const bool all = static_cast<std::size_t>(samples) >= voxels;
   const std::size_t count = all ? voxels : static_cast<std::size_t>(samples);
   std::vector<double> errors(count);
   const int half = appearance.neighbourhood / 2;
-  const VolumeSize& size = solid.size();
-  const VolumeSize& exemplar_size = exemplar.size();
+  const ImageExtent& size = solid.extent();
+  const ImageExtent& exemplar_size = exemplar.extent();
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
     const std::size_t p = all ? i : MixBits(seed * 0x9e3779b97f4a7c15ULL + i) % voxels;
-    const int x = static_cast<int>(p % size.x), y = static_cast<int>((p / size.x) % size.y),
-              z = static_cast<int>(p / (static_cast<std::size_t>(size.x) * size.y));
+    const int x = static_cast<int>(p % size.width),
+              y = static_cast<int>((p / size.width) % size.height),
+              z = static_cast<int>(p / (static_cast<std::size_t>(size.width) * size.height));
     std::vector<float> query(static_cast<std::size_t>(appearance.dimensions));
     appearance.Project(solid, x, y, z, query);
     const auto u = appearance.domain.Coordinates(index.Nearest(query));
@@ -49,11 +44,11 @@ double NeighbourhoodMatchError(const Volume& solid, const Volume& exemplar,
     for (int dz = -half; dz <= half; ++dz) {
       for (int dy = -half; dy <= half; ++dy) {
         for (int dx = -half; dx <= half; ++dx) {
-          const auto a =
-              solid.voxel(Wrap(x + dx, size.x), Wrap(y + dy, size.y), Wrap(z + dz, size.z));
-          const auto b =
-              exemplar.voxel(Wrap(u[0] + dx, exemplar_size.x), Wrap(u[1] + dy, exemplar_size.y),
-                             Wrap(u[2] + dz, exemplar_size.z));
+          const auto a = solid.pixel(Wrap(x + dx, size.width), Wrap(y + dy, size.height),
+                                     Wrap(z + dz, size.depth));
+          const auto b = exemplar.pixel(Wrap(u[0] + dx, exemplar_size.width),
+                                        Wrap(u[1] + dy, exemplar_size.height),
+                                        Wrap(u[2] + dz, exemplar_size.depth));
           for (std::size_t c = 0; c < a.size(); ++c) sum += std::pow(a[c] - b[c], 2);
         }
       }
@@ -66,25 +61,25 @@ double NeighbourhoodMatchError(const Volume& solid, const Volume& exemplar,
   return total / static_cast<double>(count);
 }
 
-double HistogramDistance(const Volume& solid, const Volume& reference, int bins) {
+double HistogramDistance(const Image& solid, const Image& reference, int bins) {
   if (solid.channels() != reference.channels() || bins < 1) {
     throw Error("histogram distance needs the same channels and at least one bin");
   }
   double total = 0;
   for (int c = 0; c < reference.channels(); ++c) {
     float low = std::numeric_limits<float>::max(), high = std::numeric_limits<float>::lowest();
-    for (std::size_t i = 0; i < reference.voxel_count(); ++i) {
-      low = std::min(low, reference.voxel(i)[static_cast<std::size_t>(c)]);
-      high = std::max(high, reference.voxel(i)[static_cast<std::size_t>(c)]);
+    for (std::size_t i = 0; i < reference.pixel_count(); ++i) {
+      low = std::min(low, reference.pixel(i)[static_cast<std::size_t>(c)]);
+      high = std::max(high, reference.pixel(i)[static_cast<std::size_t>(c)]);
     }
     if (!(high > low)) high = low + 1e-6f;
-    const auto histogram = [&](const Volume& volume) {
+    const auto histogram = [&](const Image& volume) {
       std::vector<double> h(static_cast<std::size_t>(bins), 0.0);
-      for (std::size_t i = 0; i < volume.voxel_count(); ++i) {
-        const float t = (volume.voxel(i)[static_cast<std::size_t>(c)] - low) / (high - low);
+      for (std::size_t i = 0; i < volume.pixel_count(); ++i) {
+        const float t = (volume.pixel(i)[static_cast<std::size_t>(c)] - low) / (high - low);
         h[static_cast<std::size_t>(std::clamp(static_cast<int>(t * bins), 0, bins - 1))] += 1.0;
       }
-      for (double& v : h) v /= static_cast<double>(volume.voxel_count());
+      for (double& v : h) v /= static_cast<double>(volume.pixel_count());
       return h;
     };
     const std::vector<double> a = histogram(solid), b = histogram(reference);
@@ -94,14 +89,14 @@ double HistogramDistance(const Volume& solid, const Volume& reference, int bins)
   return total / reference.channels();
 }
 
-double EarthMoverDistance(const Volume& solid, const Volume& reference) {
-  if (solid.channels() != reference.channels() || solid.voxel_count() == 0 ||
-      reference.voxel_count() == 0) {
+double EarthMoverDistance(const Image& solid, const Image& reference) {
+  if (solid.channels() != reference.channels() || solid.pixel_count() == 0 ||
+      reference.pixel_count() == 0) {
     throw Error("earth mover's distance needs the same channels and non-empty volumes");
   }
-  const auto sorted_channel = [](const Volume& volume, std::size_t c) {
-    std::vector<float> values(volume.voxel_count());
-    for (std::size_t i = 0; i < values.size(); ++i) values[i] = volume.voxel(i)[c];
+  const auto sorted_channel = [](const Image& volume, std::size_t c) {
+    std::vector<float> values(volume.pixel_count());
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = volume.pixel(i)[c];
     std::sort(values.begin(), values.end());
     return values;
   };
@@ -126,34 +121,36 @@ double EarthMoverDistance(const Volume& solid, const Volume& reference) {
   return total / reference.channels();
 }
 
-std::vector<double> RadialPowerSpectrum(const Volume& volume, int bins) {
-  const VolumeSize& size = volume.size();
-  const RealFft3d fft(size.x, size.y, size.z);
+std::vector<double> RadialPowerSpectrum(const Image& volume, int bins) {
+  const ImageExtent& size = volume.extent();
+  const RealFft3d<float> fft(size.width, size.height, size.depth);
   std::vector<double> power(static_cast<std::size_t>(bins), 0.0), weight(power.size(), 0.0);
-  std::vector<float> channel(volume.voxel_count());
+  std::vector<float> channel(volume.pixel_count());
   std::vector<std::complex<float>> spectrum(fft.spectrum_size());
-  const double voxels = static_cast<double>(volume.voxel_count());
+  const double voxels = static_cast<double>(volume.pixel_count());
   for (int c = 0; c < volume.channels(); ++c) {
     double mean = 0;
     for (std::size_t i = 0; i < channel.size(); ++i)
-      mean += volume.voxel(i)[static_cast<std::size_t>(c)];
+      mean += volume.pixel(i)[static_cast<std::size_t>(c)];
     mean /= voxels;
     for (std::size_t i = 0; i < channel.size(); ++i) {
-      channel[i] = static_cast<float>(volume.voxel(i)[static_cast<std::size_t>(c)] - mean);
+      channel[i] = static_cast<float>(volume.pixel(i)[static_cast<std::size_t>(c)] - mean);
     }
     fft.Forward(channel, spectrum);
     const int half_x = fft.spectrum_x();
-    for (int fz = 0; fz < size.z; ++fz) {
-      const double wz = static_cast<double>(fz <= size.z / 2 ? fz : fz - size.z) / size.z;
-      for (int fy = 0; fy < size.y; ++fy) {
-        const double wy = static_cast<double>(fy <= size.y / 2 ? fy : fy - size.y) / size.y;
+    for (int fz = 0; fz < size.depth; ++fz) {
+      const double wz =
+          static_cast<double>(fz <= size.depth / 2 ? fz : fz - size.depth) / size.depth;
+      for (int fy = 0; fy < size.height; ++fy) {
+        const double wy =
+            static_cast<double>(fy <= size.height / 2 ? fy : fy - size.height) / size.height;
         for (int fx = 0; fx < half_x; ++fx) {
-          const double wx = static_cast<double>(fx) / size.x;
+          const double wx = static_cast<double>(fx) / size.width;
           const double radius = std::sqrt(wx * wx + wy * wy + wz * wz);
           if (radius == 0.0 || radius > 0.5) continue;
           const int bin = std::min(bins - 1, static_cast<int>(radius / 0.5 * bins));
-          const double pair = (fx == 0 || 2 * fx == size.x) ? 1.0 : 2.0;
-          const std::size_t k = (static_cast<std::size_t>(fz) * size.y + fy) * half_x + fx;
+          const double pair = (fx == 0 || 2 * fx == size.width) ? 1.0 : 2.0;
+          const std::size_t k = (static_cast<std::size_t>(fz) * size.height + fy) * half_x + fx;
           power[static_cast<std::size_t>(bin)] += pair * std::norm(spectrum[k]) / voxels;
           weight[static_cast<std::size_t>(bin)] += pair;
         }
@@ -180,17 +177,17 @@ double LogSpectralDistance(const std::vector<double>& a, const std::vector<doubl
   return std::sqrt(sum / used);
 }
 
-Eigen::Matrix3d StructureTensor(const Volume& volume) {
+Eigen::Matrix3d StructureTensor(const Image& volume) {
   const std::vector<float> luminance = ChannelMean(volume);
-  const VolumeSize& size = volume.size();
+  const ImageExtent& size = volume.extent();
   const auto at = [&](int x, int y, int z) {
     return static_cast<double>(
-        luminance[volume.Index(Wrap(x, size.x), Wrap(y, size.y), Wrap(z, size.z))]);
+        luminance[volume.Index(Wrap(x, size.width), Wrap(y, size.height), Wrap(z, size.depth))]);
   };
   Eigen::Matrix3d tensor = Eigen::Matrix3d::Zero();
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         const Eigen::Vector3d g(0.5 * (at(x + 1, y, z) - at(x - 1, y, z)),
                                 0.5 * (at(x, y + 1, z) - at(x, y - 1, z)),
                                 0.5 * (at(x, y, z + 1) - at(x, y, z - 1)));
@@ -206,17 +203,18 @@ Eigen::Vector3d PrincipalDirection(const Eigen::Matrix3d& tensor) {
   return solver.eigenvectors().col(2).normalized();
 }
 
-double CoherentFraction(const Volume& coordinates, const ExemplarDomain& domain) {
-  const VolumeSize& size = coordinates.size();
+double CoherentFraction(const Image& coordinates, const ExemplarDomain& domain) {
+  const ImageExtent& size = coordinates.extent();
   const auto extent = domain.extent();
   std::size_t coherent = 0, pairs = 0;
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         const int p[3] = {x, y, z};
         for (int axis = 0; axis < 3; ++axis) {
           int q[3] = {x, y, z};
-          if (++q[axis] >= (axis == 0 ? size.x : axis == 1 ? size.y : size.z)) continue;
+          if (++q[axis] >= (axis == 0 ? size.width : axis == 1 ? size.height : size.depth))
+            continue;
           bool same = true;
           for (int a = 0; a < 3; ++a) {
             const int expected = a == axis ? 1 : 0;
@@ -233,22 +231,23 @@ double CoherentFraction(const Volume& coordinates, const ExemplarDomain& domain)
   return pairs ? static_cast<double>(coherent) / static_cast<double>(pairs) : 0.0;
 }
 
-PatchStatistics CoherentPatches(const Volume& coordinates, const ExemplarDomain& domain) {
-  const VolumeSize& size = coordinates.size();
+PatchStatistics CoherentPatches(const Image& coordinates, const ExemplarDomain& domain) {
+  const ImageExtent& size = coordinates.extent();
   const auto extent = domain.extent();
   // Union-find over voxels, joined along coherent pairs.
-  std::vector<std::size_t> parent(coordinates.voxel_count());
+  std::vector<std::size_t> parent(coordinates.pixel_count());
   for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = i;
   const auto find = [&parent](std::size_t i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
   };
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         for (int axis = 0; axis < 3; ++axis) {
           int q[3] = {x, y, z};
-          if (++q[axis] >= (axis == 0 ? size.x : axis == 1 ? size.y : size.z)) continue;
+          if (++q[axis] >= (axis == 0 ? size.width : axis == 1 ? size.height : size.depth))
+            continue;
           bool same = true;
           for (int a = 0; a < 3; ++a) {
             const int diff =

@@ -9,16 +9,16 @@ namespace {
 
 // A one-channel 4 x 4 x 4 volume whose voxel i holds value(i).
 template <typename Value>
-Volume Ramp(Value value) {
-  Volume volume(VolumeSize::Cube(4), 1);
-  for (std::size_t i = 0; i < volume.voxel_count(); ++i) {
-    volume.voxel(i)[0] = static_cast<float>(value(static_cast<double>(i)));
+Image Ramp(Value value) {
+  Image volume(ImageExtent::Cube(4), 1);
+  for (std::size_t i = 0; i < volume.pixel_count(); ++i) {
+    volume.pixel(i)[0] = static_cast<float>(value(static_cast<double>(i)));
   }
   return volume;
 }
 
 TEST(SolidQualityTest, EarthMoverDistanceIsTheMeanShiftInUnitsOfTheRange) {
-  const Volume reference = Ramp([](double i) { return i / 63.0; });  // range 1
+  const Image reference = Ramp([](double i) { return i / 63.0; });  // range 1
   EXPECT_DOUBLE_EQ(EarthMoverDistance(reference, reference), 0.0);
   // Every value moved by 0.1: the distributions are 0.1 apart everywhere.
   EXPECT_NEAR(EarthMoverDistance(Ramp([](double i) { return i / 63.0 + 0.1; }), reference), 0.1,
@@ -27,22 +27,22 @@ TEST(SolidQualityTest, EarthMoverDistanceIsTheMeanShiftInUnitsOfTheRange) {
   EXPECT_NEAR(EarthMoverDistance(Ramp([](double i) { return (63.0 - i) / 63.0; }), reference), 0.0,
               1e-9);
   // Half the voxels at 0 and half at 2 (range 2) against all at 0: half the mass moves by 2.
-  const Volume split = Ramp([](double i) { return i < 32 ? 0.0 : 2.0; });
+  const Image split = Ramp([](double i) { return i < 32 ? 0.0 : 2.0; });
   EXPECT_NEAR(EarthMoverDistance(Ramp([](double) { return 0.0; }), split), 0.5, 1e-9);
   // Volumes of different sizes compare their distributions.
-  Volume large(VolumeSize::Cube(8), 1);
-  for (std::size_t i = 0; i < large.voxel_count(); ++i) large.voxel(i)[0] = i % 2 ? 2.0f : 0.0f;
+  Image large(ImageExtent::Cube(8), 1);
+  for (std::size_t i = 0; i < large.pixel_count(); ++i) large.pixel(i)[0] = i % 2 ? 2.0f : 0.0f;
   EXPECT_NEAR(EarthMoverDistance(large, split), 0.0, 1e-9);
-  EXPECT_THROW(EarthMoverDistance(Volume(VolumeSize::Cube(4), 3), reference), Error);
+  EXPECT_THROW(EarthMoverDistance(Image(ImageExtent::Cube(4), 3), reference), Error);
 }
 
 TEST(SolidQualityTest, HistogramDistanceCountsTheMassInOtherBins) {
-  const Volume split = Ramp([](double i) { return i < 32 ? 0.0 : 2.0; });
+  const Image split = Ramp([](double i) { return i < 32 ? 0.0 : 2.0; });
   EXPECT_DOUBLE_EQ(HistogramDistance(split, split), 0.0);
   // All in the first bin against half in the first and half in the last: L1 = 0.5 + 0.5.
   EXPECT_DOUBLE_EQ(HistogramDistance(Ramp([](double) { return 0.0; }), split), 1.0);
   // A shift within a bin is invisible to the histogram, not to the earth mover's distance.
-  const Volume nudged = Ramp([](double i) { return i < 32 ? 0.01 : 2.0; });
+  const Image nudged = Ramp([](double i) { return i < 32 ? 0.01 : 2.0; });
   EXPECT_DOUBLE_EQ(HistogramDistance(nudged, split, 32), 0.0);
   EXPECT_NEAR(EarthMoverDistance(nudged, split), 0.5 * 0.01 / 2.0, 1e-9);
 }

@@ -26,20 +26,21 @@ int BinOf(float value) {
 
 // --- colour basis ---
 
+// The pixels of an image as a pixels x channels matrix: its planes are the columns.
+Eigen::Map<const Eigen::MatrixXf> PixelMatrix(const Image& image) {
+  return {image.values().data(), static_cast<Eigen::Index>(image.pixel_count()), image.channels()};
+}
+
 ColourBasis FitColourBasis(const std::vector<SolidView>& views) {
   const int channels = views.front().image.channels();
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(channels);
   Eigen::MatrixXd outer = Eigen::MatrixXd::Zero(channels, channels);
   double count = 0;
   for (const SolidView& view : views) {
-    const auto values = view.image.values();
-    for (std::size_t p = 0; p < view.image.pixel_count(); ++p) {
-      const Eigen::Map<const Eigen::VectorXf> pixel(values.data() + p * channels, channels);
-      const Eigen::VectorXd x = pixel.cast<double>();
-      sum += x;
-      outer.noalias() += x * x.transpose();
-      count += 1;
-    }
+    const Eigen::MatrixXd x = PixelMatrix(view.image).cast<double>();
+    sum += x.colwise().sum().transpose();
+    outer.noalias() += x.transpose() * x;
+    count += static_cast<double>(x.rows());
   }
   const Eigen::VectorXd mean = sum / count;
   const Eigen::MatrixXd covariance = outer / count - mean * mean.transpose();
@@ -56,38 +57,20 @@ ColourBasis FitColourBasis(const std::vector<SolidView>& views) {
   basis.axes = axes.cast<float>();
   basis.low = Eigen::VectorXf::Constant(channels, std::numeric_limits<float>::max());
   basis.high = Eigen::VectorXf::Constant(channels, std::numeric_limits<float>::lowest());
-  for (const SolidView& view : views) {
-    const auto values = view.image.values();
-    for (std::size_t p = 0; p < view.image.pixel_count(); ++p) {
-      const Eigen::Map<const Eigen::VectorXf> pixel(values.data() + p * channels, channels);
-      const Eigen::VectorXf y = basis.axes.transpose() * (pixel - basis.mean);
-      basis.low = basis.low.cwiseMin(y);
-      basis.high = basis.high.cwiseMax(y);
-    }
-  }
   basis.input_low = Eigen::VectorXf::Constant(channels, std::numeric_limits<float>::max());
   basis.input_high = Eigen::VectorXf::Constant(channels, std::numeric_limits<float>::lowest());
   for (const SolidView& view : views) {
-    const auto values = view.image.values();
-    for (std::size_t p = 0; p < view.image.pixel_count(); ++p) {
-      const Eigen::Map<const Eigen::VectorXf> pixel(values.data() + p * channels, channels);
-      basis.input_low = basis.input_low.cwiseMin(pixel);
-      basis.input_high = basis.input_high.cwiseMax(pixel);
-    }
+    const auto x = PixelMatrix(view.image);
+    const Eigen::MatrixXf y = (x.rowwise() - basis.mean.transpose()) * basis.axes;
+    basis.low = basis.low.cwiseMin(y.colwise().minCoeff().transpose());
+    basis.high = basis.high.cwiseMax(y.colwise().maxCoeff().transpose());
+    basis.input_low = basis.input_low.cwiseMin(x.colwise().minCoeff().transpose());
+    basis.input_high = basis.input_high.cwiseMax(x.colwise().maxCoeff().transpose());
   }
   for (int c = 0; c < channels; ++c) {
     if (!(basis.high[c] > basis.low[c])) basis.high[c] = basis.low[c] + 1e-6f;  // flat channel
   }
   return basis;
-}
-
-// The view in normalised decorrelated channels.
-Image Normalise(const Image& view, const ColourBasis& basis) {
-  Image normalised(view.width(), view.height(), view.channels());
-  for (std::size_t p = 0; p < view.pixel_count(); ++p) {
-    basis.ToNormalised(view.pixel(p), normalised.pixel(p));
-  }
-  return normalised;
 }
 
 // --- analysis ---
@@ -194,12 +177,6 @@ void AssignRegions(ChannelSpectrum& statistics, int regions) {
   }
 }
 
-std::vector<float> Column(const Image& image, int channel) {
-  std::vector<float> values(image.pixel_count());
-  for (std::size_t p = 0; p < values.size(); ++p) values[p] = image.pixel(p)[channel];
-  return values;
-}
-
 // Stretches `values` linearly onto [-1, 1] (a constant slice becomes 0).
 void RescaleToUnitRange(std::span<float> values) {
   const auto [low_it, high_it] = std::minmax_element(values.begin(), values.end());
@@ -214,41 +191,41 @@ void RescaleToUnitRange(std::span<float> values) {
 
 // --- the block ---
 
-// One N^3 array per decorrelated channel, x fastest.
-using Block = std::vector<std::vector<float>>;
-
-std::size_t BlockIndex(int n, int x, int y, int z) {
-  return (static_cast<std::size_t>(z) * n + y) * n + x;
-}
+// The block: an N^3 volume of the decorrelated channels (see ColourBasis).
+using Block = Image;
 
 // Voxel index of pixel (column, row) of slice `index` of `plane` in an N^3 block.
-std::size_t SliceVoxel(int n, SlicePlane plane, int index, int column, int row) {
+std::size_t SliceVoxel(const Block& block, SlicePlane plane, int index, int column, int row) {
   switch (plane) {
     case SlicePlane::kXY:
-      return BlockIndex(n, column, row, index);
+      return block.Index(column, row, index);
     case SlicePlane::kXZ:
-      return BlockIndex(n, column, index, row);
+      return block.Index(column, index, row);
     case SlicePlane::kYZ:
-      return BlockIndex(n, index, column, row);
+      return block.Index(index, column, row);
   }
   return 0;
 }
 
-void ReadSlice(const std::vector<float>& block, int n, SlicePlane plane, int index,
-               std::span<float> slice) {
+// Slice `index` of `plane` of channel c, row-major: the FFTs need it contiguous, which only an xy
+// slice is in place.
+void ReadSlice(const Block& block, int c, SlicePlane plane, int index, std::span<float> slice) {
+  const int n = block.width();
+  const float* values = block.plane(c).data();
   for (int row = 0; row < n; ++row) {
     for (int column = 0; column < n; ++column) {
       slice[static_cast<std::size_t>(row) * n + column] =
-          block[SliceVoxel(n, plane, index, column, row)];
+          values[SliceVoxel(block, plane, index, column, row)];
     }
   }
 }
 
-void WriteSlice(std::vector<float>& block, int n, SlicePlane plane, int index,
-                std::span<const float> slice) {
+void WriteSlice(Block& block, int c, SlicePlane plane, int index, std::span<const float> slice) {
+  const int n = block.width();
+  float* values = block.plane(c).data();
   for (int row = 0; row < n; ++row) {
     for (int column = 0; column < n; ++column) {
-      block[SliceVoxel(n, plane, index, column, row)] =
+      values[SliceVoxel(block, plane, index, column, row)] =
           slice[static_cast<std::size_t>(row) * n + column];
     }
   }
@@ -257,16 +234,16 @@ void WriteSlice(std::vector<float>& block, int n, SlicePlane plane, int index,
 // Coerces every slice of `plane` of `source` and writes it to `target` (may be the same block:
 // slices of one orientation share no voxel, so they are independent and run in parallel).
 void ProcessPlane(const Block& source, Block& target, const SpectralModel& model, SlicePlane plane,
-                  const RealFft2d& fft, int halvings) {
+                  const RealFft2d<float>& fft, int halvings) {
   const int n = model.size;
   const auto& statistics = model.planes[static_cast<int>(plane)];
   tbb::parallel_for(0, n, [&](int index) {
     std::vector<float> slice(static_cast<std::size_t>(n) * n);
-    for (std::size_t c = 0; c < source.size(); ++c) {
-      ReadSlice(source[c], n, plane, index, slice);
+    for (int c = 0; c < source.channels(); ++c) {
+      ReadSlice(source, c, plane, index, slice);
       MatchSpectrum(slice, statistics[c], fft, halvings);
       MatchHistogram(slice, statistics[c].histogram);
-      WriteSlice(target[c], n, plane, index, slice);
+      WriteSlice(target, c, plane, index, slice);
     }
   });
 }
@@ -275,8 +252,8 @@ struct ChannelFitSums {
   double histogram_mean = 0, histogram_max = 0, inside = 0, inside_average = 0, lsd = 0;
 };
 
-ChannelFitSums MeasureChannel(const std::vector<float>& block, const ChannelSpectrum& statistics,
-                              SlicePlane plane, const RealFft2d& fft) {
+ChannelFitSums MeasureChannel(const Block& block, int c, const ChannelSpectrum& statistics,
+                              SlicePlane plane, const RealFft2d<float>& fft) {
   const int n = statistics.size;
   const int half_width = statistics.spectrum_width();
   const std::size_t spectrum_size = fft.spectrum_size();
@@ -285,7 +262,7 @@ ChannelFitSums MeasureChannel(const std::vector<float>& block, const ChannelSpec
   tbb::parallel_for(0, n, [&](int index) {
     std::vector<float> slice(static_cast<std::size_t>(n) * n);
     std::vector<std::complex<float>> spectrum(spectrum_size);
-    ReadSlice(block, n, plane, index, slice);
+    ReadSlice(block, c, plane, index, slice);
     histogram_l1[static_cast<std::size_t>(index)] =
         CoarseHistogramL1(Histogram256(slice), statistics.histogram, 8);
     fft.Forward(slice, spectrum);
@@ -325,16 +302,16 @@ ChannelFitSums MeasureChannel(const std::vector<float>& block, const ChannelSpec
 }
 
 std::vector<PlaneFit> MeasureBlock(const Block& block, const SpectralModel& model,
-                                   const RealFft2d& fft) {
+                                   const RealFft2d<float>& fft) {
   std::vector<PlaneFit> fits;
   for (SlicePlane plane : kAllSlicePlanes) {
     if (!model.Constrains(plane)) continue;
     PlaneFit fit;
     fit.plane = plane;
     const auto& statistics = model.planes[static_cast<int>(plane)];
-    for (std::size_t c = 0; c < block.size(); ++c) {
-      const ChannelFitSums sums = MeasureChannel(block[c], statistics[c], plane, fft);
-      const double share = 1.0 / static_cast<double>(block.size());
+    for (int c = 0; c < block.channels(); ++c) {
+      const ChannelFitSums sums = MeasureChannel(block, c, statistics[c], plane, fft);
+      const double share = 1.0 / static_cast<double>(block.channels());
       fit.histogram_l1_mean += share * sums.histogram_mean;
       fit.histogram_l1_max = std::max(fit.histogram_l1_max, sums.histogram_max);
       fit.inside_bounds += share * sums.inside;
@@ -346,20 +323,14 @@ std::vector<PlaneFit> MeasureBlock(const Block& block, const SpectralModel& mode
   return fits;
 }
 
-Block BlockFromVolume(const Volume& volume, const SpectralModel& model) {
+Block BlockFromVolume(const Image& volume, const SpectralModel& model) {
   const int n = model.size;
-  if (volume.size() != VolumeSize::Cube(n) || volume.channels() != model.basis.channels()) {
+  if (volume.extent() != ImageExtent::Cube(n) || volume.channels() != model.basis.channels()) {
     throw Error(fmt::format("a {} volume of {} channels does not match the model ({}^3, {})",
-                            ToString(volume.size()), volume.channels(), n, model.basis.channels()));
+                            ToString(volume.extent()), volume.channels(), n,
+                            model.basis.channels()));
   }
-  Block block(static_cast<std::size_t>(volume.channels()),
-              std::vector<float>(volume.voxel_count()));
-  std::vector<float> normalised(static_cast<std::size_t>(volume.channels()));
-  for (std::size_t i = 0; i < volume.voxel_count(); ++i) {
-    model.basis.ToNormalised(volume.voxel(i), normalised);
-    for (std::size_t c = 0; c < block.size(); ++c) block[c][i] = normalised[c];
-  }
-  return block;
+  return model.basis.ToNormalised(volume);
 }
 
 }  // namespace
@@ -416,21 +387,35 @@ Image ApplyViewTransform(const Image& image, ViewTransform transform) {
   return result;
 }
 
-void ColourBasis::ToNormalised(std::span<const float> pixel, std::span<float> normalised) const {
-  const Eigen::Map<const Eigen::VectorXf> x(pixel.data(), channels());
-  const Eigen::VectorXf y = axes.transpose() * (x - mean);
+Image ColourBasis::ToNormalised(const Image& image) const {
+  const Eigen::MatrixXf y = (PixelMatrix(image).rowwise() - mean.transpose()) * axes;
+  Image normalised = image.depth() == 1 ? Image(image.width(), image.height(), channels())
+                                        : Image(image.extent(), channels());
   for (int c = 0; c < channels(); ++c) {
-    normalised[static_cast<std::size_t>(c)] = -1.0f + 2.0f * (y[c] - low[c]) / (high[c] - low[c]);
+    const float l = low[c], range = high[c] - low[c];
+    float* out = normalised.plane(c).data();
+    for (Eigen::Index p = 0; p < y.rows(); ++p) out[p] = -1.0f + 2.0f * (y(p, c) - l) / range;
   }
+  return normalised;
 }
 
-void ColourBasis::FromNormalised(std::span<const float> normalised, std::span<float> pixel) const {
-  Eigen::VectorXf y(channels());
+Image ColourBasis::FromNormalised(const Image& normalised) const {
+  Eigen::MatrixXf y(static_cast<Eigen::Index>(normalised.pixel_count()), channels());
   for (int c = 0; c < channels(); ++c) {
-    y[c] = low[c] + 0.5f * (normalised[static_cast<std::size_t>(c)] + 1.0f) * (high[c] - low[c]);
+    const float* in = normalised.plane(c).data();
+    const float l = low[c], range = high[c] - low[c];
+    for (Eigen::Index p = 0; p < y.rows(); ++p) y(p, c) = l + 0.5f * (in[p] + 1.0f) * range;
   }
-  const Eigen::VectorXf x = (axes * y + mean).cwiseMax(input_low).cwiseMin(input_high);
-  std::copy(x.data(), x.data() + channels(), pixel.begin());
+  const Eigen::MatrixXf x = y * axes.transpose();
+  Image image = normalised.depth() == 1 ? Image(normalised.width(), normalised.height(), channels())
+                                        : Image(normalised.extent(), channels());
+  for (int c = 0; c < channels(); ++c) {
+    float* out = image.plane(c).data();
+    for (Eigen::Index p = 0; p < x.rows(); ++p) {
+      out[p] = std::clamp(x(p, c) + mean[c], input_low[c], input_high[c]);
+    }
+  }
+  return image;
 }
 
 std::array<double, 256> Histogram256(std::span<const float> values) {
@@ -464,10 +449,10 @@ ChannelSpectrum AnalyseChannel(const Image& view, int channel, const SpectralSol
                                int crop_size, std::uint64_t seed) {
   const int n = options.size;
   const int c = crop_size;
-  const std::vector<float> values = Column(view, channel);
+  const std::span<const float> values = view.plane(channel);
   Random random(seed);
   const auto origins = CropOrigins(view.width(), view.height(), c, options.crops, random);
-  const RealFft2d fft(c, c);
+  const RealFft2d<float> fft(c, c);
   const std::size_t half = fft.spectrum_size();
   std::vector<double> sum(half, 0.0);
   std::vector<float> low(half, std::numeric_limits<float>::max()), high(half, 0.0f);
@@ -545,7 +530,7 @@ SpectralModel AnalyseViews(const std::vector<SolidView>& views,
   model.channel_names = views.front().image.channel_names();
   std::uint64_t stream = 0;
   for (const SolidView& view : views) {
-    const Image normalised = Normalise(view.image, model.basis);
+    const Image normalised = model.basis.ToNormalised(view.image);
     auto& planes = model.planes[static_cast<int>(view.plane)];
     for (int c = 0; c < channels; ++c) {
       planes.push_back(
@@ -581,8 +566,8 @@ void EqualiseRegionEnergies(std::span<float> amplitude, const ChannelSpectrum& s
   }
 }
 
-void MatchSpectrum(std::span<float> slice, const ChannelSpectrum& statistics, const RealFft2d& fft,
-                   int halvings) {
+void MatchSpectrum(std::span<float> slice, const ChannelSpectrum& statistics,
+                   const RealFft2d<float>& fft, int halvings) {
   const int n = statistics.size;
   std::vector<std::complex<float>> spectrum(fft.spectrum_size());
   fft.Forward(slice, spectrum);
@@ -645,16 +630,14 @@ SpectralSolidResult SynthesizeSpectralSolid(const std::vector<SolidView>& views,
   const SpectralModel& model = result.model;
   const int n = options.size;
   const std::size_t channels = static_cast<std::size_t>(model.basis.channels());
-  const std::size_t voxels = VolumeSize::Cube(n).voxel_count();
 
   // White noise, uniform in [-1, 1], from a per-voxel hash (independent of threads).
-  Block block(channels, std::vector<float>(voxels));
+  Block block(ImageExtent::Cube(n), static_cast<int>(channels));
   tbb::parallel_for(0, n, [&](int z) {
-    for (int y = 0; y < n; ++y) {
-      for (int x = 0; x < n; ++x) {
-        for (std::size_t c = 0; c < channels; ++c) {
-          block[c][BlockIndex(n, x, y, z)] = HashToSigned(HashVoxel(options.seed, c, x, y, z));
-        }
+    for (std::size_t c = 0; c < channels; ++c) {
+      for (int y = 0; y < n; ++y) {
+        float* row = block.row(static_cast<int>(c), y, z).data();
+        for (int x = 0; x < n; ++x) row[x] = HashToSigned(HashVoxel(options.seed, c, x, y, z));
       }
     }
   });
@@ -665,7 +648,7 @@ SpectralSolidResult SynthesizeSpectralSolid(const std::vector<SolidView>& views,
       order.push_back(plane);
     }
   }
-  const RealFft2d fft(n, n);
+  const RealFft2d<float> fft(n, n);
   report.Start("solid from views", static_cast<std::size_t>(options.iterations) * order.size());
   for (int iteration = 1; iteration <= options.iterations; ++iteration) {
     const Block previous = block;
@@ -675,27 +658,24 @@ SpectralSolidResult SynthesizeSpectralSolid(const std::vector<SolidView>& views,
         report.Advance();
       }
     } else {
-      Block sum(channels, std::vector<float>(voxels, 0.0f));
+      Block sum(ImageExtent::Cube(n), static_cast<int>(channels));
       Block processed = previous;
       for (SlicePlane plane : order) {
         ProcessPlane(previous, processed, model, plane, fft, options.clamp_halvings);
-        for (std::size_t c = 0; c < channels; ++c) {
-          for (std::size_t i = 0; i < voxels; ++i) sum[c][i] += processed[c][i];
-        }
+        std::transform(sum.values().begin(), sum.values().end(), processed.values().begin(),
+                       sum.values().begin(), std::plus<float>());
         report.Advance();
       }
       const float share = 1.0f / static_cast<float>(order.size());
-      for (std::size_t c = 0; c < channels; ++c) {
-        for (std::size_t i = 0; i < voxels; ++i) block[c][i] = sum[c][i] * share;
-      }
+      std::transform(sum.values().begin(), sum.values().end(), block.values().begin(),
+                     [share](float v) { return v * share; });
     }
     double change = 0, norm = 0;
-    for (std::size_t c = 0; c < channels; ++c) {
-      for (std::size_t i = 0; i < voxels; ++i) {
-        const double d = block[c][i] - previous[c][i];
-        change += d * d;
-        norm += static_cast<double>(block[c][i]) * block[c][i];
-      }
+    const std::span<const float> now = block.values(), before = previous.values();
+    for (std::size_t i = 0; i < now.size(); ++i) {
+      const double d = now[i] - before[i];
+      change += d * d;
+      norm += static_cast<double>(now[i]) * now[i];
     }
     IterationReport iteration_report;
     iteration_report.iteration = iteration;
@@ -707,19 +687,13 @@ SpectralSolidResult SynthesizeSpectralSolid(const std::vector<SolidView>& views,
   }
   report.Finish();
 
-  std::vector<std::string> names = model.channel_names;
-  result.volume = Volume(VolumeSize::Cube(n), static_cast<int>(channels));
-  if (!names.empty()) result.volume.set_channel_names(names);
-  std::vector<float> normalised(channels);
-  for (std::size_t i = 0; i < voxels; ++i) {
-    for (std::size_t c = 0; c < channels; ++c) normalised[c] = block[c][i];
-    model.basis.FromNormalised(normalised, result.volume.voxel(i));
-  }
+  result.volume = model.basis.FromNormalised(block);
+  result.volume.set_channel_names(model.channel_names);
   return result;
 }
 
-std::vector<PlaneFit> MeasureSpectralFit(const Volume& volume, const SpectralModel& model) {
-  const RealFft2d fft(model.size, model.size);
+std::vector<PlaneFit> MeasureSpectralFit(const Image& volume, const SpectralModel& model) {
+  const RealFft2d<float> fft(model.size, model.size);
   return MeasureBlock(BlockFromVolume(volume, model), model, fft);
 }
 

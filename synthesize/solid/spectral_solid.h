@@ -88,8 +88,10 @@ struct ColourBasis {
   Eigen::VectorXf input_high;
 
   int channels() const { return static_cast<int>(mean.size()); }
-  void ToNormalised(std::span<const float> pixel, std::span<float> normalised) const;
-  void FromNormalised(std::span<const float> normalised, std::span<float> pixel) const;
+  // Every pixel (or voxel) of `image` in the decorrelated channels, and back: a matrix product of
+  // the planes (pixels x channels).
+  Image ToNormalised(const Image& image) const;
+  Image FromNormalised(const Image& normalised) const;
 };
 
 struct SpectralModel {
@@ -127,8 +129,8 @@ void ClampAmplitudes(std::span<float> amplitude, const ChannelSpectrum& statisti
 void EqualiseRegionEnergies(std::span<float> amplitude, const ChannelSpectrum& statistics);
 // Spectral coercion of an N x N slice: amplitudes clamped and equalised, phases kept, inverse
 // transform, then the range stretched back to [-1, 1].
-void MatchSpectrum(std::span<float> slice, const ChannelSpectrum& statistics, const RealFft2d& fft,
-                   int halvings);
+void MatchSpectrum(std::span<float> slice, const ChannelSpectrum& statistics,
+                   const RealFft2d<float>& fft, int halvings);
 // Bin-level histogram specification (paper Fig. 3): the pixels of a source bin all move to the
 // mass-weighted mean of the target bins its cumulative interval covers, never split.
 void MatchHistogram(std::span<float> slice, const std::array<double, 256>& target);
@@ -153,7 +155,7 @@ struct IterationReport {
 };
 
 struct SpectralSolidResult {
-  Volume volume;
+  Image volume;
   SpectralModel model;
   std::vector<IterationReport> iterations;
 };
@@ -163,6 +165,6 @@ SpectralSolidResult SynthesizeSpectralSolid(const std::vector<SolidView>& views,
                                             Progress* progress = nullptr);
 
 // The fit of every constrained orientation of `volume` (in the model's colour space).
-std::vector<PlaneFit> MeasureSpectralFit(const Volume& volume, const SpectralModel& model);
+std::vector<PlaneFit> MeasureSpectralFit(const Image& volume, const SpectralModel& model);
 
 }  // namespace photomat

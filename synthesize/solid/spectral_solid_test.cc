@@ -116,7 +116,7 @@ TEST(SpectralSolidTest, SpectralMatchKeepsPhases) {
   const ChannelSpectrum statistics = NoiseStatistics(n);
   std::vector<float> slice(n * n);
   for (int i = 0; i < n * n; ++i) slice[i] = HashToSigned(HashVoxel(7, 0, i, 0, 0));
-  const RealFft2d fft(n, n);
+  const RealFft2d<float> fft(n, n);
   std::vector<std::complex<float>> before(fft.spectrum_size()), after(fft.spectrum_size());
   fft.Forward(slice, before);
   MatchSpectrum(slice, statistics, fft, 50);
@@ -161,10 +161,10 @@ TEST(SpectralSolidTest, HistogramMatchReachesTheTargetAndKeepsOrder) {
   for (std::size_t i = 0; i < slice.size(); ++i) EXPECT_NEAR(again[i], slice[i], 2.0 / 128);
 }
 
-double StreakAnisotropy(const Volume& volume, SlicePlane plane) {
+double StreakAnisotropy(const Image& volume, SlicePlane plane) {
   // Mean squared difference of neighbours along slice columns vs rows (channel R).
   double along_columns = 0, along_rows = 0;
-  for (int i = 0; i < SliceCount(volume.size(), plane); ++i) {
+  for (int i = 0; i < SliceCount(volume.extent(), plane); ++i) {
     const Image slice = ExtractSlice(volume, plane, i);
     for (int y = 0; y + 1 < slice.height(); ++y) {
       for (int x = 0; x + 1 < slice.width(); ++x) {
@@ -206,7 +206,7 @@ TEST(SpectralSolidTest, ReproducesEachViewsStatisticsAndConverges) {
   // The fit of each constrained orientation, against the white-noise start.
   const std::vector<PlaneFit> noise = MeasureSpectralFit(
       [&] {
-        Volume start(VolumeSize::Cube(32), 3);
+        Image start(ImageExtent::Cube(32), 3);
         for (std::size_t i = 0; i < start.values().size(); ++i) {
           start.values()[i] = 0.5f + 0.5f * HashToSigned(HashVoxel(1, 0, i, 0, 0));
         }
@@ -262,7 +262,7 @@ TEST(SpectralSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
   SpectralSolidOptions options;
   options.size = 16;
   options.iterations = 2;
-  Volume one, two;
+  Image one, two;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     one = SynthesizeSpectralSolid(StreakViews(), options).volume;
@@ -274,7 +274,7 @@ TEST(SpectralSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
   ASSERT_TRUE(one.SameShape(two));
   EXPECT_EQ(std::memcmp(one.values().data(), two.values().data(), one.values().size_bytes()), 0);
   options.seed = 2;
-  const Volume other = SynthesizeSpectralSolid(StreakViews(), options).volume;
+  const Image other = SynthesizeSpectralSolid(StreakViews(), options).volume;
   EXPECT_NE(std::memcmp(one.values().data(), other.values().data(), one.values().size_bytes()), 0);
 }
 

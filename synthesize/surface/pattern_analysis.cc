@@ -3,10 +3,11 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <complex>
 #include <numbers>
-#include <opencv2/core.hpp>
 
 #include "core/error.h"
+#include "core/fft.h"
 
 namespace photomat {
 
@@ -78,23 +79,24 @@ double DominantGridWavelength(const GridShape& grid, const Eigen::VectorXd& fiel
   if (field.size() != static_cast<Eigen::Index>(grid.width) * grid.height) {
     throw Error("grid wavelength: one value per grid node needed");
   }
-  cv::Mat values(grid.height, grid.width, CV_64F);
   const double mean = field.mean();
-  for (int y = 0; y < grid.height; ++y) {
-    for (int x = 0; x < grid.width; ++x) values.at<double>(y, x) = field[y * grid.width + x] - mean;
-  }
-  cv::Mat spectrum;
-  cv::dft(values, spectrum, cv::DFT_COMPLEX_OUTPUT);
-  // Radial bins of the wavenumber in cycles per domain width (square cells assumed per axis).
+  std::vector<double> values(field.size());
+  for (Eigen::Index i = 0; i < field.size(); ++i) values[i] = field[i] - mean;
+  const RealFft2d<double> fft(grid.width, grid.height);
+  std::vector<std::complex<double>> spectrum(fft.spectrum_size());
+  fft.Forward(values, spectrum);
+  // Radial bins of the wavenumber in cycles per domain width (square cells assumed per axis). The
+  // half spectrum of a real field: every column but 0 and width / 2 stands for a conjugate pair.
   const int bins = std::max(grid.width, grid.height);
   std::vector<double> power(bins, 0.0), weighted_k(bins, 0.0);
+  const int half = fft.spectrum_width();
   for (int y = 0; y < grid.height; ++y) {
-    for (int x = 0; x < grid.width; ++x) {
-      const double fx = (x <= grid.width / 2 ? x : x - grid.width) / (grid.width * grid.spacing);
+    for (int x = 0; x < half; ++x) {
+      const double fx = x / (grid.width * grid.spacing);
       const double fy = (y <= grid.height / 2 ? y : y - grid.height) / (grid.height * grid.spacing);
       const double f = std::hypot(fx, fy);  // cycles per length unit
-      const cv::Vec2d c = spectrum.at<cv::Vec2d>(y, x);
-      const double p = c[0] * c[0] + c[1] * c[1];
+      const double pairs = (x == 0 || 2 * x == grid.width) ? 1.0 : 2.0;
+      const double p = pairs * std::norm(spectrum[static_cast<std::size_t>(y) * half + x]);
       const int bin = static_cast<int>(std::lround(f * bins * grid.spacing));
       if (bin <= 0 || bin >= bins) continue;
       power[bin] += p;

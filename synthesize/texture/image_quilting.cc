@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/random.h"
+#include "core/wrap.h"
 #include "synthesize/texture/boundary_cut.h"
 
 namespace photomat {
@@ -50,7 +51,7 @@ void CheckOptions(const Image& guide, const SynthesisTarget& target, const Quilt
 
 // The mean error between horizontally or vertically neighbouring sample pixels: the texture's
 // own roughness in the matching metric, per pixel.
-double MeanNeighbourError(const PlanarImage& space, ErrorMetric metric) {
+double MeanNeighbourError(const Image& space, ErrorMetric metric) {
   double sum = 0.0;
   std::size_t pairs = 0;
   for (int c = 0; c < space.channels(); ++c) {
@@ -70,7 +71,7 @@ double MeanNeighbourError(const PlanarImage& space, ErrorMetric metric) {
 
 // The already-synthesised pixels under a block, in matching space.
 OverlapTemplate MakeTemplate(const OverlapShape& shape, const PlacedBlock& block,
-                             const SourceMap& canvas, const PlanarImage& space) {
+                             const SourceMap& canvas, const Image& space) {
   OverlapTemplate pattern(shape, space.channels());
   for (int v = 0; v < shape.block; ++v) {
     for (int u = 0; u < shape.block; ++u) {
@@ -86,7 +87,7 @@ OverlapTemplate MakeTemplate(const OverlapShape& shape, const PlacedBlock& block
 
 // Per-pixel error between the new block and the overlap, over the whole block (0 elsewhere).
 std::vector<double> PixelErrors(const OverlapTemplate& pattern, SamplePixel source,
-                                const PlanarImage& space, ErrorMetric metric) {
+                                const Image& space, ErrorMetric metric) {
   const int b = pattern.shape.block;
   std::vector<double> errors(static_cast<std::size_t>(b) * b, 0.0);
   for (int v = 0; v < b; ++v) {
@@ -137,8 +138,8 @@ std::optional<SamplePixel> Continuation(const BlockPlacement& placement, int col
 // `wrap`).
 bool Meet(int a, int b, int length, int extent, bool wrap) {
   if (!wrap) return a < b + length && b < a + length;
-  const int forward = ((b - a) % extent + extent) % extent;
-  const int backward = ((a - b) % extent + extent) % extent;
+  const int forward = Wrap(b - a, extent);
+  const int backward = Wrap(a - b, extent);
   return forward < length || backward < length;
 }
 
@@ -209,7 +210,7 @@ BlockPlacement PlanQuilt(const Image& guide, const SynthesisTarget& target,
   const int overlap = options.overlap > 0 ? options.overlap : DefaultOverlap(block);
   CheckOptions(guide, target, options, block, overlap);
   const ErrorMetric metric = options.matching.metric;
-  const PlanarImage space(guide, ChannelTransform::Fit(guide, options.matching));
+  const Image space = ChannelTransform::Fit(guide, options.matching).Apply(guide);
   const double neighbour_error = MeanNeighbourError(space, metric);
 
   BlockPlacement placement;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 
 #include "core/error.h"
@@ -23,8 +24,9 @@ Image NormalMaps(const Representation& representation) {
   const Image& maps = representation.maps();
   Image normals(maps.width(), maps.height(),
                 std::vector<std::string>(kNormalMaps.begin(), kNormalMaps.end()));
-  for (std::size_t i = 0; i < maps.pixel_count(); ++i) {
-    for (int k = 0; k < 3; ++k) normals.pixel(i)[k] = maps.pixel(i)[channels[k]];
+  for (int k = 0; k < 3; ++k) {
+    std::copy(maps.plane(channels[k]).begin(), maps.plane(channels[k]).end(),
+              normals.plane(k).begin());
   }
   return normals;
 }
@@ -49,8 +51,9 @@ Representation ProjectNormalsToIntegrable(const Representation& representation) 
       NormalsFromGradients(ProjectToIntegrable(GradientsFromNormals(NormalMaps(representation))));
   Image maps = representation.maps();
   const std::array<int, 3> channels = NormalChannels(representation);
-  for (std::size_t i = 0; i < maps.pixel_count(); ++i) {
-    for (int k = 0; k < 3; ++k) maps.pixel(i)[channels[k]] = projected.pixel(i)[k];
+  for (int k = 0; k < 3; ++k) {
+    std::copy(projected.plane(k).begin(), projected.plane(k).end(),
+              maps.plane(channels[k]).begin());
   }
   nlohmann::json details = representation.details();
   if (!details.is_object()) details = nlohmann::json::object();

@@ -3,34 +3,37 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
+#include "core/enum_names.h"
 #include "core/error.h"
 
 namespace photomat {
 
-std::string_view ToString(ErrorMetric metric) {
-  return metric == ErrorMetric::kSsd ? "ssd" : "sad";
-}
+namespace {
+
+constexpr std::array<NamedValue<ErrorMetric>, 2> kMetricNames = {
+    {{ErrorMetric::kSsd, "ssd"}, {ErrorMetric::kSad, "sad"}}};
+constexpr std::array<NamedValue<ChannelScaling>, 2> kScalingNames = {
+    {{ChannelScaling::kMinMax, "minmax"}, {ChannelScaling::kZScore, "zscore"}}};
+
+}  // namespace
+
+std::string_view ToString(ErrorMetric metric) { return NameOf(metric, kMetricNames); }
 
 ErrorMetric ParseErrorMetric(std::string_view name) {
-  if (name == "ssd") return ErrorMetric::kSsd;
-  if (name == "sad") return ErrorMetric::kSad;
-  throw Error(fmt::format("unknown error metric '{}' (ssd or sad)", name));
+  return ValueNamed(name, kMetricNames, "error metric");
 }
 
-std::string_view ToString(ChannelScaling scaling) {
-  return scaling == ChannelScaling::kMinMax ? "minmax" : "zscore";
-}
+std::string_view ToString(ChannelScaling scaling) { return NameOf(scaling, kScalingNames); }
 
 ChannelScaling ParseChannelScaling(std::string_view name) {
-  if (name == "minmax") return ChannelScaling::kMinMax;
-  if (name == "zscore") return ChannelScaling::kZScore;
-  throw Error(fmt::format("unknown channel scaling '{}' (minmax or zscore)", name));
+  return ValueNamed(name, kScalingNames, "channel scaling");
 }
 
-ChannelTransform ChannelTransform::Fit(const Image& maps, const MatchingOptions& options) {
+ChannelTransform ChannelTransform::Fit(ConstImageView maps, const MatchingOptions& options) {
   const int n = maps.channels();
   if (!options.weights.empty() && static_cast<int>(options.weights.size()) != n) {
     throw Error(fmt::format("{} channel weights given for {} channels", options.weights.size(), n));
@@ -43,14 +46,15 @@ ChannelTransform ChannelTransform::Fit(const Image& maps, const MatchingOptions&
   std::vector<double> sum(n, 0.0), sum2(n, 0.0);
   std::vector<double> low(n, std::numeric_limits<double>::infinity());
   std::vector<double> high(n, -std::numeric_limits<double>::infinity());
-  for (std::size_t i = 0; i < maps.pixel_count(); ++i) {
-    const auto pixel = maps.pixel(i);
-    for (int c = 0; c < n; ++c) {
-      const double v = pixel[c];
-      sum[c] += v;
-      sum2[c] += v * v;
-      low[c] = std::min(low[c], v);
-      high[c] = std::max(high[c], v);
+  for (int c = 0; c < n; ++c) {
+    for (int y = 0; y < maps.height(); ++y) {
+      for (const float value : maps.row(c, y)) {
+        const double v = value;
+        sum[c] += v;
+        sum2[c] += v * v;
+        low[c] = std::min(low[c], v);
+        high[c] = std::max(high[c], v);
+      }
     }
   }
   const double count = static_cast<double>(std::max<std::size_t>(maps.pixel_count(), 1));
@@ -70,23 +74,21 @@ ChannelTransform ChannelTransform::Fit(const Image& maps, const MatchingOptions&
   return transform;
 }
 
-PlanarImage::PlanarImage(int width, int height, int channels)
-    : width_(width),
-      height_(height),
-      channels_(channels),
-      values_(static_cast<std::size_t>(width) * height * channels, 0.0f) {}
-
-PlanarImage::PlanarImage(const Image& image, const ChannelTransform& transform)
-    : PlanarImage(image.width(), image.height(), image.channels()) {
-  if (transform.channels() != image.channels()) {
+Image ChannelTransform::Apply(ConstImageView image) const {
+  if (channels() != image.channels()) {
     throw Error(fmt::format("a channel transform for {} channels applied to {} channels",
-                            transform.channels(), image.channels()));
+                            channels(), image.channels()));
   }
-  for (int c = 0; c < channels_; ++c) {
-    float* out = plane(c).data();
-    const float offset = transform.offset[c], scale = transform.scale[c];
-    for (std::size_t i = 0; i < plane_size(); ++i) out[i] = (image.pixel(i)[c] - offset) * scale;
+  Image out(image.width(), image.height(), image.channels());
+  for (int c = 0; c < image.channels(); ++c) {
+    const float o = offset[c], s = scale[c];
+    for (int y = 0; y < image.height(); ++y) {
+      const auto in = image.row(c, y);
+      std::transform(in.begin(), in.end(), out.row(c, y).begin(),
+                     [o, s](float v) { return (v - o) * s; });
+    }
   }
+  return out;
 }
 
 }  // namespace photomat

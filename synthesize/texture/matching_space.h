@@ -1,7 +1,7 @@
 #pragma once
 
+#include <cmath>
 #include <cstddef>
-#include <span>
 #include <string_view>
 #include <vector>
 
@@ -48,49 +48,33 @@ struct ChannelTransform {
 
   // The transform of `maps` under `options`. Throws Error for a wrong number of weights or a
   // negative or non-finite weight.
-  static ChannelTransform Fit(const Image& maps, const MatchingOptions& options);
+  static ChannelTransform Fit(ConstImageView maps, const MatchingOptions& options);
   int channels() const { return static_cast<int>(scale.size()); }
-};
-
-// An image stored channel by channel (planar): candidate positions along a row are contiguous
-// in each plane, which is what the vectorised searches stream through.
-class PlanarImage {
- public:
-  PlanarImage() = default;
-  PlanarImage(int width, int height, int channels);
-  // The channels of `image` after `transform` (one transform channel per image channel).
-  PlanarImage(const Image& image, const ChannelTransform& transform);
-
-  int width() const { return width_; }
-  int height() const { return height_; }
-  int channels() const { return channels_; }
-  std::size_t plane_size() const { return static_cast<std::size_t>(width_) * height_; }
-  std::span<const float> plane(int c) const {
-    return {values_.data() + static_cast<std::size_t>(c) * plane_size(), plane_size()};
-  }
-  std::span<float> plane(int c) {
-    return {values_.data() + static_cast<std::size_t>(c) * plane_size(), plane_size()};
-  }
-  float at(int x, int y, int c) const {
-    return values_[static_cast<std::size_t>(c) * plane_size() +
-                   static_cast<std::size_t>(y) * width_ + x];
-  }
-  float& at(int x, int y, int c) {
-    return values_[static_cast<std::size_t>(c) * plane_size() +
-                   static_cast<std::size_t>(y) * width_ + x];
-  }
-
- private:
-  int width_ = 0;
-  int height_ = 0;
-  int channels_ = 0;
-  std::vector<float> values_;
+  // The channels of `image` after the transform (one transform channel per image channel): a new
+  // image, since its values differ from the sample's. Its planes (candidate positions along a row
+  // contiguous) are what the vectorised searches stream through.
+  Image Apply(ConstImageView image) const;
 };
 
 // The error of one pair of scaled values under `metric`.
 inline double PairError(ErrorMetric metric, double a, double b) {
   const double d = a - b;
   return metric == ErrorMetric::kSsd ? d * d : (d < 0 ? -d : d);
+}
+
+// sums[i] += the squared (SSD) or absolute (SAD) difference of values[i] and `wanted`, i < count,
+// in float: the vectorised inner loop of the direct searches, one term of every candidate along a
+// row at a time.
+inline void AccumulatePairErrors(bool squared, const float* values, float wanted, int count,
+                                 float* sums) {
+  if (squared) {
+    for (int i = 0; i < count; ++i) {
+      const float d = values[i] - wanted;
+      sums[i] += d * d;
+    }
+  } else {
+    for (int i = 0; i < count; ++i) sums[i] += std::fabs(values[i] - wanted);
+  }
 }
 
 }  // namespace photomat

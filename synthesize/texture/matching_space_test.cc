@@ -25,7 +25,7 @@ Image ThreeScales() {
 }
 
 TEST(MatchingSpaceTest, MinMaxGivesEveryChannelUnitRange) {
-  const PlanarImage space(ThreeScales(), ChannelTransform::Fit(ThreeScales(), {}));
+  const Image space = ChannelTransform::Fit(ThreeScales(), {}).Apply(ThreeScales());
   for (int c = 0; c < 3; ++c) {
     const auto plane = space.plane(c);
     const auto [low, high] = std::minmax_element(plane.begin(), plane.end());
@@ -41,11 +41,11 @@ TEST(MatchingSpaceTest, MinMaxGivesEveryChannelUnitRange) {
 TEST(MatchingSpaceTest, ZScoreGivesUnitStandardDeviation) {
   MatchingOptions options;
   options.scaling = ChannelScaling::kZScore;
-  const PlanarImage space(ThreeScales(), ChannelTransform::Fit(ThreeScales(), options));
+  const Image space = ChannelTransform::Fit(ThreeScales(), options).Apply(ThreeScales());
   for (int c = 0; c < 3; ++c) {
     double sum2 = 0.0;
     for (float v : space.plane(c)) sum2 += v * v;
-    EXPECT_NEAR(std::sqrt(sum2 / space.plane_size()), 1.0, 1e-4) << c;
+    EXPECT_NEAR(std::sqrt(sum2 / space.pixel_count()), 1.0, 1e-4) << c;
   }
 }
 
@@ -55,8 +55,8 @@ TEST(MatchingSpaceTest, WeightsMultiplyEachChannelsErrorTerm) {
     MatchingOptions plain, weighted;
     plain.metric = weighted.metric = metric;
     weighted.weights = {4.0, 0.0, 0.5, 1.0};
-    const PlanarImage a(image, ChannelTransform::Fit(image, plain));
-    const PlanarImage b(image, ChannelTransform::Fit(image, weighted));
+    const Image a = ChannelTransform::Fit(image, plain).Apply(image);
+    const Image b = ChannelTransform::Fit(image, weighted).Apply(image);
     for (int c = 0; c < 3; ++c) {
       const double plain_error = PairError(metric, a.at(0, 0, c), a.at(5, 4, c));
       const double weighted_error = PairError(metric, b.at(0, 0, c), b.at(5, 4, c));

@@ -1,16 +1,19 @@
 #include "synthesize/texture/overlap_search.h"
 
-#include <fftw3.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <mutex>
 
+#include "core/enum_names.h"
 #include "core/error.h"
+#include "core/fft.h"
 
 namespace photomat {
 namespace {
@@ -21,12 +24,6 @@ constexpr double kDoubleEpsilon = 0x1.0p-53;
 
 // Relative slack for the exact sums themselves (double, at most a few thousand terms).
 constexpr double kExactSlack = 1e-12;
-
-// FFTW's planner is not thread-safe (its executor is): plans are made under this lock.
-std::mutex& PlannerMutex() {
-  static std::mutex mutex;
-  return mutex;
-}
 
 // The smallest size >= n with no prime factor above 5 (sizes FFTW transforms fastest).
 int FftFriendlySize(int n) {
@@ -39,18 +36,7 @@ int FftFriendlySize(int n) {
   }
 }
 
-// Arrays from fftw_malloc (aligned as FFTW's plans expect), freed by fftw_free.
-struct FftwFree {
-  void operator()(void* p) const { fftw_free(p); }
-};
-using RealArray = std::unique_ptr<double[], FftwFree>;
-using ComplexArray = std::unique_ptr<fftw_complex[], FftwFree>;
-RealArray NewReal(std::size_t n) {
-  RealArray array(fftw_alloc_real(n));
-  std::fill(array.get(), array.get() + n, 0.0);
-  return array;
-}
-ComplexArray NewComplex(std::size_t n) { return ComplexArray(fftw_alloc_complex(n)); }
+using Complex = std::complex<double>;
 
 // The smallest value (four running minima break the dependency chain of one).
 double Minimum(const std::vector<double>& values) {
@@ -64,58 +50,51 @@ double Minimum(const std::vector<double>& values) {
   return std::min(std::min(m[0], m[1]), std::min(m[2], m[3]));
 }
 
+constexpr std::array<NamedValue<SearchMode>, 2> kSearchModeNames = {
+    {{SearchMode::kFast, "fast"}, {SearchMode::kBruteForce, "brute"}}};
+
 }  // namespace
 
-std::string_view ToString(SearchMode mode) {
-  return mode == SearchMode::kBruteForce ? "brute" : "fast";
-}
+std::string_view ToString(SearchMode mode) { return NameOf(mode, kSearchModeNames); }
 
 SearchMode ParseSearchMode(std::string_view name) {
-  if (name == "brute") return SearchMode::kBruteForce;
-  if (name == "fast") return SearchMode::kFast;
-  throw Error(fmt::format("unknown search mode '{}' (fast or brute)", name));
+  return ValueNamed(name, kSearchModeNames, "search mode");
 }
 
 // SSD by correlation: the sample planes' spectra once, each template's per block. The correlation
 // is circular over the padded size; a candidate's window never crosses the edge, so no wrapped
 // value enters a candidate's sum.
 struct OverlapSearch::Fft {
-  int width = 0;  // padded
-  int height = 0;
-  int half = 0;                   // width / 2 + 1: complex columns of a real row's spectrum
-  std::size_t spectrum_size = 0;  // height * half
-  // The 2-D transforms of the correlation split into their row and column passes, so that a
-  // template's all-zero rows below the block skip the row pass, and the inverse's row pass stops
-  // at the last row of candidates. Made on arrays laid out as the workspace's; executed on those.
-  fftw_plan rows_forward = nullptr;     // real rows [0, block) -> half spectra
-  fftw_plan columns_forward = nullptr;  // in place, every column
-  fftw_plan columns_inverse = nullptr;  // in place, every column
-  fftw_plan rows_inverse = nullptr;     // half spectra -> real rows [0, candidate rows)
-  std::vector<ComplexArray> spectra;    // per channel, of the sample
+  // `width` x `height` padded; the template transform reads `block` rows, and its inverse writes
+  // the `candidate_rows` rows of candidates.
+  Fft(int padded_width, int padded_height, int block, int candidate_rows)
+      : correlation(padded_width, padded_height, {block, candidate_rows}) {}
+
+  // The correlation's 2-D transforms split into their row and column passes (core/fft.h,
+  // FftRows), so that a template's all-zero rows below the block skip the row pass, and the
+  // inverse's row pass stops at the last row of candidates.
+  RealFft2d<double> correlation;
+  std::vector<FftArray<Complex>> spectra;  // per channel, of the sample
   std::vector<double> plane_norms;
   std::vector<double> squares_integral;  // (H + 1) x (W + 1) of sum_c M_c^2
   double squares_total = 0.0;
 
+  int width() const { return correlation.width(); }
+  int height() const { return correlation.height(); }
   double SumOfBox(int sample_width, int x, int y, int w, int h) const {
     if (w <= 0 || h <= 0) return 0.0;
     const std::size_t stride = static_cast<std::size_t>(sample_width) + 1;
     auto at = [&](int xx, int yy) { return squares_integral[yy * stride + xx]; };
     return at(x + w, y + h) - at(x + w, y) - at(x, y + h) + at(x, y);
   }
-  ~Fft() {
-    const std::lock_guard<std::mutex> lock(PlannerMutex());
-    for (fftw_plan plan : {rows_forward, columns_forward, columns_inverse, rows_inverse}) {
-      if (plan) fftw_destroy_plan(plan);
-    }
-  }
 };
 
 // Buffers one search needs, kept between searches (allocating them anew would page-fault).
 struct OverlapSearch::Workspace {
-  std::vector<RealArray> template_planes;  // padded, zero outside the block
-  std::vector<ComplexArray> spectra;       // per channel: spectrum, then its product
-  ComplexArray sum;
-  RealArray correlation;
+  std::vector<FftArray<double>> template_planes;  // padded, zero outside the block
+  std::vector<FftArray<Complex>> spectra;         // per channel: spectrum, then its product
+  FftArray<Complex> sum;
+  FftArray<double> correlation;
   std::vector<double> low, high;
 };
 
@@ -124,8 +103,7 @@ OverlapTemplate::OverlapTemplate(const OverlapShape& overlap, int channel_count)
       channels(channel_count),
       values(static_cast<std::size_t>(channel_count) * overlap.block * overlap.block, 0.0f) {}
 
-OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetric metric,
-                             int stride)
+OverlapSearch::OverlapSearch(const Image& space, int block_size, ErrorMetric metric, int stride)
     : space_(space), block_(block_size), metric_(metric), stride_(stride) {
   if (block_size < 2 || block_size > space.width() || block_size > space.height()) {
     throw Error(fmt::format("a {}-pixel block does not fit in the {}x{} sample", block_size,
@@ -135,39 +113,12 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
   columns_ = (space.width() - block_size) / stride + 1;
   rows_ = (space.height() - block_size) / stride + 1;
   if (metric != ErrorMetric::kSsd) return;
-  fft_ = std::make_unique<Fft>();
-  Fft& fft = *fft_;
-  fft.width = FftFriendlySize(space.width());
-  fft.height = FftFriendlySize(space.height());
-  fft.half = fft.width / 2 + 1;
-  fft.spectrum_size = static_cast<std::size_t>(fft.height) * fft.half;
-  const std::size_t padded = static_cast<std::size_t>(fft.width) * fft.height;
   const int candidate_rows = (rows_ - 1) * stride_ + 1;
-  RealArray plane = NewReal(padded);
-  ComplexArray spectrum = NewComplex(fft.spectrum_size);
-  fftw_plan sample_forward = nullptr;
-  {
-    // FFTW_ESTIMATE: no trial runs (they would cost more than a synthesis) and inputs untouched.
-    const std::lock_guard<std::mutex> lock(PlannerMutex());
-    sample_forward =
-        fftw_plan_dft_r2c_2d(fft.height, fft.width, plane.get(), spectrum.get(), FFTW_ESTIMATE);
-    fft.rows_forward =
-        fftw_plan_many_dft_r2c(1, &fft.width, block_size, plane.get(), nullptr, 1, fft.width,
-                               spectrum.get(), nullptr, 1, fft.half, FFTW_ESTIMATE);
-    fft.columns_forward =
-        fftw_plan_many_dft(1, &fft.height, fft.half, spectrum.get(), nullptr, fft.half, 1,
-                           spectrum.get(), nullptr, fft.half, 1, FFTW_FORWARD, FFTW_ESTIMATE);
-    fft.columns_inverse =
-        fftw_plan_many_dft(1, &fft.height, fft.half, spectrum.get(), nullptr, fft.half, 1,
-                           spectrum.get(), nullptr, fft.half, 1, FFTW_BACKWARD, FFTW_ESTIMATE);
-    fft.rows_inverse =
-        fftw_plan_many_dft_c2r(1, &fft.width, candidate_rows, spectrum.get(), nullptr, 1, fft.half,
-                               plane.get(), nullptr, 1, fft.width, FFTW_ESTIMATE);
-  }
-  if (!sample_forward || !fft.rows_forward || !fft.columns_forward || !fft.columns_inverse ||
-      !fft.rows_inverse) {
-    throw Error("FFTW could not plan the overlap correlation");
-  }
+  fft_ = std::make_unique<Fft>(FftFriendlySize(space.width()), FftFriendlySize(space.height()),
+                               block_size, candidate_rows);
+  Fft& fft = *fft_;
+  const RealFft2d<double> sample_transform(fft.width(), fft.height());
+  FftArray<double> plane(sample_transform.size());
   const int n = space.channels();
   const std::size_t integral_stride = static_cast<std::size_t>(space.width()) + 1;
   fft.squares_integral.assign(integral_stride * (space.height() + 1), 0.0);
@@ -177,13 +128,13 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
     for (int y = 0; y < space.height(); ++y) {
       for (int x = 0; x < space.width(); ++x) {
         const double v = space.at(x, y, c);
-        plane[static_cast<std::size_t>(y) * fft.width + x] = v;
+        plane[static_cast<std::size_t>(y) * fft.width() + x] = v;
         squares[static_cast<std::size_t>(y) * space.width() + x] += v * v;
         norm2 += v * v;
       }
     }
-    ComplexArray channel = NewComplex(fft.spectrum_size);
-    fftw_execute_dft_r2c(sample_forward, plane.get(), channel.get());
+    FftArray<Complex> channel(sample_transform.spectrum_size());
+    sample_transform.Forward(plane, channel);
     fft.spectra.push_back(std::move(channel));
     fft.plane_norms.push_back(std::sqrt(norm2));
   }
@@ -196,8 +147,6 @@ OverlapSearch::OverlapSearch(const PlanarImage& space, int block_size, ErrorMetr
     }
   }
   fft.squares_total = fft.squares_integral.back();
-  const std::lock_guard<std::mutex> lock(PlannerMutex());
-  fftw_destroy_plan(sample_forward);
 }
 
 OverlapSearch::~OverlapSearch() = default;
@@ -238,13 +187,13 @@ std::unique_ptr<OverlapSearch::Workspace> OverlapSearch::Borrow() const {
   workspace->low.resize(count);
   workspace->high.resize(count);
   if (fft_) {
-    const std::size_t padded = static_cast<std::size_t>(fft_->width) * fft_->height;
+    const RealFft2d<double>& transform = fft_->correlation;
     for (int c = 0; c < space_.channels(); ++c) {
-      workspace->template_planes.push_back(NewReal(padded));
-      workspace->spectra.push_back(NewComplex(fft_->spectrum_size));
+      workspace->template_planes.emplace_back(transform.size());
+      workspace->spectra.emplace_back(transform.spectrum_size());
     }
-    workspace->sum = NewComplex(fft_->spectrum_size);
-    workspace->correlation = NewReal(padded);
+    workspace->sum = FftArray<Complex>(transform.spectrum_size());
+    workspace->correlation = FftArray<double>(transform.size());
   }
   return workspace;
 }
@@ -304,39 +253,33 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, Workspace& workspac
   // One forward transform per channel and its product with the conjugate of the sample's
   // spectrum, channels in parallel; summed in channel order; one inverse.
   const Fft& fft = *fft_;
+  const RealFft2d<double>& transform = fft.correlation;
+  const std::size_t spectrum_size = transform.spectrum_size();
   tbb::parallel_for(0, n, [&](int c) {
-    double* plane = workspace.template_planes[c].get();
+    double* plane = workspace.template_planes[c].data();
     for (int v = 0; v < block_; ++v) {
-      for (int u = 0; u < block_; ++u) plane[v * fft.width + u] = pattern.at(u, v, c);
+      for (int u = 0; u < block_; ++u) plane[v * fft.width() + u] = pattern.at(u, v, c);
     }
-    fftw_complex* product = workspace.spectra[c].get();
-    // Rows below the block are zero in the template, so are their row spectra.
-    double* values = &product[0][0];
-    std::fill(values + 2 * static_cast<std::size_t>(block_) * fft.half,
-              values + 2 * fft.spectrum_size, 0.0);
-    fftw_execute_dft_r2c(fft.rows_forward, plane, product);
-    fftw_execute_dft(fft.columns_forward, product, product);
-    const fftw_complex* sample = fft.spectra[c].get();
-    for (std::size_t k = 0; k < fft.spectrum_size; ++k) {
-      const double re = sample[k][0] * product[k][0] + sample[k][1] * product[k][1];
-      const double im = sample[k][1] * product[k][0] - sample[k][0] * product[k][1];
-      product[k][0] = re;
-      product[k][1] = im;
+    // The rows below the block are zero (the transform skips them).
+    transform.Forward(workspace.template_planes[c], workspace.spectra[c]);
+    Complex* product = workspace.spectra[c].data();
+    const Complex* sample = fft.spectra[c].data();
+    for (std::size_t k = 0; k < spectrum_size; ++k) {
+      // sample * conj(template), written out (std::complex's product checks for NaN).
+      const double re = sample[k].real() * product[k].real() + sample[k].imag() * product[k].imag();
+      const double im = sample[k].imag() * product[k].real() - sample[k].real() * product[k].imag();
+      product[k] = {re, im};
     }
   });
-  fftw_complex* sum = workspace.sum.get();
-  std::copy_n(&workspace.spectra[0][0][0], 2 * fft.spectrum_size, &sum[0][0]);
+  Complex* sum = workspace.sum.data();
+  std::copy_n(workspace.spectra[0].data(), spectrum_size, sum);
   for (int c = 1; c < n; ++c) {
-    const fftw_complex* product = workspace.spectra[c].get();
-    for (std::size_t k = 0; k < fft.spectrum_size; ++k) {
-      sum[k][0] += product[k][0];
-      sum[k][1] += product[k][1];
-    }
+    const Complex* product = workspace.spectra[c].data();
+    for (std::size_t k = 0; k < spectrum_size; ++k) sum[k] += product[k];
   }
-  double* correlation = workspace.correlation.get();
-  fftw_execute_dft(fft.columns_inverse, sum, sum);
-  fftw_execute_dft_c2r(fft.rows_inverse, sum, correlation);  // unscaled: times width * height
-  const double unscale = 1.0 / (static_cast<double>(fft.width) * fft.height);
+  double* correlation = workspace.correlation.data();
+  transform.Inverse(workspace.sum, workspace.correlation);  // unscaled: times width * height
+  const double unscale = 1.0 / (static_cast<double>(fft.width()) * fft.height());
 
   // Rounding of the FFT correlation, per channel and output value, is at most of the order of
   // u log2(N) |M|_2 (|T|_1 + sqrt(N) |T|_2): the transforms are normwise stable (error
@@ -346,7 +289,7 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, Workspace& workspac
   // ~ (W + H) u sum(M^2). Both are inflated a thousandfold (IMPLEMENTER CHOICE): the bound only
   // decides which candidates are re-scored exactly, so generosity costs a few exact sums while a
   // bound that failed would break equality with brute force.
-  const double size = static_cast<double>(fft.width) * fft.height;
+  const double size = static_cast<double>(fft.width()) * fft.height();
   double correlation_bound = 0.0;
   for (int c = 0; c < n; ++c) {
     correlation_bound += fft.plane_norms[c] * (template_l1[c] + std::sqrt(size * template_l2[c]));
@@ -359,7 +302,7 @@ void OverlapSearch::BoundFft(const OverlapTemplate& pattern, Workspace& workspac
   const std::vector<double>& all_squares = SquaresUnder(shape);
   tbb::parallel_for(0, rows_, [&](int row) {
     const int y = row * stride_;
-    const double* correlation_row = correlation + static_cast<std::size_t>(y) * fft.width;
+    const double* correlation_row = correlation + static_cast<std::size_t>(y) * fft.width();
     for (int column = 0; column < columns_; ++column) {
       const int x = column * stride_;
       const double squares = all_squares[static_cast<std::size_t>(row) * columns_ + column];
@@ -403,15 +346,7 @@ void OverlapSearch::BoundDirect(const OverlapTemplate& pattern, Workspace& works
       float* acc = sums.data();
       for (const Term& term : terms) {
         const float* line = space_.plane(term.channel).data() + origin + term.offset;
-        const float t = term.value;
-        if (squared) {
-          for (int x = 0; x < span; ++x) {
-            const float d = line[x] - t;
-            acc[x] += d * d;
-          }
-        } else {
-          for (int x = 0; x < span; ++x) acc[x] += std::fabs(line[x] - t);
-        }
+        AccumulatePairErrors(squared, line, term.value, span, acc);
       }
       for (int column = 0; column < columns_; ++column) {
         const double estimate = sums[column * stride_];

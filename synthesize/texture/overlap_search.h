@@ -54,7 +54,7 @@ struct QualifyingBlocks {
 // Thread-safe: several blocks can be searched at once (each search borrows its own work buffers).
 class OverlapSearch {
  public:
-  OverlapSearch(const PlanarImage& space, int block_size, ErrorMetric metric, int stride);
+  OverlapSearch(const Image& space, int block_size, ErrorMetric metric, int stride);
   ~OverlapSearch();
   OverlapSearch(const OverlapSearch&) = delete;
   OverlapSearch& operator=(const OverlapSearch&) = delete;
@@ -86,7 +86,7 @@ class OverlapSearch {
   std::unique_ptr<Workspace> Borrow() const;
   void Return(std::unique_ptr<Workspace> workspace) const;
 
-  const PlanarImage& space_;
+  const Image& space_;
   int block_;
   ErrorMetric metric_;
   int stride_;

@@ -31,7 +31,7 @@ Image PeriodicMaps(int width, int height, int channels) {
 }
 
 // A template of `shape` taken from the space at `from`, plus noise of `noise`.
-OverlapTemplate TemplateFrom(const PlanarImage& space, const OverlapShape& shape, SamplePixel from,
+OverlapTemplate TemplateFrom(const Image& space, const OverlapShape& shape, SamplePixel from,
                              double noise, Random& random) {
   OverlapTemplate pattern(shape, space.channels());
   for (int v = 0; v < shape.block; ++v) {
@@ -48,7 +48,7 @@ OverlapTemplate TemplateFrom(const PlanarImage& space, const OverlapShape& shape
 
 TEST(OverlapSearchTest, ExactErrorIsTheSumOverTheOverlap) {
   const Image maps = RandomMaps(20, 16, 3, 1);
-  const PlanarImage space(maps, ChannelTransform::Fit(maps, {}));
+  const Image space = ChannelTransform::Fit(maps, {}).Apply(maps);
   Random random(2);
   const OverlapShape shape{6, 2, 1, 0, 1};
   const OverlapTemplate pattern = TemplateFrom(space, shape, {3, 4}, 0.1, random);
@@ -93,7 +93,7 @@ TEST_P(FastSearchTest, QualifiesExactlyTheBruteForceCandidates) {
       test.periodic ? PeriodicMaps(37, 29, channels) : RandomMaps(37, 29, channels, 3);
   MatchingOptions matching;
   matching.metric = test.metric;
-  const PlanarImage space(maps, ChannelTransform::Fit(maps, matching));
+  const Image space = ChannelTransform::Fit(maps, matching).Apply(maps);
   Random random(11);
   for (int trial = 0; trial < 6; ++trial) {
     const SamplePixel from{static_cast<int>(random.Index(37 - test.shape.block)),
@@ -130,7 +130,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(OverlapSearchTest, FindsACopiedBlockWithZeroError) {
   const Image maps = RandomMaps(30, 30, 3, 4);
-  const PlanarImage space(maps, ChannelTransform::Fit(maps, {}));
+  const Image space = ChannelTransform::Fit(maps, {}).Apply(maps);
   Random random(1);
   const OverlapTemplate pattern = TemplateFrom(space, {8, 2, 2, 0, 0}, {13, 5}, 0.0, random);
   OverlapSearch search(space, 8, ErrorMetric::kSsd, 1);
@@ -147,7 +147,7 @@ TEST(OverlapSearchTest, FindsACopiedBlockWithZeroError) {
 
 TEST(OverlapSearchTest, CandidatesFollowTheStride) {
   const Image maps = RandomMaps(30, 20, 1, 4);
-  const PlanarImage space(maps, ChannelTransform::Fit(maps, {}));
+  const Image space = ChannelTransform::Fit(maps, {}).Apply(maps);
   const OverlapSearch every(space, 8, ErrorMetric::kSsd, 1);
   EXPECT_EQ(every.candidate_count(), 23 * 13);
   const OverlapSearch grid(space, 8, ErrorMetric::kSsd, 8);

@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/random.h"
+#include "core/wrap.h"
 
 namespace photomat {
 namespace {
@@ -20,9 +21,9 @@ constexpr int kMaxLevels = 4;
 constexpr int kMinCoarsestSide = 16;
 constexpr int kMaxOutputSide = 65536;
 
-PlanarImage Downsample(const PlanarImage& image) {
+Image Downsample(const Image& image) {
   const int w = (image.width() + 1) / 2, h = (image.height() + 1) / 2;
-  PlanarImage out(w, h, image.channels());
+  Image out(w, h, image.channels());
   for (int c = 0; c < image.channels(); ++c) {
     const cv::Mat source(image.height(), image.width(), CV_32F,
                          const_cast<float*>(image.plane(c).data()));
@@ -34,8 +35,8 @@ PlanarImage Downsample(const PlanarImage& image) {
 
 // The parent level repeated 2 x 2, so that the parent of candidate (x, y) shifted by (dx, dy)
 // parent pixels is at (x + 2 dx, y + 2 dy): contiguous along candidate rows.
-PlanarImage Upsample(const PlanarImage& parent) {
-  PlanarImage out(parent.width() * 2, parent.height() * 2, parent.channels());
+Image Upsample(const Image& parent) {
+  Image out(parent.width() * 2, parent.height() * 2, parent.channels());
   for (int c = 0; c < parent.channels(); ++c) {
     for (int y = 0; y < out.height(); ++y) {
       for (int x = 0; x < out.width(); ++x) out.at(x, y, c) = parent.at(x / 2, y / 2, c);
@@ -126,15 +127,7 @@ Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metr
         const Term& term = terms[k];
         const float* line = term.plane + static_cast<std::ptrdiff_t>(y + term.dy) * term.stride +
                             range.x_low + term.dx;
-        const float t = term.value;
-        if (squared) {
-          for (int i = 0; i < span; ++i) {
-            const float d = line[i] - t;
-            acc[i] += d * d;
-          }
-        } else {
-          for (int i = 0; i < span; ++i) acc[i] += std::fabs(line[i] - t);
-        }
+        AccumulatePairErrors(squared, line, term.value, span, acc);
         if (prune && (k + 1) % kCheckEvery == 0 && k + 1 < terms.size() &&
             *std::min_element(sums.begin(), sums.end()) > bound.load(std::memory_order_relaxed)) {
           abandoned = true;
@@ -157,9 +150,8 @@ Best Search(const std::vector<Term>& terms, const Range& range, ErrorMetric metr
 // Synthesis of one output level; `parent_*` are absent at the coarsest level.
 class LevelSynthesizer {
  public:
-  LevelSynthesizer(const PlanarImage& sample, const PlanarImage* parent_sample,
-                   const PlanarImage* parent_output, int width, int height, bool tileable,
-                   const PixelSynthesisOptions& options)
+  LevelSynthesizer(const Image& sample, const Image* parent_sample, const Image* parent_output,
+                   int width, int height, bool tileable, const PixelSynthesisOptions& options)
       : sample_(sample),
         parent_output_(parent_output),
         tileable_(tileable),
@@ -203,7 +195,7 @@ class LevelSynthesizer {
     }
   }
 
-  const PlanarImage& output() const { return output_; }
+  const Image& output() const { return output_; }
   const std::vector<SamplePixel>& sources() const { return sources_; }
 
  private:
@@ -215,7 +207,7 @@ class LevelSynthesizer {
   int Place(int coordinate, int size) const {
     if (coordinate >= 0 && coordinate < size) return coordinate;
     if (!tileable_) return -1;
-    return ((coordinate % size) + size) % size;
+    return Wrap(coordinate, size);
   }
 
   SamplePixel Match(int x, int y, Random& random) const {
@@ -264,13 +256,13 @@ class LevelSynthesizer {
     return {best.x, best.y};
   }
 
-  const PlanarImage& sample_;
-  const PlanarImage* parent_output_;
+  const Image& sample_;
+  const Image* parent_output_;
   bool tileable_;
   const PixelSynthesisOptions& options_;
-  PlanarImage parent_up_;
+  Image parent_up_;
   Range range_{};
-  PlanarImage output_;
+  Image output_;
   std::vector<SamplePixel> sources_;
 };
 
@@ -303,8 +295,8 @@ SourceMap PlanPixelSynthesis(const Image& guide, const SynthesisTarget& target,
   CheckOptions(guide, target, options);
   const int levels =
       options.levels >= 0 ? options.levels : AutoLevels(guide.width(), guide.height(), options);
-  std::vector<PlanarImage> pyramid;
-  pyramid.emplace_back(guide, ChannelTransform::Fit(guide, options.matching));
+  std::vector<Image> pyramid;
+  pyramid.push_back(ChannelTransform::Fit(guide, options.matching).Apply(guide));
   for (int l = 0; l < levels; ++l) pyramid.push_back(Downsample(pyramid.back()));
   std::vector<std::pair<int, int>> sizes{{target.width, target.height}};
   std::size_t total = static_cast<std::size_t>(target.width) * target.height;
@@ -317,7 +309,7 @@ SourceMap PlanPixelSynthesis(const Image& guide, const SynthesisTarget& target,
   Progress& report = OrNull(progress, null_progress);
   report.Start("pixel synthesis", total);
   Random random(target.seed);
-  PlanarImage parent_output;
+  Image parent_output;
   std::vector<SamplePixel> finest;
   for (int l = levels; l >= 0; --l) {
     const bool has_parent = l < levels;

@@ -41,9 +41,15 @@ Image SourceMap::Apply(const Image& sample) const {
   if (!Complete()) throw Error("the source map leaves output pixels without a source");
   Image out(width_, height_, sample.channels());
   if (!sample.channel_names().empty()) out.set_channel_names(sample.channel_names());
+  // Plane by plane: every output pixel's value is the sample's at its source.
+  std::vector<std::size_t> sources(pixels_.size());
   for (std::size_t i = 0; i < pixels_.size(); ++i) {
-    const auto from = sample.pixel(pixels_[i].x, pixels_[i].y);
-    std::copy(from.begin(), from.end(), out.pixel(i).begin());
+    sources[i] = sample.Index(pixels_[i].x, pixels_[i].y);
+  }
+  for (int c = 0; c < sample.channels(); ++c) {
+    const float* in = sample.plane(c).data();
+    float* to = out.plane(c).data();
+    for (std::size_t i = 0; i < sources.size(); ++i) to[i] = in[sources[i]];
   }
   return out;
 }
@@ -64,8 +70,8 @@ void SaveSourceMap(const std::filesystem::path& path, const SourceMap& map) {
   if (!map.Complete()) throw Error(path, "the source map is incomplete");
   Image image(map.width(), map.height(), std::vector<std::string>{"source.x", "source.y"});
   for (std::size_t i = 0; i < map.pixels().size(); ++i) {
-    image.pixel(i)[0] = static_cast<float>(map.pixels()[i].x);
-    image.pixel(i)[1] = static_cast<float>(map.pixels()[i].y);
+    image.plane(0)[i] = static_cast<float>(map.pixels()[i].x);
+    image.plane(1)[i] = static_cast<float>(map.pixels()[i].y);
   }
   const nlohmann::json description = {{"format", kSourceMapFormat},
                                       {"version", 1},

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <array>
+
+#include "core/enum_names.h"
 #include "core/error.h"
 
 namespace photomat {
@@ -51,16 +54,15 @@ nlohmann::json Describe(const Image& guide, const SynthesisOptions& options,
   return description;
 }
 
+constexpr std::array<NamedValue<SynthesisMethod>, 2> kMethodNames = {
+    {{SynthesisMethod::kQuilt, "quilt"}, {SynthesisMethod::kPixel, "pixel"}}};
+
 }  // namespace
 
-std::string_view ToString(SynthesisMethod method) {
-  return method == SynthesisMethod::kQuilt ? "quilt" : "pixel";
-}
+std::string_view ToString(SynthesisMethod method) { return NameOf(method, kMethodNames); }
 
 SynthesisMethod ParseSynthesisMethod(std::string_view name) {
-  if (name == "quilt") return SynthesisMethod::kQuilt;
-  if (name == "pixel") return SynthesisMethod::kPixel;
-  throw Error(fmt::format("unknown synthesis method '{}' (quilt or pixel)", name));
+  return ValueNamed(name, kMethodNames, "synthesis method");
 }
 
 SynthesisPlan PlanSynthesis(const Image& guide, const SynthesisOptions& options,

@@ -16,7 +16,7 @@ namespace {
 constexpr double kFloatEpsilon = 0x1.0p-24;
 constexpr int kChunk = 128;  // output patches per matrix product
 
-double PairDifference(const PlanarImage& image, int x0, int y0, int x1, int y1) {
+double PairDifference(const Image& image, int x0, int y0, int x1, int y1) {
   double sum = 0.0;
   for (int c = 0; c < image.channels(); ++c) {
     const double d = static_cast<double>(image.at(x0, y0, c)) - image.at(x1, y1, c);
@@ -38,7 +38,7 @@ void Finish(PairContrast& contrast, double sum, double reference_sum) {
 }
 
 // Sum of squared neighbour differences over the interior pairs (right and down) of an image.
-void InteriorPairs(const PlanarImage& image, double& sum, std::size_t& pairs) {
+void InteriorPairs(const Image& image, double& sum, std::size_t& pairs) {
   for (int y = 0; y < image.height(); ++y) {
     for (int x = 0; x < image.width(); ++x) {
       if (x + 1 < image.width()) sum += PairDifference(image, x, y, x + 1, y), ++pairs;
@@ -49,7 +49,7 @@ void InteriorPairs(const PlanarImage& image, double& sum, std::size_t& pairs) {
 
 // The values of the patch at (x, y), channel-major, into `out` (size patch^2 * channels).
 template <typename Out>
-void GatherPatch(const PlanarImage& image, int x, int y, int patch, Out&& out) {
+void GatherPatch(const Image& image, int x, int y, int patch, Out&& out) {
   int k = 0;
   for (int c = 0; c < image.channels(); ++c) {
     for (int v = 0; v < patch; ++v) {
@@ -81,7 +81,7 @@ double MeanNearestPatchDistance(const Image& sample, const Image& output,
                             sample.width(), sample.height(), output.width(), output.height()));
   }
   const ChannelTransform scale = QualityScale(sample, options.scaling);
-  const PlanarImage s(sample, scale), o(output, scale);
+  const Image s = scale.Apply(sample), o = scale.Apply(output);
   const int dims = patch * patch * s.channels();
   const int sample_columns = s.width() - patch + 1;
   const int sample_patches = sample_columns * (s.height() - patch + 1);
@@ -136,7 +136,7 @@ PairContrast SeamScore(const Image& output, const SourceMap& map, const ChannelT
     throw Error(fmt::format("the source map is {}x{} but the output {}x{}", map.width(),
                             map.height(), output.width(), output.height()));
   }
-  const PlanarImage o(output, scale);
+  const Image o = scale.Apply(output);
   PairContrast contrast;
   double seam_sum = 0.0, inside_sum = 0.0;
   auto visit = [&](int x0, int y0, int x1, int y1) {
@@ -161,7 +161,7 @@ PairContrast SeamScore(const Image& output, const SourceMap& map, const ChannelT
 }
 
 PairContrast WrapScore(const Image& output, const ChannelTransform& scale) {
-  const PlanarImage o(output, scale);
+  const Image o = scale.Apply(output);
   PairContrast contrast;
   double wrap_sum = 0.0, inside_sum = 0.0;
   InteriorPairs(o, inside_sum, contrast.reference_pairs);
@@ -180,8 +180,8 @@ PairContrast RoughnessRatio(const Image& sample, const Image& output,
                             const ChannelTransform& scale) {
   PairContrast contrast;
   double output_sum = 0.0, sample_sum = 0.0;
-  InteriorPairs(PlanarImage(output, scale), output_sum, contrast.pairs);
-  InteriorPairs(PlanarImage(sample, scale), sample_sum, contrast.reference_pairs);
+  InteriorPairs(scale.Apply(output), output_sum, contrast.pairs);
+  InteriorPairs(scale.Apply(sample), sample_sum, contrast.reference_pairs);
   Finish(contrast, output_sum, sample_sum);
   return contrast;
 }

@@ -12,7 +12,7 @@ enum class VolumeEdge {
 
 // Every channel convolved with a separable Gaussian of standard deviation `sigma` voxels, the
 // kernel cut at 3 sigma and normalised. sigma <= 0 returns the volume unchanged.
-Volume GaussianBlur(const Volume& volume, double sigma, VolumeEdge edge);
+Image GaussianBlur(const Image& volume, double sigma, VolumeEdge edge);
 
 // The blur of level `spacing` (a power of two) of a Gaussian stack: the standard deviation of
 // log2(spacing) passes of the binomial kernel (1 4 6 4 1) / 16 of a Gaussian pyramid, each pass at

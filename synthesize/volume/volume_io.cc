@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/text_parsing.h"
 
 namespace photomat {
 namespace {
@@ -23,15 +24,9 @@ constexpr const char* kStackFormat = "photomat-volume-slices";
 constexpr const char* kBlenderColourGrid = "color";
 constexpr const char* kBlenderDensityGrid = "density";
 
-std::string Lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
-std::vector<std::string> CheckedChannelNames(const Volume& volume,
+std::vector<std::string> CheckedChannelNames(const Image& volume,
                                              const std::filesystem::path& path) {
-  std::vector<std::string> names = volume.ChannelNamesOrDefault();
+  std::vector<std::string> names = ChannelNamesOrDefault(volume);
   std::set<std::string> seen;
   for (const std::string& name : names) {
     if (name.empty()) throw Error(path, "a channel of the volume has an empty name");
@@ -42,9 +37,9 @@ std::vector<std::string> CheckedChannelNames(const Volume& volume,
   return names;
 }
 
-nlohmann::json SizeJson(const VolumeSize& size) { return {size.x, size.y, size.z}; }
+nlohmann::json SizeJson(const ImageExtent& size) { return {size.width, size.height, size.depth}; }
 
-VolumeSize SizeFromJson(const JsonReader& reader) {
+ImageExtent SizeFromJson(const JsonReader& reader) {
   if (reader.ArraySize() != 3) reader.Fail("expected [x, y, z]");
   return {reader[0].Integer(), reader[1].Integer(), reader[2].Integer()};
 }
@@ -53,7 +48,7 @@ VolumeSize SizeFromJson(const JsonReader& reader) {
 // calls this.
 void InitialiseOpenVdb() { openvdb::initialize(); }
 
-bool HasRgb(const Volume& volume) {
+bool HasRgb(const Image& volume) {
   return volume.FindChannel("R") >= 0 && volume.FindChannel("G") >= 0 &&
          volume.FindChannel("B") >= 0;
 }
@@ -61,11 +56,10 @@ bool HasRgb(const Volume& volume) {
 }  // namespace
 
 VolumeFormat VolumeFormatForPath(const std::filesystem::path& path) {
-  return Lower(path.extension().string()) == ".vdb" ? VolumeFormat::kOpenVdb
-                                                    : VolumeFormat::kExrSlices;
+  return LowerExtension(path) == ".vdb" ? VolumeFormat::kOpenVdb : VolumeFormat::kExrSlices;
 }
 
-void WriteVolume(const std::filesystem::path& path, const Volume& volume) {
+void WriteVolume(const std::filesystem::path& path, const Image& volume) {
   if (VolumeFormatForPath(path) == VolumeFormat::kOpenVdb) {
     WriteVolumeVdb(path, volume);
   } else {
@@ -73,25 +67,25 @@ void WriteVolume(const std::filesystem::path& path, const Volume& volume) {
   }
 }
 
-Volume ReadVolume(const std::filesystem::path& path) {
+Image ReadVolume(const std::filesystem::path& path) {
   return VolumeFormatForPath(path) == VolumeFormat::kOpenVdb ? ReadVolumeVdb(path)
                                                              : ReadExrSliceStack(path);
 }
 
-void WriteVolumeVdb(const std::filesystem::path& path, const Volume& volume,
+void WriteVolumeVdb(const std::filesystem::path& path, const Image& volume,
                     const VdbWriteOptions& options) {
   if (volume.empty()) throw Error(path, "cannot write an empty volume");
   InitialiseOpenVdb();
   const std::vector<std::string> names = CheckedChannelNames(volume, path);
-  const VolumeSize& size = volume.size();
+  const ImageExtent& size = volume.extent();
   openvdb::GridPtrVec grids;
   for (int c = 0; c < volume.channels(); ++c) {
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(0.0f);
     grid->setName(names[static_cast<std::size_t>(c)]);
     auto accessor = grid->getAccessor();
-    for (int z = 0; z < size.z; ++z) {
-      for (int y = 0; y < size.y; ++y) {
-        for (int x = 0; x < size.x; ++x) {
+    for (int z = 0; z < size.depth; ++z) {
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
           accessor.setValue(openvdb::Coord(x, y, z), volume.at(x, y, z, c));
         }
       }
@@ -109,13 +103,14 @@ void WriteVolumeVdb(const std::filesystem::path& path, const Volume& volume,
     openvdb::FloatGrid::Ptr density = openvdb::FloatGrid::create(0.0f);
     density->setName(kBlenderDensityGrid);
     density->setGridClass(openvdb::GRID_FOG_VOLUME);
-    density->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0),
-                                     openvdb::Coord(size.x - 1, size.y - 1, size.z - 1)),
-                  1.0f, true);
+    density->fill(
+        openvdb::CoordBBox(openvdb::Coord(0, 0, 0),
+                           openvdb::Coord(size.width - 1, size.height - 1, size.depth - 1)),
+        1.0f, true);
     auto accessor = colour->getAccessor();
-    for (int z = 0; z < size.z; ++z) {
-      for (int y = 0; y < size.y; ++y) {
-        for (int x = 0; x < size.x; ++x) {
+    for (int z = 0; z < size.depth; ++z) {
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
           accessor.setValue(
               openvdb::Coord(x, y, z),
               openvdb::Vec3s(volume.at(x, y, z, r), volume.at(x, y, z, g), volume.at(x, y, z, b)));
@@ -142,12 +137,12 @@ void WriteVolumeVdb(const std::filesystem::path& path, const Volume& volume,
 
 namespace {
 
-Volume ReadVdbGrids(const std::filesystem::path& path, openvdb::io::File& file) {
+Image ReadVdbGrids(const std::filesystem::path& path, openvdb::io::File& file) {
   openvdb::MetaMap::Ptr metadata = file.getMetadata();
   const openvdb::GridPtrVecPtr all = file.getGrids();
   std::vector<openvdb::FloatGrid::Ptr> channels;
   std::vector<std::string> names;
-  VolumeSize size;
+  ImageExtent size;
   openvdb::Coord origin(0, 0, 0);
   const auto described = metadata ? (*metadata)[kVdbMetadataKey] : openvdb::Metadata::Ptr();
   if (described) {
@@ -188,12 +183,12 @@ Volume ReadVdbGrids(const std::filesystem::path& path, openvdb::io::File& file) 
     size = {extent.x(), extent.y(), extent.z()};
   }
   if (channels.empty()) throw Error(path, "the volume has no channels");
-  Volume volume(size, names);
+  Image volume(size, names);
   for (std::size_t c = 0; c < channels.size(); ++c) {
     const auto accessor = channels[c]->getConstAccessor();
-    for (int z = 0; z < size.z; ++z) {
-      for (int y = 0; y < size.y; ++y) {
-        for (int x = 0; x < size.x; ++x) {
+    for (int z = 0; z < size.depth; ++z) {
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
           const float value = accessor.getValue(origin.offsetBy(x, y, z));
           if (!std::isfinite(value)) {
             throw Error(path, fmt::format("non-finite value in grid \"{}\" at ({}, {}, {})",
@@ -209,13 +204,13 @@ Volume ReadVdbGrids(const std::filesystem::path& path, openvdb::io::File& file) 
 
 }  // namespace
 
-Volume ReadVolumeVdb(const std::filesystem::path& path) {
+Image ReadVolumeVdb(const std::filesystem::path& path) {
   InitialiseOpenVdb();
   if (!std::filesystem::is_regular_file(path)) throw Error(path, "no such file");
   try {
     openvdb::io::File file(path.string());
     file.open();
-    Volume volume = ReadVdbGrids(path, file);
+    Image volume = ReadVdbGrids(path, file);
     file.close();
     return volume;
   } catch (const openvdb::Exception& error) {
@@ -225,7 +220,7 @@ Volume ReadVolumeVdb(const std::filesystem::path& path) {
   }
 }
 
-void WriteExrSliceStack(const std::filesystem::path& folder, const Volume& volume) {
+void WriteExrSliceStack(const std::filesystem::path& folder, const Image& volume) {
   if (volume.empty()) throw Error(folder, "cannot write an empty volume");
   const std::vector<std::string> names = CheckedChannelNames(volume, folder);
   std::error_code error;
@@ -233,23 +228,23 @@ void WriteExrSliceStack(const std::filesystem::path& folder, const Volume& volum
   if (error) throw Error(folder, fmt::format("cannot create folder: {}", error.message()));
   // A stale manifest must not describe slices that are about to be replaced.
   std::filesystem::remove(folder / kStackManifest, error);
-  Volume named = volume;
-  named.set_channel_names(names);
   nlohmann::json files = nlohmann::json::array();
-  for (int z = 0; z < volume.size().z; ++z) {
+  for (int z = 0; z < volume.depth(); ++z) {
     const std::string name = fmt::format("slice_{:04d}.exr", z);
-    WriteImage(folder / name, ExtractSlice(named, SlicePlane::kXY, z));
+    Image slice(volume.SliceXY(z));
+    slice.set_channel_names(names);
+    WriteImage(folder / name, slice);
     files.push_back(name);
   }
   WriteJsonFile(folder / kStackManifest, {{"format", kStackFormat},
                                           {"version", 1},
-                                          {"size", SizeJson(volume.size())},
+                                          {"size", SizeJson(volume.extent())},
                                           {"channels", names},
                                           {"plane", "xy"},
                                           {"slices", files}});
 }
 
-Volume ReadExrSliceStack(const std::filesystem::path& folder) {
+Image ReadExrSliceStack(const std::filesystem::path& folder) {
   const std::filesystem::path manifest = folder / kStackManifest;
   if (!std::filesystem::is_regular_file(manifest)) {
     throw Error(folder, fmt::format("not a volume: no {} (an OpenVDB file must end in .vdb)",
@@ -260,35 +255,34 @@ Volume ReadExrSliceStack(const std::filesystem::path& folder) {
   if (reader["format"].String() != kStackFormat) {
     reader["format"].Fail(fmt::format("expected \"{}\"", kStackFormat));
   }
-  const VolumeSize size = SizeFromJson(reader["size"]);
+  const ImageExtent size = SizeFromJson(reader["size"]);
   std::vector<std::string> names;
   for (std::size_t c = 0; c < reader["channels"].ArraySize(); ++c) {
     names.push_back(reader["channels"][c].String());
   }
   if (names.empty()) reader["channels"].Fail("no channels");
   const JsonReader slices = reader["slices"];
-  if (static_cast<int>(slices.ArraySize()) != size.z) {
-    slices.Fail(fmt::format("{} slices for a depth of {}", slices.ArraySize(), size.z));
+  if (static_cast<int>(slices.ArraySize()) != size.depth) {
+    slices.Fail(fmt::format("{} slices for a depth of {}", slices.ArraySize(), size.depth));
   }
-  Volume volume(size, names);
-  for (int z = 0; z < size.z; ++z) {
+  Image volume(size, names);
+  for (int z = 0; z < size.depth; ++z) {
     const std::filesystem::path file = folder / slices[static_cast<std::size_t>(z)].String();
     ImageReadOptions options;
     options.keep_alpha = true;
     Image slice = ReadImage(file, options).image;
-    if (slice.width() != size.x || slice.height() != size.y ||
+    if (slice.width() != size.width || slice.height() != size.height ||
         slice.channels() != static_cast<int>(names.size())) {
       throw Error(file, fmt::format("slice is {}x{} with {} channels; the stack is {}x{} with {}",
-                                    slice.width(), slice.height(), slice.channels(), size.x, size.y,
-                                    names.size()));
+                                    slice.width(), slice.height(), slice.channels(), size.width,
+                                    size.height, names.size()));
     }
-    slice.set_channel_names(names);
-    InsertSlice(volume, SlicePlane::kXY, z, slice);
+    CopyPixels(slice, volume.SliceXY(z));
   }
   return volume;
 }
 
-std::vector<int> DisplayChannels(const Volume& volume) {
+std::vector<int> DisplayChannels(const Image& volume) {
   if (HasRgb(volume)) {
     return {volume.FindChannel("R"), volume.FindChannel("G"), volume.FindChannel("B")};
   }
@@ -296,18 +290,18 @@ std::vector<int> DisplayChannels(const Volume& volume) {
   return {0};
 }
 
-void WriteSliceImage(const std::filesystem::path& path, const Volume& volume, SlicePlane plane,
+void WriteSliceImage(const std::filesystem::path& path, const Image& volume, SlicePlane plane,
                      int index, const SliceDisplay& display) {
   const std::vector<int> channels = DisplayChannels(volume);
   float low = 0.0f, high = 1.0f;
   if (display.normalise) {
     low = std::numeric_limits<float>::max();
     high = std::numeric_limits<float>::lowest();
-    for (std::size_t i = 0; i < volume.voxel_count(); ++i) {
-      for (int c : channels) {
-        low = std::min(low, volume.voxel(i)[static_cast<std::size_t>(c)]);
-        high = std::max(high, volume.voxel(i)[static_cast<std::size_t>(c)]);
-      }
+    for (int c : channels) {
+      const std::span<const float> values = volume.plane(c);
+      const auto [plane_low, plane_high] = std::minmax_element(values.begin(), values.end());
+      low = std::min(low, *plane_low);
+      high = std::max(high, *plane_high);
     }
     if (!(high > low)) high = low + 1.0f;
   }
@@ -329,7 +323,7 @@ void WriteSliceImage(const std::filesystem::path& path, const Volume& volume, Sl
 
 std::vector<std::filesystem::path> WriteCentralSlices(const std::filesystem::path& folder,
                                                       const std::string& prefix,
-                                                      const Volume& volume,
+                                                      const Image& volume,
                                                       const SliceDisplay& display) {
   std::error_code error;
   std::filesystem::create_directories(folder, error);
@@ -338,7 +332,7 @@ std::vector<std::filesystem::path> WriteCentralSlices(const std::filesystem::pat
   for (SlicePlane plane : kAllSlicePlanes) {
     const std::filesystem::path path =
         folder / fmt::format("{}{}.png", prefix, std::string(ToString(plane)));
-    WriteSliceImage(path, volume, plane, SliceCount(volume.size(), plane) / 2, display);
+    WriteSliceImage(path, volume, plane, SliceCount(volume.extent(), plane) / 2, display);
     written.push_back(path);
   }
   return written;

@@ -27,19 +27,19 @@ enum class VolumeFormat { kOpenVdb, kExrSlices };
 // kOpenVdb for a path ending in ".vdb" (any case), kExrSlices otherwise.
 VolumeFormat VolumeFormatForPath(const std::filesystem::path& path);
 
-void WriteVolume(const std::filesystem::path& path, const Volume& volume);
-Volume ReadVolume(const std::filesystem::path& path);
+void WriteVolume(const std::filesystem::path& path, const Image& volume);
+Image ReadVolume(const std::filesystem::path& path);
 
 struct VdbWriteOptions {
   // Adds the "color" and "density" grids Blender's volume shader reads, when there are R, G, B.
   bool blender_grids = true;
 };
-void WriteVolumeVdb(const std::filesystem::path& path, const Volume& volume,
+void WriteVolumeVdb(const std::filesystem::path& path, const Image& volume,
                     const VdbWriteOptions& options = {});
-Volume ReadVolumeVdb(const std::filesystem::path& path);
+Image ReadVolumeVdb(const std::filesystem::path& path);
 
-void WriteExrSliceStack(const std::filesystem::path& folder, const Volume& volume);
-Volume ReadExrSliceStack(const std::filesystem::path& folder);
+void WriteExrSliceStack(const std::filesystem::path& folder, const Image& volume);
+Image ReadExrSliceStack(const std::filesystem::path& folder);
 
 // How a slice becomes a picture.
 struct SliceDisplay {
@@ -49,15 +49,15 @@ struct SliceDisplay {
 };
 // The channels a picture of the volume shows: R, G, B when the volume names them, else the first
 // three, else the first one (grey).
-std::vector<int> DisplayChannels(const Volume& volume);
+std::vector<int> DisplayChannels(const Image& volume);
 // Slice `index` of `plane` as an 8-bit sRGB PNG (or any format by extension).
-void WriteSliceImage(const std::filesystem::path& path, const Volume& volume, SlicePlane plane,
+void WriteSliceImage(const std::filesystem::path& path, const Image& volume, SlicePlane plane,
                      int index, const SliceDisplay& display = {});
 // The three central slices (xy at z = size.z / 2, and so on) as `<prefix>xy.png`, `<prefix>xz.png`,
 // `<prefix>yz.png` in `folder` (created). Returns the paths written.
 std::vector<std::filesystem::path> WriteCentralSlices(const std::filesystem::path& folder,
                                                       const std::string& prefix,
-                                                      const Volume& volume,
+                                                      const Image& volume,
                                                       const SliceDisplay& display = {});
 
 }  // namespace photomat

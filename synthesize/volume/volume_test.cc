@@ -17,11 +17,11 @@ namespace {
 
 using testing::TempDir;
 
-Volume NumberedVolume(VolumeSize size, int channels) {
-  Volume volume(size, channels);
-  for (int z = 0; z < size.z; ++z) {
-    for (int y = 0; y < size.y; ++y) {
-      for (int x = 0; x < size.x; ++x) {
+Image NumberedVolume(ImageExtent size, int channels) {
+  Image volume(size, channels);
+  for (int z = 0; z < size.depth; ++z) {
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
         for (int c = 0; c < channels; ++c)
           volume.at(x, y, z, c) = x + 100 * y + 10000 * z + 0.25f * c;
       }
@@ -30,15 +30,15 @@ Volume NumberedVolume(VolumeSize size, int channels) {
   return volume;
 }
 
-Volume RandomVolume(VolumeSize size, std::vector<std::string> names, std::uint64_t seed) {
-  Volume volume(size, std::move(names));
+Image RandomVolume(ImageExtent size, std::vector<std::string> names, std::uint64_t seed) {
+  Image volume(size, std::move(names));
   for (std::size_t i = 0; i < volume.values().size(); ++i) {
     volume.values()[i] = HashToSigned(HashVoxel(seed, 0, static_cast<std::int64_t>(i), 0, 0)) * 3;
   }
   return volume;
 }
 
-void ExpectSameVolume(const Volume& a, const Volume& b) {
+void ExpectSameVolume(const Image& a, const Image& b) {
   ASSERT_TRUE(a.SameShape(b));
   EXPECT_EQ(a.channel_names(), b.channel_names());
   for (std::size_t i = 0; i < a.values().size(); ++i) {
@@ -47,18 +47,18 @@ void ExpectSameVolume(const Volume& a, const Volume& b) {
 }
 
 TEST(VolumeTest, ParsesSizes) {
-  EXPECT_EQ(ParseVolumeSize("64"), VolumeSize::Cube(64));
-  EXPECT_EQ(ParseVolumeSize("8x16x4"), (VolumeSize{8, 16, 4}));
+  EXPECT_EQ(ParseVolumeSize("64"), ImageExtent::Cube(64));
+  EXPECT_EQ(ParseVolumeSize("8x16x4"), (ImageExtent{8, 16, 4}));
   EXPECT_FALSE(ParseVolumeSize("8x16"));
   EXPECT_FALSE(ParseVolumeSize("0"));
   EXPECT_FALSE(ParseVolumeSize("8x-1x2"));
   EXPECT_FALSE(ParseVolumeSize("abc"));
-  EXPECT_THROW(Volume(VolumeSize{0, 1, 1}, 1), Error);
-  EXPECT_THROW(Volume(VolumeSize{1, 1, 1}, 0), Error);
+  EXPECT_THROW(Image(ImageExtent{0, 1, 1}, 1), Error);
+  EXPECT_THROW(Image(ImageExtent{1, 1, 1}, 0), Error);
 }
 
 TEST(VolumeTest, SlicesFollowTheFixedAxes) {
-  const Volume volume = NumberedVolume({5, 4, 3}, 2);
+  const Image volume = NumberedVolume({5, 4, 3}, 2);
   const Image xy = ExtractSlice(volume, SlicePlane::kXY, 2);
   EXPECT_EQ(xy.width(), 5);
   EXPECT_EQ(xy.height(), 4);
@@ -73,10 +73,10 @@ TEST(VolumeTest, SlicesFollowTheFixedAxes) {
   EXPECT_EQ(yz.at(3, 1, 0), 0 + 100 * 3 + 10000 * 1);
   EXPECT_THROW(ExtractSlice(volume, SlicePlane::kXY, 3), Error);
 
-  Volume copy(volume.size(), 2);
+  Image copy(volume.extent(), 2);
   for (SlicePlane plane : kAllSlicePlanes) {
-    Volume rebuilt(volume.size(), 2);
-    for (int i = 0; i < SliceCount(volume.size(), plane); ++i) {
+    Image rebuilt(volume.extent(), 2);
+    for (int i = 0; i < SliceCount(volume.extent(), plane); ++i) {
       InsertSlice(rebuilt, plane, i, ExtractSlice(volume, plane, i));
     }
     ExpectSameVolume(rebuilt, volume);
@@ -85,17 +85,17 @@ TEST(VolumeTest, SlicesFollowTheFixedAxes) {
 }
 
 TEST(VolumeFilterTest, GaussianBlurKeepsTheMeanAndSmoothsAnImpulse) {
-  Volume impulse(VolumeSize{12, 10, 8}, 2);
+  Image impulse(ImageExtent{12, 10, 8}, 2);
   impulse.at(0, 5, 4, 0) = 1.0f;  // on a face: wraps or piles up at the edge
   impulse.at(6, 5, 4, 1) = 1.0f;
-  const Volume wrapped = GaussianBlur(impulse, 1.0, VolumeEdge::kWrap);
+  const Image wrapped = GaussianBlur(impulse, 1.0, VolumeEdge::kWrap);
   double sum = 0;
-  for (std::size_t i = 0; i < wrapped.voxel_count(); ++i) sum += wrapped.voxel(i)[0];
+  for (std::size_t i = 0; i < wrapped.pixel_count(); ++i) sum += wrapped.pixel(i)[0];
   EXPECT_NEAR(sum, 1.0, 1e-5);
   EXPECT_NEAR(wrapped.at(11, 5, 4, 0), wrapped.at(1, 5, 4, 0), 1e-7);  // symmetric across the wrap
   // One voxel away along one axis: exp(-1/2) of the centre.
   EXPECT_NEAR(wrapped.at(7, 5, 4, 1) / wrapped.at(6, 5, 4, 1), std::exp(-0.5), 1e-5);
-  const Volume clamped = GaussianBlur(impulse, 1.0, VolumeEdge::kClamp);
+  const Image clamped = GaussianBlur(impulse, 1.0, VolumeEdge::kClamp);
   EXPECT_EQ(clamped.at(11, 5, 4, 0), 0.0f);
   EXPECT_GT(clamped.at(0, 5, 4, 0), wrapped.at(0, 5, 4, 0));  // the cut-off tail folds back
   EXPECT_EQ(GaussianBlur(impulse, 0.0, VolumeEdge::kWrap).values()[0], impulse.values()[0]);
@@ -107,12 +107,12 @@ TEST(VolumeFilterTest, GaussianBlurKeepsTheMeanAndSmoothsAnImpulse) {
 
 TEST(VolumeIoTest, OpenVdbRoundTripIsExact) {
   TempDir dir;
-  const Volume volume = RandomVolume({7, 5, 3}, {"normal.X", "normal.Y", "normal.Z", "a", "b"}, 3);
+  const Image volume = RandomVolume({7, 5, 3}, {"normal.X", "normal.Y", "normal.Z", "a", "b"}, 3);
   WriteVolume(dir / "v.vdb", volume);
   ExpectSameVolume(ReadVolume(dir / "v.vdb"), volume);
 
   // A colour volume also carries Blender's grids, which reading skips.
-  const Volume colour = RandomVolume({6, 6, 6}, {"R", "G", "B"}, 4);
+  const Image colour = RandomVolume({6, 6, 6}, {"R", "G", "B"}, 4);
   WriteVolumeVdb(dir / "c.vdb", colour);
   ExpectSameVolume(ReadVolumeVdb(dir / "c.vdb"), colour);
   openvdb::io::File file((dir / "c.vdb").string());
@@ -133,8 +133,8 @@ TEST(VolumeIoTest, ReadsAVdbWrittenElsewhere) {
   openvdb::io::File file((dir / "foreign.vdb").string());
   file.write({grid});
   file.close();
-  const Volume volume = ReadVolumeVdb(dir / "foreign.vdb");
-  EXPECT_EQ(volume.size(), (VolumeSize{3, 2, 1}));
+  const Image volume = ReadVolumeVdb(dir / "foreign.vdb");
+  EXPECT_EQ(volume.extent(), (ImageExtent{3, 2, 1}));
   EXPECT_EQ(volume.channel_names(), std::vector<std::string>{"smoke"});
   EXPECT_EQ(volume.at(0, 0, 0, 0), 2.0f);
   EXPECT_EQ(volume.at(2, 1, 0, 0), 3.0f);
@@ -143,7 +143,7 @@ TEST(VolumeIoTest, ReadsAVdbWrittenElsewhere) {
 
 TEST(VolumeIoTest, ExrSliceStackRoundTripIsExact) {
   TempDir dir;
-  const Volume volume = RandomVolume({9, 4, 5}, {"R", "G", "B", "height"}, 5);
+  const Image volume = RandomVolume({9, 4, 5}, {"R", "G", "B", "height"}, 5);
   WriteVolume(dir / "stack", volume);
   EXPECT_TRUE(std::filesystem::exists(dir / "stack" / "slice_0004.exr"));
   ExpectSameVolume(ReadVolume(dir / "stack"), volume);
@@ -161,7 +161,7 @@ TEST(VolumeIoTest, BadFilesAreErrorsNamingThem) {
   EXPECT_THROW(ReadVolume(dir / "missing.vdb"), Error);
   EXPECT_THROW(ReadVolume(dir / "no-stack"), Error);
 
-  const Volume volume = RandomVolume({4, 4, 3}, {"R", "G", "B"}, 6);
+  const Image volume = RandomVolume({4, 4, 3}, {"R", "G", "B"}, 6);
   WriteVolume(dir / "stack", volume);
   std::filesystem::remove(dir / "stack" / "slice_0001.exr");
   EXPECT_THROW(ReadVolume(dir / "stack"), Error);
@@ -177,14 +177,14 @@ TEST(VolumeIoTest, BadFilesAreErrorsNamingThem) {
   } catch (const Error& error) {
     EXPECT_EQ(error.file(), dir / "stack2" / "slice_0002.exr");
   }
-  Volume duplicate(VolumeSize::Cube(2), std::vector<std::string>{"a", "a"});
+  Image duplicate(ImageExtent::Cube(2), std::vector<std::string>{"a", "a"});
   EXPECT_THROW(WriteVolume(dir / "dup.vdb", duplicate), Error);
   EXPECT_FALSE(std::filesystem::exists(dir / "dup.vdb"));
 }
 
 TEST(VolumeIoTest, WritesCentralSlicePictures) {
   TempDir dir;
-  Volume volume(VolumeSize{8, 6, 4}, std::vector<std::string>{"R", "G", "B"});
+  Image volume(ImageExtent{8, 6, 4}, std::vector<std::string>{"R", "G", "B"});
   for (int z = 0; z < 4; ++z) {
     for (int y = 0; y < 6; ++y) {
       for (int x = 0; x < 8; ++x) volume.at(x, y, z, 0) = x / 7.0f;

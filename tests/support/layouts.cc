@@ -14,8 +14,11 @@ void WriteImages(const fs::path& dir, const std::vector<std::string>& names, int
                  int height) {
   for (std::size_t i = 0; i < names.size(); ++i) {
     Image image(width, height, 3);
-    for (std::size_t v = 0; v < image.values().size(); ++v) {
-      image.values()[v] = static_cast<float>((v * 7 + i * 13) % 50) / 50.0f + 0.1f;
+    for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        const std::size_t v = 3 * p + c;  // the sample's index in the file
+        image.pixel(p)[c] = static_cast<float>((v * 7 + i * 13) % 50) / 50.0f + 0.1f;
+      }
     }
     ImageWriteOptions options;
     options.sample_type = SampleType::kUint16;
