@@ -171,7 +171,8 @@ std::string IndexHtml(const fs::path& batch_dir, const BatchSummary& summary) {
       "td,th{{border:1px solid #bbb;padding:0.3em 0.6em;text-align:left}}.ok{{color:#060}}"
       ".bad{{color:#a00;font-weight:bold}}</style>\n</head>\n<body>\n<h1>{0}</h1>\n"
       "<p>{1} done, {2} failed, {3} not run. The viewers need a static file server (e.g. "
-      "<code>python3 -m http.server</code> in a folder above this page and the outputs).</p>\n<table>\n"
+      "<code>python3 -m http.server</code> in a folder above this page and the "
+      "outputs).</p>\n<table>\n"
       "<tr><th>capture</th><th>state</th><th>method</th><th>eta reconstruction</th>"
       "<th>eta prediction</th><th>normal error (deg)</th><th>time (s)</th><th>peak (MB)</th>"
       "<th>outputs</th></tr>\n{4}</table>\n</body>\n</html>\n",
