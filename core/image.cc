@@ -66,10 +66,9 @@ ImageView Image::SliceXY(int z) {
   return {values_.data() + Index(0, 0, z), width(), height(), channels_, width(), PlaneStride()};
 }
 
-ConstImageView Image::SliceXY(int z) const {
-  CheckRange(z, 1, depth(), "slices");
-  return {values_.data() + Index(0, 0, z), width(), height(), channels_, width(), PlaneStride()};
-}
+// The read-only slices are the writable ones seen through const: one computation of each
+// view's geometry (the const_cast never writes).
+ConstImageView Image::SliceXY(int z) const { return const_cast<Image*>(this)->SliceXY(z); }
 
 ImageView Image::SliceXZ(int y) {
   CheckRange(y, 1, height(), "rows");
@@ -81,15 +80,7 @@ ImageView Image::SliceXZ(int y) {
           PlaneStride()};
 }
 
-ConstImageView Image::SliceXZ(int y) const {
-  CheckRange(y, 1, height(), "rows");
-  return {values_.data() + Index(0, y, 0),
-          width(),
-          depth(),
-          channels_,
-          static_cast<std::ptrdiff_t>(width()) * height(),
-          PlaneStride()};
-}
+ConstImageView Image::SliceXZ(int y) const { return const_cast<Image*>(this)->SliceXZ(y); }
 
 void Image::set_channel_names(std::vector<std::string> names) {
   if (!names.empty() && static_cast<int>(names.size()) != channels_) {
