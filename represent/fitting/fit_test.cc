@@ -3,9 +3,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 
+#include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "represent/model/normal_error.h"
 #include "tests/support/synthetic_sets.h"
@@ -108,12 +110,27 @@ TEST(FitTest, ThreeImageUsesTheThesisLightsAndRotatesWhenOneIsMissing) {
   EXPECT_EQ(SelectThreeImageLights(grid, without_90), (std::array<int, 3>{13, 16, 19}));
 }
 
-TEST(FitTest, ThreeImageReconstructsItsOwnImagesExactly) {
+TEST(FitTest, ThreeImageRelightsUncapturedLightsAsTheTrueSurface) {
+  // At a captured light 3I returns its stored image whatever its light function does, so relight
+  // between the fitted lights and compare with the surface rendered there: for a Lambertian
+  // sample without shadows 3I is exact at every light.
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 32);
   const Representation three = Fit(synthetic.set, Method::Parse("3i"));
-  const Image relit = three.Relight(synthetic.set.light(15));
-  for (std::size_t v = 0; v < relit.values().size(); ++v) {
-    ASSERT_NEAR(relit.values()[v], synthetic.set.image(15).values()[v], 1e-6);
+  const std::vector<LightDirection> uncaptured = {LightDirection::FromSlantTilt(37, 211),
+                                                  LightDirection::FromSlantTilt(8, 47),
+                                                  LightDirection::FromSlantTilt(52, 118)};
+  const PhotometricSet truth = RenderSyntheticCapture(synthetic.material, uncaptured);
+  for (int i = 0; i < truth.size(); ++i) {
+    const Image relit = three.Relight(uncaptured[i]);
+    ASSERT_EQ(relit.values().size(), truth.image(i).values().size());
+    double worst = 0.0;
+    for (std::size_t v = 0; v < relit.values().size(); ++v) {
+      worst = std::max(worst, std::abs(double{relit.values()[v]} - truth.image(i).values()[v]));
+    }
+    ::testing::Test::RecordProperty("worst_abs_error_" + std::to_string(i), std::to_string(worst));
+    // measured WORST; bound BOUND (float rounding of a 3-term sum of values <= 1).
+    // Measured 1.2e-7, 6.0e-8, 6.0e-8 (float rounding of a 3-term sum); bound 2.4e-7 = 1.2e-7 * 2.
+    EXPECT_LT(worst, 2.4e-7) << "light " << i << ": worst error " << worst;
   }
 }
 
