@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <filesystem>
 
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere.h"
@@ -90,8 +91,7 @@ TEST(MirrorSphereTest, PerspectiveCameraNeedsThePerspectiveModel) {
 
 // The University of Washington chrome sphere (12 images, 8-bit, anti-aliased mask) against the
 // lights.txt shipped beside it.
-TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
-  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+AngleStats UwChromeAgainstTheShippedLights(const std::filesystem::path& folder) {
   std::vector<Image> images;
   std::vector<std::string> names;
   for (int i = 0; i < 12; ++i) {
@@ -104,20 +104,44 @@ TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
   const MirrorSphereCalibration result =
       CalibrateLightsFromMirrorSphere(images, names, mask, MirrorSphereOptions{});
   const std::vector<LightDirection> reference = ReadLightList(folder / "lights.txt");
-  ASSERT_EQ(reference.size(), 12u);
-  const AngleStats stats = CompareLights(result.lights, reference);
+  EXPECT_EQ(reference.size(), 12u);
+  return CompareLights(result.lights, reference);
+}
+
+// The target is 2 degrees; measured 3.09 mean, 8.55 max. The shortfall is the file's,
+// not this calibration's (README "Calibration"): every highlight definition (this weighted
+// centroid, the centroid of the clipped pixels, sRGB or linear decoding) agrees to 0.15 px,
+// while lights.txt puts the highlights 1.2 to 8.9 px away, nearly all to the left; the
+// orthographic sphere that agrees best with the file (1.25 degrees) has a radius of 130 px where
+// the outline (mask and visible rim) measures 119.5; a perspective camera does not close the gap
+// (2.9 degrees at best); and the matte grey sphere under the same lights (next test) agrees
+// with these lights, not with the file's. This bound guards against regressions; the target is
+// kept in the next test, as an expected failure.
+TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+  const AngleStats stats = UwChromeAgainstTheShippedLights(folder);
   RecordProperty("mean_difference_deg", std::to_string(stats.mean));
   RecordProperty("max_difference_deg", std::to_string(stats.max));
   std::printf("uw-psm chrome: mean %.3f, max %.3f degrees\n", stats.mean, stats.max);
-  // The target is 2 degrees; measured 3.09 mean, 8.55 max. The shortfall is the file's,
-  // not this calibration's (README "Calibration"): every highlight definition (this weighted
-  // centroid, the centroid of the clipped pixels, sRGB or linear decoding) agrees to 0.15 px,
-  // while lights.txt puts the highlights 1.2 to 8.9 px away, nearly all to the left; the
-  // orthographic sphere that agrees best with the file (1.25 degrees) has a radius of 130 px where
-  // the outline (mask and visible rim) measures 119.5; a perspective camera does not close the gap
-  // (2.9 degrees at best); and the matte grey sphere under the same lights (next test) agrees
-  // with these lights, not with the file's. The bound guards against regressions.
   EXPECT_LT(stats.mean, 3.5);
+}
+
+// The 2-degree target, not met: a visible expected failure. It prints what it misses and why, and
+// fails once the target is met, so that 2 degrees then becomes the bound of the test above.
+TEST(MirrorSphereRealTest, UwChromeSphereMissesTheTwoDegreeTarget) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+  constexpr double kTargetDegrees = 2.0;
+  const AngleStats stats = UwChromeAgainstTheShippedLights(folder);
+  std::printf(
+      "EXPECTED FAILURE: target %.1f degrees mean against uw-psm lights.txt not met (measured "
+      "%.2f) because lights.txt disagrees with the chrome highlights and with the matte sphere "
+      "(README \"Calibration\")\n",
+      kTargetDegrees, stats.mean);
+  RecordProperty("expected_failure",
+                 fmt::format("mean {:.2f} degrees against target {}", stats.mean, kTargetDegrees));
+  EXPECT_GE(stats.mean, kTargetDegrees)
+      << "the 2-degree target is met (" << stats.mean
+      << "): make it the bound of UwChromeSphereAgreesWithTheShippedLights and delete this test";
 }
 
 // Light directions from a matte (Lambertian) sphere of known outline, independent of any
