@@ -38,6 +38,12 @@ TEST(PhotomatCliTest, GenerateFitRelightEvaluate) {
                   " --method gradient --light 60,120 --out " + (dir / "g.png").string());
   ASSERT_EQ(one.exit_code, 0) << one.output;
   EXPECT_EQ(ReadImage(dir / "g.png").image.width(), 40);
+  const RunResult bad_light =
+      RunPhotomat("relight " + (dir / "stacks").string() +
+                  " --method gradient --light 100,0 --out " + (dir / "bad.png").string());
+  EXPECT_EQ(bad_light.exit_code, 1);
+  EXPECT_EQ(bad_light.output, "photomat: error: \"100,0\": slant must be in [0, 90] degrees\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.png"));
 
   const RunResult sweep =
       RunPhotomat("relight " + (dir / "stacks" / "eigen6.exr").string() +
@@ -68,8 +74,11 @@ TEST(PhotomatCliTest, ErrorsAreOneLineAndNonZero) {
   const RunResult method = RunPhotomat("fit " + dir.path().string() + " --method hsh --out /tmp/x");
   EXPECT_EQ(method.exit_code, 1);
   EXPECT_THAT(method.output, HasSubstr("unknown method \"hsh\""));
-  const RunResult light = RunPhotomat("relight x.exr --light 100,0 --out y.png");
-  EXPECT_EQ(light.exit_code, 1);
+  // A valid light, so that the stack is what is wrong (the light is checked after the stack is
+  // read: GenerateFitRelightEvaluate checks a bad light on a real stack).
+  const RunResult stack = RunPhotomat("relight /nonexistent/stack.exr --light 40,0 --out y.png");
+  EXPECT_EQ(stack.exit_code, 1);
+  EXPECT_EQ(stack.output, "photomat: error: /nonexistent/stack.exr: no such map stack\n");
 }
 
 TEST(PhotomatCliTest, EverySubcommandHasHelp) {

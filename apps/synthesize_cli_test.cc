@@ -78,9 +78,12 @@ TEST(SynthesizeCliTest, GrowsAStackAndReappliesItsSourceMapToAnother) {
   ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
   EXPECT_THAT(evaluate.output, HasSubstr("nearest-patch distance"));
   const nlohmann::json quality = ReadJsonFile(dir / "quality.json");
+  // Measured: nearest-patch distance 0.0311, seams 1.228 (1183 pairs). Blocks chosen at random
+  // (--tolerance 1000) give 0.0713 and 3.29.
   EXPECT_GE(quality["nearest_patch_distance"].get<double>(), 0.0);
-  EXPECT_LT(quality["nearest_patch_distance"].get<double>(), 0.1);
+  EXPECT_LT(quality["nearest_patch_distance"].get<double>(), 0.047);  // 0.0311 * 1.5
   EXPECT_GT(quality["seams"]["pairs"].get<double>(), 0.0);
+  EXPECT_LT(quality["seams"]["ratio"].get<double>(), 1.47);  // 1.228 * 1.2
 }
 
 TEST(SynthesizeCliTest, QualityPresetTakesLargerBlocksAndTheBestMatches) {

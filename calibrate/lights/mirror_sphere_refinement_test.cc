@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <filesystem>
 
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere.h"
@@ -21,9 +22,11 @@ TEST(MirrorSphereTest, MaskOutlineGivesTheCircleToASmallFractionOfAPixel) {
   const MirrorSphereRender render =
       RenderMirrorSphere({LightDirection::FromVector(0, 0, 1)}, options);
   const SphereCircle circle = FitSphereToMask(render.coverage);
-  EXPECT_NEAR(circle.centre.x(), 151.37, 0.05);
-  EXPECT_NEAR(circle.centre.y(), 117.81, 0.05);
-  EXPECT_NEAR(circle.radius, 83.4, 0.05);
+  // Measured errors: centre 0.0009, 0.0039 px, radius 0.0025 px; bounds 0.008 = 0.0039 * 2 and
+  // 0.005 = 0.0025 * 2.
+  EXPECT_NEAR(circle.centre.x(), 151.37, 0.008);
+  EXPECT_NEAR(circle.centre.y(), 117.81, 0.008);
+  EXPECT_NEAR(circle.radius, 83.4, 0.005);
 }
 
 TEST(MirrorSphereTest, SyntheticSphereWithMaskRecoversLightsWithinHalfADegree) {
@@ -36,10 +39,12 @@ TEST(MirrorSphereTest, SyntheticSphereWithMaskRecoversLightsWithinHalfADegree) {
   const AngleStats stats = CompareLights(result.lights, lights);
   RecordProperty("mean_error_deg", std::to_string(stats.mean));
   std::printf("synthetic sphere with mask: mean %.3f, max %.3f degrees\n", stats.mean, stats.max);
-  EXPECT_LT(stats.mean, 0.5);
-  EXPECT_LT(stats.max, 1.0);
-  EXPECT_NEAR(result.sphere.radius, 60.0, 0.1);
-  EXPECT_LT(result.edge_rms_pixels, 0.2);
+  // Measured: mean 0.065, max 0.128 degrees, radius error 0.0047 px, edge RMS 0.070 px; bounds
+  // 0.098 = 0.065 * 1.5, 0.19 = 0.128 * 1.5, 0.0094 = 0.0047 * 2, 0.105 = 0.070 * 1.5.
+  EXPECT_LT(stats.mean, 0.098);
+  EXPECT_LT(stats.max, 0.19);
+  EXPECT_NEAR(result.sphere.radius, 60.0, 0.0094);
+  EXPECT_LT(result.edge_rms_pixels, 0.105);
 }
 
 TEST(MirrorSphereTest, SyntheticSphereWithoutMaskIsDetectedAndCalibrated) {
@@ -49,11 +54,14 @@ TEST(MirrorSphereTest, SyntheticSphereWithoutMaskIsDetectedAndCalibrated) {
   const MirrorSphereRender render = RenderMirrorSphere(lights, options);
   const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
       render.images, SphereImageNames(lights.size()), std::nullopt, MirrorSphereOptions{});
-  EXPECT_NEAR(result.sphere.centre.x(), 110.2, 0.3);
-  EXPECT_NEAR(result.sphere.centre.y(), 72.6, 0.3);
-  EXPECT_NEAR(result.sphere.radius, 55.0, 0.3);
-  EXPECT_LT(result.edge_rms_pixels, 0.3);
-  EXPECT_LT(CompareLights(result.lights, lights).mean, 0.5);
+  // Measured errors: centre 0.0073, 0.109 px, radius 0.0038 px, edge RMS 0.166 px, lights 0.249
+  // degrees mean; bounds 0.015 = 0.0073 * 2, 0.165 = 0.109 * 1.5, 0.0076 = 0.0038 * 2,
+  // 0.25 = 0.166 * 1.5, 0.375 = 0.249 * 1.5.
+  EXPECT_NEAR(result.sphere.centre.x(), 110.2, 0.015);
+  EXPECT_NEAR(result.sphere.centre.y(), 72.6, 0.165);
+  EXPECT_NEAR(result.sphere.radius, 55.0, 0.0076);
+  EXPECT_LT(result.edge_rms_pixels, 0.25);
+  EXPECT_LT(CompareLights(result.lights, lights).mean, 0.375);
 }
 
 TEST(MirrorSphereTest, PerspectiveCameraNeedsThePerspectiveModel) {
@@ -75,14 +83,15 @@ TEST(MirrorSphereTest, PerspectiveCameraNeedsThePerspectiveModel) {
   RecordProperty("perspective_mean_error_deg", std::to_string(perspective_error));
   std::printf("synthetic perspective sphere: mean %.3f degrees (orthographic model: %.3f)\n",
               perspective_error, CompareLights(orthographic.lights, lights).mean);
-  EXPECT_LT(perspective_error, 0.5);
-  EXPECT_GT(CompareLights(orthographic.lights, lights).mean, 2.0);
+  // Measured 0.105 degrees (orthographic model 5.59); bounds 0.16 = 0.105 * 1.5 and
+  // 3.7 = 5.59 / 1.5.
+  EXPECT_LT(perspective_error, 0.16);
+  EXPECT_GT(CompareLights(orthographic.lights, lights).mean, 3.7);
 }
 
 // The University of Washington chrome sphere (12 images, 8-bit, anti-aliased mask) against the
 // lights.txt shipped beside it.
-TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
-  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+AngleStats UwChromeAgainstTheShippedLights(const std::filesystem::path& folder) {
   std::vector<Image> images;
   std::vector<std::string> names;
   for (int i = 0; i < 12; ++i) {
@@ -95,20 +104,44 @@ TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
   const MirrorSphereCalibration result =
       CalibrateLightsFromMirrorSphere(images, names, mask, MirrorSphereOptions{});
   const std::vector<LightDirection> reference = ReadLightList(folder / "lights.txt");
-  ASSERT_EQ(reference.size(), 12u);
-  const AngleStats stats = CompareLights(result.lights, reference);
+  EXPECT_EQ(reference.size(), 12u);
+  return CompareLights(result.lights, reference);
+}
+
+// The target is 2 degrees; measured 3.09 mean, 8.55 max. The shortfall is the file's,
+// not this calibration's (README "Calibration"): every highlight definition (this weighted
+// centroid, the centroid of the clipped pixels, sRGB or linear decoding) agrees to 0.15 px,
+// while lights.txt puts the highlights 1.2 to 8.9 px away, nearly all to the left; the
+// orthographic sphere that agrees best with the file (1.25 degrees) has a radius of 130 px where
+// the outline (mask and visible rim) measures 119.5; a perspective camera does not close the gap
+// (2.9 degrees at best); and the matte grey sphere under the same lights (next test) agrees
+// with these lights, not with the file's. This bound guards against regressions; the target is
+// kept in the next test, as an expected failure.
+TEST(MirrorSphereRealTest, UwChromeSphereAgreesWithTheShippedLights) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+  const AngleStats stats = UwChromeAgainstTheShippedLights(folder);
   RecordProperty("mean_difference_deg", std::to_string(stats.mean));
   RecordProperty("max_difference_deg", std::to_string(stats.max));
   std::printf("uw-psm chrome: mean %.3f, max %.3f degrees\n", stats.mean, stats.max);
-  // The target is 2 degrees; measured 3.09 mean, 8.55 max. The shortfall is the file's,
-  // not this calibration's (README "Calibration"): every highlight definition (this weighted
-  // centroid, the centroid of the clipped pixels, sRGB or linear decoding) agrees to 0.15 px,
-  // while lights.txt puts the highlights 1.2 to 8.9 px away, nearly all to the left; the
-  // orthographic sphere that agrees best with the file (1.25 degrees) has a radius of 130 px where
-  // the outline (mask and visible rim) measures 119.5; a perspective camera does not close the gap
-  // (2.9 degrees at best); and the matte grey sphere under the same lights (next test) agrees
-  // with these lights, not with the file's. The bound guards against regressions.
   EXPECT_LT(stats.mean, 3.5);
+}
+
+// The 2-degree target, not met: a visible expected failure. It prints what it misses and why, and
+// fails once the target is met, so that 2 degrees then becomes the bound of the test above.
+TEST(MirrorSphereRealTest, UwChromeSphereMissesTheTwoDegreeTarget) {
+  PHOTOMAT_TEST_DATA_OR_SKIP(folder, "uw-psm");
+  constexpr double kTargetDegrees = 2.0;
+  const AngleStats stats = UwChromeAgainstTheShippedLights(folder);
+  std::printf(
+      "EXPECTED FAILURE: target %.1f degrees mean against uw-psm lights.txt not met (measured "
+      "%.2f) because lights.txt disagrees with the chrome highlights and with the matte sphere "
+      "(README \"Calibration\")\n",
+      kTargetDegrees, stats.mean);
+  RecordProperty("expected_failure",
+                 fmt::format("mean {:.2f} degrees against target {}", stats.mean, kTargetDegrees));
+  EXPECT_GE(stats.mean, kTargetDegrees)
+      << "the 2-degree target is met (" << stats.mean
+      << "): make it the bound of UwChromeSphereAgreesWithTheShippedLights and delete this test";
 }
 
 // Light directions from a matte (Lambertian) sphere of known outline, independent of any

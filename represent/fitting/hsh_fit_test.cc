@@ -49,6 +49,34 @@ TEST(HshTest, FitRecoversKnownCoefficientsForEveryOrder) {
   }
 }
 
+// Four-term HSH written out by hand in the light's x, y, z (RTIViewer's order, as
+// represent/model/hsh.h states it), independent of HshLightBasis: with c = z, sin(theta) cos(phi) =
+// x and sqrt(c - c^2) = sin(theta) sqrt(c / (1 + c)), h1 = sqrt(6 / pi) x sqrt(c / (1 + c)),
+// h2 = sqrt(3 / (2 pi)) (2c - 1), h3 = sqrt(6 / pi) y sqrt(c / (1 + c)), h0 = 1 / sqrt(2 pi).
+double Hsh4ByHand(const Eigen::Vector4d& a, const LightDirection& light) {
+  const double c = light.z(), k = std::sqrt(c / (1 + c));
+  return a[0] / std::sqrt(2 * M_PI) + a[1] * std::sqrt(6 / M_PI) * light.x() * k +
+         a[2] * std::sqrt(3 / (2 * M_PI)) * (2 * c - 1) +
+         a[3] * std::sqrt(6 / M_PI) * light.y() * k;
+}
+
+TEST(HshTest, FourTermFitFollowsTheClosedForm) {
+  const auto lights = testing::FiveRingDome();
+  const Eigen::Vector4d truth(1.1, 0.3, -0.25, 0.15);
+  std::vector<Image> images;
+  for (const auto& light : lights) {
+    Image image(2, 2, 1);
+    for (float& v : image.values()) v = static_cast<float>(Hsh4ByHand(truth, light));
+    images.push_back(image);
+  }
+  const Representation hsh = Fit(PhotometricSet(images, lights), Method::Parse("hsh4"));
+  for (int j = 0; j < 4; ++j) EXPECT_NEAR(hsh.maps().at(1, 0, j), truth[j], 2e-5) << "term " << j;
+  for (const auto& light :
+       {LightDirection::FromSlantTilt(52, 200), LightDirection::FromSlantTilt(23, 71)}) {
+    EXPECT_NEAR(hsh.Relight(light).at(0, 1, 0), Hsh4ByHand(truth, light), 2e-5);
+  }
+}
+
 TEST(HshTest, SixteenTermsNeedFourSlants) {
   // The thesis grid has three slants: the four m = 0 terms of 16-term HSH depend on the slant
   // only and cannot be separated.

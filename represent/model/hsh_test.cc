@@ -58,6 +58,43 @@ TEST(HshTest, TermOrderFollowsRtiViewer) {
   EXPECT_THROW(HshLightBasis(6), Error);
 }
 
+TEST(HshTest, NineTermsMatchValuesComputedByHand) {
+  // Lights where each of terms 4..8 is non-zero somewhere, with every value worked out by hand
+  // from RTIViewer's formulas (c = cos(theta), s = sqrt(c - c^2)).
+  const double k30 = std::sqrt(30 / M_PI), k6 = std::sqrt(6 / M_PI);
+  // (0.6, 0, 0.8): c = 0.8, s = 0.4, phi = 0.
+  const auto x = HshLightBasis(9).Coefficients(LightDirection::FromVector(0.6, 0, 0.8));
+  const std::vector<double> x_by_hand = {1 / std::sqrt(2 * M_PI),
+                                         0.4 * k6,
+                                         0.6 * std::sqrt(3 / (2 * M_PI)),
+                                         0,
+                                         -0.16 * k30,
+                                         0.24 * k30,
+                                         0.04 * std::sqrt(5 / (2 * M_PI)),
+                                         0,
+                                         0};
+  // (0, 0.6, 0.8): phi = 90 degrees, so cos(2 phi) = -1 and the sine terms take over.
+  const auto y = HshLightBasis(9).Coefficients(LightDirection::FromVector(0, 0.6, 0.8));
+  const std::vector<double> y_by_hand = {
+      x_by_hand[0], 0, x_by_hand[2], 0.4 * k6, 0.16 * k30, 0, x_by_hand[6], 0.24 * k30, 0};
+  // Slant 60, tilt 45: c = 0.5, s = 0.5, cos(phi) = sin(phi) = 1 / sqrt(2), sin(2 phi) = 1.
+  const auto d = HshLightBasis(9).Coefficients(LightDirection::FromSlantTilt(60, 45));
+  const std::vector<double> d_by_hand = {x_by_hand[0],
+                                         0.5 * k6 / std::sqrt(2),
+                                         0,
+                                         0.5 * k6 / std::sqrt(2),
+                                         0,
+                                         0,
+                                         -0.5 * std::sqrt(5 / (2 * M_PI)),
+                                         0,
+                                         -0.25 * k30};
+  for (int j = 0; j < 9; ++j) {
+    EXPECT_NEAR(x[j], x_by_hand[j], 1e-12) << "term " << j;
+    EXPECT_NEAR(y[j], y_by_hand[j], 1e-12) << "term " << j;
+    EXPECT_NEAR(d[j], d_by_hand[j], 1e-12) << "term " << j;
+  }
+}
+
 TEST(HshTest, BasisSurvivesJson) {
   const nlohmann::json json = HshLightBasis(9).ToJson();
   const auto basis = LightBasisFromJson(JsonReader(json, "stack.exr", "basis"));

@@ -215,10 +215,9 @@ Comparison Compare(const Image& exemplar, ImageExtent size, const char* name) {
 // only, which is below random coordinates; colour histogram (32-bin L1 and the bin-free earth
 // mover's distance) and radially averaged spectrum far below jitter only; the internal objective
 // falling with each pass; coherent patches, yet not one translated copy of the exemplar.
-void ExpectGrownLikeTheExemplar(const Comparison& c) {
+void ExpectGrownLikeTheExemplarButForTheSpectrum(const Comparison& c) {
   EXPECT_LT(c.corrected.match_error, 0.5 * c.jitter_only.match_error);
   EXPECT_LT(c.jitter_only.match_error, c.random.match_error);
-  EXPECT_LT(c.corrected.spectrum_db, 0.3 * c.jitter_only.spectrum_db);
   EXPECT_LT(c.corrected.histogram, 0.3 * c.jitter_only.histogram);
   EXPECT_LT(c.corrected.earth_mover, 0.3 * c.jitter_only.earth_mover);
   const std::vector<PassReport>& passes = c.result.passes;
@@ -232,10 +231,18 @@ void ExpectGrownLikeTheExemplar(const Comparison& c) {
   EXPECT_GT(c.coherence, 2 * c.random_coherence);
 }
 
+// The spectrum target: far below jitter only's.
+constexpr double kSpectrumTarget = 0.3;
+
+void ExpectGrownLikeTheExemplar(const Comparison& c) {
+  ExpectGrownLikeTheExemplarButForTheSpectrum(c);
+  EXPECT_LT(c.corrected.spectrum_db, kSpectrumTarget * c.jitter_only.spectrum_db);
+}
+
 // Procedural exemplars grown to a whole number of exemplar periods (16^3 to 32^3) and to a
 // fractional one (24^3 to 64^3, where the jitter-only result's coarse levels do not repeat whole
 // exemplar blocks, so its histogram lies near the sampling floor of random copies). Wood 16^3
-// is left out: its spectrum is only 0.4x the jitter-only one (1.22 against 2.87 dB). All figures
+// to 32^3 misses the spectrum target: GrownFromProceduralTargetTest below. All figures
 // (corrected / jitter only, bench/solid_table for more sizes): README, solid textures.
 struct Growth {
   ProceduralPattern pattern;
@@ -263,6 +270,29 @@ INSTANTIATE_TEST_SUITE_P(Patterns, GrownFromProceduralTest,
                            return fmt::format("{}{}To{}", ToString(param.param.pattern),
                                               param.param.exemplar_side, param.param.output_side);
                          });
+
+// Wood 16^3 grown to 32^3 shows every property but the spectrum target: an expected failure, kept
+// visible. Its spectrum is 0.44x the jitter-only one (README, solid textures: wood 16^3 gives 0.44x
+// to 0.53x at every output size, other exemplars at most 0.3x); why the correction leaves wood's
+// 16^3 spectrum there is not established. The test asserts the measured state, prints the target
+// it misses, and fails once the target is met, so that the case then joins the list above.
+TEST(GrownFromProceduralTargetTest, Wood16To32SpectrumMissesItsTarget) {
+  const Image exemplar = MakeProceduralExemplar(ProceduralPattern::kWood, 16, 3);
+  const Comparison c = Compare(exemplar, ImageExtent::Cube(32), "wood16To32");
+  ExpectGrownLikeTheExemplarButForTheSpectrum(c);
+  const double ratio = c.corrected.spectrum_db / c.jitter_only.spectrum_db;
+  std::printf(
+      "EXPECTED FAILURE: target spectrum below %.1fx jitter only's not met (measured %.3fx: %.2f "
+      "against %.2f dB) because the correction leaves 16^3 wood's spectrum at about 0.44x (cause "
+      "not established)\n",
+      kSpectrumTarget, ratio, c.corrected.spectrum_db, c.jitter_only.spectrum_db);
+  RecordProperty("expected_failure",
+                 fmt::format("spectrum ratio {:.3f} against target {}", ratio, kSpectrumTarget));
+  EXPECT_LT(ratio, 0.53) << "measured state";  // measured 0.438; bound 0.53 = 0.438 * 1.2
+  EXPECT_GE(ratio, kSpectrumTarget)
+      << "the spectrum target is met (" << ratio
+      << "x): move wood 16^3 to 32^3 into GrownFromProceduralTest and delete this test";
+}
 
 // A real exemplar: a 16^3 solid made from a photograph of the solid-exemplar set (002, the same
 // view on all three planes, as `photomat solid from-views --view`), grown to 32^3. The histogram
