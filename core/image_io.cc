@@ -281,8 +281,9 @@ int AllowedThreads() {
 // OpenImageIO's thread counts are process-wide attributes (its own "threads" for format
 // conversion, "exr_threads" for OpenEXR's compression pool, applied when the next EXR reader or
 // writer is created). This is the one place photomat sets them, before every EXR write, so that
-// OpenEXR never uses more threads than the caller's TBB limit. OpenImageIO guards its attributes
-// with a lock and resizes OpenEXR's pool only when the count changes.
+// OpenEXR's pool has as many compressing workers as the caller's TBB limit allows (the calling
+// thread meanwhile only writes finished chunks out). OpenImageIO guards its attributes with a
+// lock and resizes OpenEXR's pool only when the count changes.
 void LimitOpenImageIoThreads(int threads) {
   OIIO::attribute("threads", threads);
   OIIO::attribute("exr_threads", threads);
