@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/text_parsing.h"
 #include "relight/render/relight.h"
 
@@ -62,6 +63,13 @@ LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOption
         images, loaded.set.size(), worst, loaded.set.image_name(worst_index));
   }
   return loaded;
+}
+
+void AddExrCompressionOption(CLI::App& command, std::string& name) {
+  command
+      .add_option("--exr-compression", name,
+                  "Compression of the map stack (lossless): none, rle, zips, zip or piz")
+      ->capture_default_str();
 }
 
 void CreateFolder(const std::filesystem::path& folder) {

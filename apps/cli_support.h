@@ -1,5 +1,6 @@
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -24,6 +25,11 @@ std::pair<int, int> ParseSize(const std::string& text);
 
 // Loads a set with a progress bar and warns (stderr) about clipped pixels.
 LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options);
+
+// `--exr-compression NAME` on a command that writes map stacks: one of the lossless OpenEXR
+// compressions, the default's name preset. The command's callback turns the name into the value
+// with ParseExrCompression, whose error lists the allowed names.
+void AddExrCompressionOption(CLI::App& command, std::string& name);
 
 // Creates `folder` (and parents); Error naming it on failure.
 void CreateFolder(const std::filesystem::path& folder);

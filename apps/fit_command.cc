@@ -10,6 +10,7 @@
 #include "apps/robust_support.h"
 #include "core/colour.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
 
@@ -24,6 +25,7 @@ void AddFitCommand(CLI::App& app) {
     std::string colour_space;
     bool robust = false;
     std::string loss = "cauchy";
+    std::string exr_compression{ToString(kDefaultExrCompression)};
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "fit");
@@ -47,8 +49,10 @@ void AddFitCommand(CLI::App& app) {
                     "(robust photometric stereo; PTM and Eigen-k share its outlier weights)");
   command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
       ->capture_default_str();
+  AddExrCompressionOption(*command, options->exr_compression);
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
+    const ExrCompression compression = ParseExrCompression(options->exr_compression);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
     if (!options->colour_space.empty()) {
@@ -77,7 +81,7 @@ void AddFitCommand(CLI::App& app) {
     for (const Method& method : methods) {
       const Representation representation = robust ? robust->Fit(method) : Fit(loaded.set, method);
       const std::string file = method.Name() + ".exr";
-      SaveRepresentation(options->out / file, representation, provenance);
+      SaveRepresentation(options->out / file, representation, provenance, compression);
       stacks[method.Name()] = file;
       fmt::print("{:<10} {} maps -> {}\n", method.Name(), representation.maps().channels(),
                  (options->out / file).string());

@@ -3,6 +3,8 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 #include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -16,6 +18,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/text_parsing.h"
 
@@ -245,6 +248,64 @@ std::vector<std::string> DefaultChannelNames(int channels) {
   return names;
 }
 
+constexpr std::array<NamedValue<ExrCompression>, 5> kExrCompressionNames = {
+    {{ExrCompression::kNone, "none"},
+     {ExrCompression::kRle, "rle"},
+     {ExrCompression::kZips, "zips"},
+     {ExrCompression::kZip, "zip"},
+     {ExrCompression::kPiz, "piz"}}};
+
+// Scanlines per compressed chunk (OpenEXR's fixed block heights).
+int ExrChunkLines(ExrCompression compression) {
+  switch (compression) {
+    case ExrCompression::kZip:
+      return 16;
+    case ExrCompression::kPiz:
+      return 32;
+    case ExrCompression::kNone:
+    case ExrCompression::kRle:
+    case ExrCompression::kZips:
+      break;
+  }
+  return 1;
+}
+
+// The threads TBB lets the calling code use: the process's tbb::global_control limit (photomat's
+// --threads, tests' limits) and the arena the caller runs in.
+int AllowedThreads() {
+  const int limit = static_cast<int>(
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  return std::max(1, std::min(limit, tbb::this_task_arena::max_concurrency()));
+}
+
+// OpenImageIO's thread counts are process-wide attributes (its own "threads" for format
+// conversion, "exr_threads" for OpenEXR's compression pool, applied when the next EXR reader or
+// writer is created). This is the one place photomat sets them, before every EXR write, so that
+// OpenEXR's pool has as many compressing workers as the caller's TBB limit allows (the calling
+// thread meanwhile only writes finished chunks out). OpenImageIO guards its attributes with a
+// lock and resizes OpenEXR's pool only when the count changes.
+void LimitOpenImageIoThreads(int threads) {
+  OIIO::attribute("threads", threads);
+  OIIO::attribute("exr_threads", threads);
+}
+
+// Rows handed to OpenImageIO per write call. EXR: whole compression chunks, at least
+// kExrChunksPerThread per thread so that OpenEXR's pool compresses them in parallel, and
+// otherwise as many rows as fit in kExrBandBytes. The interleaved temporary is therefore at most
+// max(kExrBandBytes, threads * kExrChunksPerThread * chunk rows * row bytes), never the whole
+// image of a tall file (a 612-wide 18-channel float stack: 16 MiB = 380 rows, 368 written per
+// call with zip's 16-row chunks). Other formats: kBandRows.
+constexpr std::size_t kExrBandBytes = std::size_t{16} << 20;
+constexpr int kExrChunksPerThread = 4;
+
+int WriteBandRows(bool exr, ExrCompression compression, int threads, std::size_t row_bytes) {
+  if (!exr) return kBandRows;
+  const int chunk = ExrChunkLines(compression);
+  const std::size_t fitting_chunks = kExrBandBytes / std::max<std::size_t>(row_bytes, 1) / chunk;
+  const int chunks = static_cast<int>(std::min<std::size_t>(fitting_chunks, 1 << 20));
+  return std::max(chunks, threads * kExrChunksPerThread) * chunk;
+}
+
 // Integer outputs: the values as they will be quantised (encoded and clamped).
 float PrepareForQuantising(float value, ColourSpace encoding) {
   return encoding == ColourSpace::kSrgb ? static_cast<float>(LinearToSrgb(value))
@@ -269,6 +330,9 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     }
   }
 
+  const bool exr = LowerExtension(path) == ".exr";
+  const int threads = AllowedThreads();
+  if (exr) LimitOpenImageIoThreads(threads);
   WriteFileAtomically(path, [&](const fs::path& temp) {
     auto output = OIIO::ImageOutput::create(path.string());
     if (!output) {
@@ -279,20 +343,26 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     spec.channelnames = image.channel_names().empty() ? DefaultChannelNames(image.channels())
                                                       : image.channel_names();
     spec.alpha_channel = -1;
-    spec.attribute("compression", "zip");
     if (integer) {
       spec.attribute("oiio:ColorSpace", options.encoding == ColourSpace::kSrgb ? "sRGB" : "Linear");
     }
     for (const auto& [name, value] : options.attributes) spec.attribute(name, value);
+    // After the attributes: a "compression" copied from a file read earlier does not override.
+    spec.attribute("compression",
+                   exr ? std::string(ToString(options.exr_compression)) : std::string("zip"));
     if (!output->open(temp.string(), spec)) {
       throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
     }
     // Band by band: the planes of a band interleaved (and, for integer files, encoded) into a
-    // small buffer, which OpenImageIO converts to the file's sample type.
+    // bounded buffer, which OpenImageIO converts to the file's sample type (WriteBandRows).
     const int width = image.width(), channels = image.channels();
-    std::vector<float> band(static_cast<std::size_t>(kBandRows) * width * channels);
-    for (int first = 0; first < image.height(); first += kBandRows) {
-      const int count = std::min(kBandRows, image.height() - first);
+    const std::size_t row_values = static_cast<std::size_t>(width) * channels;
+    const int band_rows =
+        std::min(image.height(),
+                 WriteBandRows(exr, options.exr_compression, threads, row_values * sizeof(float)));
+    std::vector<float> band(static_cast<std::size_t>(band_rows) * row_values);
+    for (int first = 0; first < image.height(); first += band_rows) {
+      const int count = std::min(band_rows, image.height() - first);
       for (int r = 0; r < count; ++r) {
         float* row = band.data() + static_cast<std::size_t>(r) * width * channels;
         for (int c = 0; c < channels; ++c) {
@@ -314,6 +384,14 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
       throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
     }
   });
+}
+
+std::string_view ToString(ExrCompression compression) {
+  return NameOf(compression, kExrCompressionNames);
+}
+
+ExrCompression ParseExrCompression(std::string_view name) {
+  return ValueNamed(name, kExrCompressionNames, "EXR compression");
 }
 
 void WriteMask(const fs::path& path, const Mask& mask) {

@@ -29,12 +29,13 @@ MapLayout LayoutFromJson(const JsonReader& json) {
 }  // namespace
 
 void SaveRepresentation(const fs::path& path, const Representation& representation,
-                        const StackProvenance& provenance) {
-  SaveRepresentation(path, representation, provenance, Image());
+                        const StackProvenance& provenance, ExrCompression compression) {
+  SaveRepresentation(path, representation, provenance, Image(), compression);
 }
 
 void SaveRepresentation(const fs::path& path, const Representation& representation,
-                        const StackProvenance& provenance, const Image& extra_layers) {
+                        const StackProvenance& provenance, const Image& extra_layers,
+                        ExrCompression compression) {
   const Image& maps = representation.maps();
   if (static_cast<int>(maps.channel_names().size()) != maps.channels()) {
     throw Error(path, "the maps have no channel names");
@@ -55,6 +56,7 @@ void SaveRepresentation(const fs::path& path, const Representation& representati
         {"source", provenance.source}}},
   };
   ImageWriteOptions options;
+  options.exr_compression = compression;
   if (extra_layers.empty()) {
     options.attributes[kStackAttribute] = description.dump();
     WriteImage(path, maps, options);

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image_io.h"
 #include "core/light_direction.h"
 #include "represent/model/representation.h"
 
@@ -29,14 +30,17 @@ struct StackProvenance {
   std::string source;
 };
 
-// Atomic write; throws Error naming `path`.
+// Atomic write; throws Error naming `path`. Every `compression` is lossless: the maps read back
+// bit for bit.
 void SaveRepresentation(const std::filesystem::path& path, const Representation& representation,
-                        const StackProvenance& provenance = {});
+                        const StackProvenance& provenance = {},
+                        ExrCompression compression = kDefaultExrCompression);
 // The same with extra layers beside the maps (named channels of the maps' size that relighting
 // does not read, e.g. "height" and derived "normal.X/Y/Z" from `photomat export`), listed in the
 // description as "extra_layers". Throws Error if a name repeats a map's.
 void SaveRepresentation(const std::filesystem::path& path, const Representation& representation,
-                        const StackProvenance& provenance, const Image& extra_layers);
+                        const StackProvenance& provenance, const Image& extra_layers,
+                        ExrCompression compression = kDefaultExrCompression);
 
 struct LoadedStack {
   Representation representation;
