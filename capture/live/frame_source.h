@@ -57,6 +57,10 @@ struct FrameMetadata {
   // When the frame was captured, on the steady (CLOCK_MONOTONIC) clock: the session drops frames
   // exposed before a light or exposure change had settled.
   std::chrono::steady_clock::time_point timestamp;
+  // The exposure this frame really had, as the device reports it per frame (libcamera: the
+  // completed request's ExposureTime metadata); unset when the device does not report one (V4L2
+  // has no per-frame exposure, and a driver may apply a change a few frames late). The session
+  // keeps a frame for a bracket step only when a reported exposure matches the step's.
   std::optional<double> exposure_us;
   std::optional<double> gain;
 };

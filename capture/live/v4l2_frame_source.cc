@@ -244,7 +244,6 @@ void V4l2FrameSource::SetExposure(double exposure_us) {
   if (!SetControlIfPresent(V4L2_CID_EXPOSURE_ABSOLUTE, units, "setting the exposure")) {
     throw Error(path_, "the device has no exposure control (V4L2_CID_EXPOSURE_ABSOLUTE)");
   }
-  exposure_us_ = units * 100.0;
 }
 
 void V4l2FrameSource::Start() {
@@ -353,7 +352,9 @@ Frame V4l2FrameSource::Grab(std::chrono::milliseconds timeout) {
                   fmt::format("driver returned buffer {} of {}", buffer.index, buffers_.size()));
     }
     Frame frame;
-    frame.metadata = {buffer.sequence, FrameTime(buffer), exposure_us_, gain_};
+    // No exposure: V4L2 reports none per frame, and the control's value is not what this frame
+    // had when the driver applies a change some frames late.
+    frame.metadata = {buffer.sequence, FrameTime(buffer), std::nullopt, gain_};
     const bool corrupt = buffer.flags & V4L2_BUF_FLAG_ERROR;
     std::optional<Error> decode_error;
     if (!corrupt) {

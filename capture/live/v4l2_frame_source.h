@@ -75,7 +75,6 @@ class V4l2FrameSource final : public FrameSource {
   bool format_set_ = false;
   bool streaming_ = false;
   std::vector<MappedBuffer> buffers_;
-  std::optional<double> exposure_us_;
   std::optional<double> gain_;
   // A failure to requeue the buffer of a frame that was returned: reported by the next Grab.
   std::optional<Error> pending_error_;
