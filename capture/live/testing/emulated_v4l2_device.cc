@@ -49,6 +49,9 @@ EmulatedV4l2Device::EmulatedV4l2Device(EmulatedCameraOptions options)
     controls_[V4L2_CID_EXPOSURE_ABSOLUTE] = {
         V4L2_CTRL_TYPE_INTEGER, "Exposure Time, Absolute", 1, 20000, 1, 100, 100};
   }
+  if (options_.has_exposure_control) {
+    applied_exposure_us_ = controls_.at(V4L2_CID_EXPOSURE_ABSOLUTE).value * 100.0;
+  }
   // A fixed dark pattern: what a dark frame measures and subtraction must remove.
   dark_ = Image(options_.width, options_.height, 1);
   for (int y = 0; y < options_.height; ++y) {
@@ -96,12 +99,25 @@ std::size_t EmulatedV4l2Device::FrameBytes() const {
   return static_cast<std::size_t>(options_.width * bpp + options_.row_padding) * options_.height;
 }
 
-Image EmulatedV4l2Device::SensorImage(const Image& scene) {
-  double scale = controls_.at(V4L2_CID_GAIN).value / 100.0;
-  if (options_.has_exposure_control) {
-    scale *=
-        controls_.at(V4L2_CID_EXPOSURE_ABSOLUTE).value * 100.0 / options_.reference_exposure_us;
+std::optional<double> EmulatedV4l2Device::FrameExposureUs(std::uint64_t sequence) const {
+  const auto it = frame_exposures_us_.find(sequence);
+  if (it == frame_exposures_us_.end()) return std::nullopt;
+  return it->second;
+}
+
+double EmulatedV4l2Device::ExposureOfNextFrame() {
+  while (!pending_exposures_.empty() && pending_exposures_.front().first <= sequence_) {
+    applied_exposure_us_ = pending_exposures_.front().second;
+    pending_exposures_.pop_front();
   }
+  return options_.max_applied_exposure_us
+             ? std::min(applied_exposure_us_, *options_.max_applied_exposure_us)
+             : applied_exposure_us_;
+}
+
+Image EmulatedV4l2Device::SensorImage(const Image& scene, double exposure_us) {
+  double scale = controls_.at(V4L2_CID_GAIN).value / 100.0;
+  if (options_.has_exposure_control) scale *= exposure_us / options_.reference_exposure_us;
   // Each auto mode varies from frame to frame, with its own rhythm so that they never cancel.
   const auto wobble = [&](double rate) { return std::sin(rate * sequence_ + 0.3); };
   if (controls_.at(V4L2_CID_EXPOSURE_AUTO).value != V4L2_EXPOSURE_MANUAL) {
@@ -130,6 +146,8 @@ void EmulatedV4l2Device::Expose(int index) {
   buffer.sequence = sequence_;
   buffer.time = std::chrono::steady_clock::now();
   buffer.flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | V4L2_BUF_FLAG_DONE;
+  const double exposure_us = ExposureOfNextFrame();
+  if (options_.has_exposure_control) frame_exposures_us_[sequence_] = exposure_us;
   const auto format = PixelFormatFromV4l2(fourcc_);
   if (!format) {  // a format photomat does not decode: fill with a constant
     std::fill(buffer.bytes.begin(), buffer.bytes.end(), 0x80);
@@ -149,7 +167,7 @@ void EmulatedV4l2Device::Expose(int index) {
     const FrameLayout layout{*format, options_.width, options_.height,
                              options_.width * BytesPerPixel(*format) + options_.row_padding};
     const std::vector<std::uint8_t> bytes =
-        EncodeFrame(layout, SensorImage(scene), options_.eight_bit_encoding);
+        EncodeFrame(layout, SensorImage(scene, exposure_us), options_.eight_bit_encoding);
     if (bytes.size() > buffer.bytes.size()) {
       buffer.flags |= V4L2_BUF_FLAG_ERROR;
       buffer.bytes_used = 0;
@@ -336,6 +354,11 @@ int EmulatedV4l2Device::HandleIoctl(unsigned long request, void* argument) {
         return Fail(ERANGE);
       }
       it->second.value = control->value;
+      if (control->id == V4L2_CID_EXPOSURE_ABSOLUTE) {
+        // The sensor takes the new value from the frame `exposure_delay_frames` after the next.
+        pending_exposures_.emplace_back(sequence_ + options_.exposure_delay_frames,
+                                        control->value * 100.0);
+      }
       return 0;
     }
     default:

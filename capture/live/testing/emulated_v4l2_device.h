@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "capture/live/pixel_format.h"
@@ -40,6 +41,12 @@ struct EmulatedCameraOptions {
   double noise_sigma = 0.0;
   std::uint64_t noise_seed = 1;
   bool has_exposure_control = true;
+  // A driver that applies an exposure change late: the frames exposed after the change keep the
+  // previous exposure for this many frames (the control itself reads back the new value at once).
+  int exposure_delay_frames = 0;
+  // A sensor whose exposure cannot exceed its frame time: a longer setting is accepted by the
+  // control and applied as this.
+  std::optional<double> max_applied_exposure_us;
   // Faults. The device vanishes (ENODEV, POLLERR) once this many frames were dequeued.
   std::optional<int> disconnect_after_frames;
   // No frame comes any more once this many frames were dequeued (poll times out).
@@ -55,7 +62,9 @@ struct EmulatedCameraOptions {
 // CLOCK_MONOTONIC timestamp; so frames queued before a light switch show the old light, as on a
 // real camera. While auto exposure, auto gain or auto white balance are on, each frame gets a
 // different scale (per channel for white balance), so a capture that fails to turn them off
-// shows it. Single-threaded, like the backend.
+// shows it. An exposure change can reach the sensor some frames late (as on drivers that apply
+// controls at a frame boundary), and the device records the exposure each frame really had
+// (FrameExposureUs) for a wrapper that reports it. Single-threaded, like the backend.
 class EmulatedV4l2Device final : public V4l2Syscalls {
  public:
   explicit EmulatedV4l2Device(EmulatedCameraOptions options);
@@ -73,6 +82,10 @@ class EmulatedV4l2Device final : public V4l2Syscalls {
   int mapped_buffers() const { return mapped_; }
   bool streaming() const { return streaming_; }
   std::int32_t control(std::uint32_t id) const { return controls_.at(id).value; }
+  // The exposure frame `sequence` really had (the delayed, capped value the sensor used), as a
+  // device with per-frame metadata reports it; unset for a frame never exposed or without an
+  // exposure control.
+  std::optional<double> FrameExposureUs(std::uint64_t sequence) const;
   // Unplugs the device now.
   void Disconnect() { disconnected_ = true; }
 
@@ -95,7 +108,9 @@ class EmulatedV4l2Device final : public V4l2Syscalls {
   bool Gone() const;
   bool Stalled() const;
   void Expose(int index);
-  Image SensorImage(const Image& scene);
+  // Applies the exposure changes due at the frame about to be exposed; returns its exposure.
+  double ExposureOfNextFrame();
+  Image SensorImage(const Image& scene, double exposure_us);
   std::size_t FrameBytes() const;
 
   EmulatedCameraOptions options_;
@@ -109,6 +124,10 @@ class EmulatedV4l2Device final : public V4l2Syscalls {
   bool streaming_ = false;
   bool disconnected_ = false;
   std::uint32_t sequence_ = 0;
+  // Exposure changes not applied yet: (first sequence exposed with it, exposure in us).
+  std::deque<std::pair<std::uint32_t, double>> pending_exposures_;
+  double applied_exposure_us_ = 0.0;
+  std::map<std::uint64_t, double> frame_exposures_us_;
   int frames_dequeued_ = 0;
   Image dark_;
   std::mt19937_64 random_;
