@@ -206,6 +206,12 @@ void AddCaptureCommand(CLI::App& app) {
           "or use --bracket",
           summary.clipped_pixels);
     }
+    if (summary.exposure_mismatches > 0) {
+      spdlog::info(
+          "{} frames were dropped: the camera reported another exposure than the one requested "
+          "(it applies exposure changes late)",
+          summary.exposure_mismatches);
+    }
     fmt::print("captured {} of {} lights ({} already on disk) in {} from {} to {}\n",
                summary.lights_before + summary.lights_taken, summary.lights_total,
                summary.lights_before, ToString(summary.format), source->name(),

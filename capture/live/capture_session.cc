@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <thread>
 
 #include "capture/io/capture_manifest.h"
@@ -70,11 +71,20 @@ void Accumulate(Image& sum, const Image& frame, const std::string& device) {
   for (std::size_t i = 0; i < out.size(); ++i) out[i] += in[i];
 }
 
-// K frames averaged, all exposed at or after `ready`.
+// K frames averaged, all exposed at or after `ready` (and at the requested exposure where the
+// camera reports one).
 struct Exposure {
   Image mean;
   Image clipped;  // 1 where any frame reached the clip level, per sample
   std::vector<std::uint64_t> sequences;
+  std::size_t mismatches = 0;  // frames dropped for a reported exposure that was not requested
+};
+
+// One bracket step of one light (or of the dark frame): what the frames must have.
+struct Step {
+  Clock::time_point changed;          // the light switch or exposure change
+  std::optional<double> exposure_us;  // requested; unset: the device's own
+  std::string what;                   // "light 3 of 36, exposure 1 of 2" for messages
 };
 
 class Session {
@@ -99,6 +109,7 @@ class Session {
     for (int index = summary.lights_before; index < summary.lights_total; ++index) {
       const CapturedLight& taken = TakeLight(index);
       summary.clipped_pixels += taken.clipped_pixels;
+      summary.exposure_mismatches += taken.exposure_mismatches;
       ++summary.lights_taken;
       report.Advance();
     }
@@ -119,16 +130,40 @@ class Session {
     return Clock::now();
   }
 
-  // Sets the exposure of bracket `b` when bracketing; returns when it was set.
-  Clock::time_point SetBracket(std::size_t b) {
-    if (state_.settings.bracket.empty()) return Clock::time_point::min();
-    source_.SetExposure(*state_.settings.controls.exposure_us * state_.settings.bracket[b]);
-    return Clock::now();
+  // Sets the exposure of bracket `b` when bracketing; returns the step, changed at the later of
+  // `switched` and the exposure change.
+  Step SetBracket(std::size_t b, Clock::time_point switched, std::string what) {
+    const CaptureSettings& s = state_.settings;
+    Step step{switched, s.controls.exposure_us, std::move(what)};
+    if (s.bracket.empty()) return step;
+    step.exposure_us = *s.controls.exposure_us * s.bracket[b];
+    step.what += fmt::format(", exposure {} of {}", b + 1, s.bracket.size());
+    source_.SetExposure(*step.exposure_us);
+    step.changed = std::max(switched, Clock::now());
+    return step;
   }
 
-  Exposure Grab(Clock::time_point changed) {
+  // Whether `frame` has the step's exposure; counts one that has not and refuses it past the
+  // limit.
+  bool HasStepExposure(const Frame& frame, const Step& step, Exposure& exposure) const {
+    if (!step.exposure_us || !frame.metadata.exposure_us ||
+        ExposureMatches(*step.exposure_us, *frame.metadata.exposure_us)) {
+      return true;
+    }
+    if (++exposure.mismatches >= kMaxExposureMismatchFrames) {
+      throw Error(source_.name(),
+                  fmt::format("{}: the camera did not reach the requested exposure of {} us "
+                              "in {} frames (the last reported {} us; tolerance {} % or {} us)",
+                              step.what, *step.exposure_us, kMaxExposureMismatchFrames,
+                              *frame.metadata.exposure_us, kExposureMatchRelative * 100,
+                              kExposureMatchAbsoluteUs));
+    }
+    return false;
+  }
+
+  Exposure Grab(const Step& step) {
     const CaptureSettings& s = state_.settings;
-    const Clock::time_point ready = changed + s.settle;
+    const Clock::time_point ready = step.changed + s.settle;
     std::this_thread::sleep_until(ready);
     // Stale frames (queued before the change) are dropped; the whole grab is bounded.
     const Clock::time_point deadline = ready + s.frame_timeout * (s.frames_per_light + 1);
@@ -146,6 +181,7 @@ class Session {
         }
         continue;
       }
+      if (!HasStepExposure(frame, step, exposure)) continue;
       if (exposure.clipped.empty()) {
         exposure.clipped = Image(frame.image.width(), frame.image.height(), frame.image.channels());
       }
@@ -189,8 +225,7 @@ class Session {
     const Clock::time_point off = Switch({0, static_cast<int>(state_.plan.lights.size()), {}});
     state_.dark_files.clear();
     for (std::size_t b = 0; b < factors.size(); ++b) {
-      const Clock::time_point changed = std::max(off, SetBracket(b));
-      Exposure dark = Grab(changed);
+      Exposure dark = Grab(SetBracket(b, off, "the dark frame"));
       const std::string file =
           factors.size() == 1 ? std::string("dark.exr") : fmt::format("dark_{}.exr", b);
       ImageWriteOptions options;
@@ -248,13 +283,15 @@ class Session {
     const std::vector<double> factors = Factors();
     std::vector<Exposure> exposures;
     for (std::size_t b = 0; b < factors.size(); ++b) {
-      exposures.push_back(Grab(std::max(switched, SetBracket(b))));
+      exposures.push_back(
+          Grab(SetBracket(b, switched, fmt::format("light {} of {}", index + 1, count))));
     }
     CapturedLight taken;
     taken.number = index + 1;
     taken.file = fmt::format("img_{:03}.{}", index, Extension());
     for (const Exposure& e : exposures) {
       taken.frames.insert(taken.frames.end(), e.sequences.begin(), e.sequences.end());
+      taken.exposure_mismatches += e.mismatches;
     }
     const Image image = Merge(exposures, factors, taken.clipped_pixels);
     // Image first, then the state that lists it, then the manifest: whatever is listed exists.
@@ -309,6 +346,11 @@ void CheckSettings(const CaptureSettings& s) {
 
 }  // namespace
 
+bool ExposureMatches(double requested_us, double reported_us) {
+  return std::abs(reported_us - requested_us) <=
+         std::max(kExposureMatchRelative * requested_us, kExposureMatchAbsoluteUs);
+}
+
 void WriteCaptureSession(const fs::path& path, const CaptureSessionState& state) {
   json lights = json::array();
   for (const LightDirection& l : state.plan.lights) lights.push_back({l.x(), l.y(), l.z()});
@@ -317,7 +359,8 @@ void WriteCaptureSession(const fs::path& path, const CaptureSessionState& state)
     captured.push_back({{"light", c.number},
                         {"file", c.file},
                         {"frames", c.frames},
-                        {"clipped_pixels", c.clipped_pixels}});
+                        {"clipped_pixels", c.clipped_pixels},
+                        {"exposure_mismatches", c.exposure_mismatches}});
   }
   const json document = {
       {"format", kCaptureSessionFormat},
@@ -373,6 +416,10 @@ CaptureSessionState ReadCaptureSession(const fs::path& path) {
     c.file = entry["file"].String();
     for (double f : entry["frames"].Numbers()) c.frames.push_back(static_cast<std::uint64_t>(f));
     c.clipped_pixels = static_cast<std::size_t>(entry["clipped_pixels"].Number());
+    // Sessions written before the exposure check have no count.
+    if (entry.Has("exposure_mismatches")) {
+      c.exposure_mismatches = static_cast<std::size_t>(entry["exposure_mismatches"].Number());
+    }
     state.captured.push_back(std::move(c));
   }
   if (state.captured.size() > state.plan.lights.size()) {

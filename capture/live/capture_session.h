@@ -31,6 +31,22 @@ namespace photomat {
 
 enum class CaptureImageFormat { kExr, kPng16 };
 
+// Exposure check, IMPLEMENTER CHOICE. When the camera reports each frame's exposure
+// (FrameMetadata::exposure_us; libcamera does, V4L2 does not) and the session asked for one, a
+// frame is kept only when its reported exposure matches the requested one within
+// max(1 % of it, 50 us): sensors quantise exposure to whole line times (about 10 to 30 us), which
+// stays under 1 % above a few milliseconds, and 50 us covers a line below that and V4L2's
+// rounding to its 100 us unit; bracket steps differ by far more. A frame that does not match
+// (a driver applying the change late) is dropped and counted; after
+// kMaxExposureMismatchFrames such frames for one bracket step the capture fails naming the light,
+// the requested and the last reported exposure. A camera that reports no exposure is trusted to
+// have applied the change within the settle time, as before.
+inline constexpr double kExposureMatchRelative = 0.01;
+inline constexpr double kExposureMatchAbsoluteUs = 50.0;
+// A driver applies a change within a few frames; 30 frames is a second at 30 fps.
+inline constexpr int kMaxExposureMismatchFrames = 30;
+bool ExposureMatches(double requested_us, double reported_us);
+
 struct CaptureSettings {
   // Unset: the device's default (FrameSource::DefaultFormat).
   std::optional<FrameFormat> format;
@@ -57,6 +73,9 @@ struct CapturedLight {
   // never used twice).
   std::vector<std::uint64_t> frames;
   std::size_t clipped_pixels = 0;  // pixels with a channel clipped at every exposure
+  // Frames dropped because their reported exposure was not the requested one (cameras that
+  // report a per-frame exposure only).
+  std::size_t exposure_mismatches = 0;
 };
 
 struct CaptureSessionState {
@@ -81,7 +100,8 @@ struct CaptureSummary {
   int lights_before = 0;  // already on disk when this run started (resume)
   int lights_taken = 0;   // taken by this run
   FrameFormat format;
-  std::size_t clipped_pixels = 0;  // over the lights taken by this run
+  std::size_t clipped_pixels = 0;       // over the lights taken by this run
+  std::size_t exposure_mismatches = 0;  // frames dropped, over the lights taken by this run
 };
 
 // Starts a session in `out` (created if needed). Refuses a folder that already holds a session

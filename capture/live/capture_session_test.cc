@@ -13,6 +13,7 @@
 #include "capture/io/capture_manifest.h"
 #include "capture/io/load_photometric_set.h"
 #include "capture/live/testing/emulated_v4l2_device.h"
+#include "capture/live/testing/reported_exposure_source.h"
 #include "capture/live/testing/synthetic_studio.h"
 #include "capture/live/v4l2_frame_source.h"
 #include "core/error.h"
@@ -353,6 +354,123 @@ TEST(CaptureSessionTest, ExposureBracketingMergesToLinearHdr) {
                            << (scene.at(5, 5, 0) + scene.at(5, 5, 1) + scene.at(5, 5, 2)) / 3;
     EXPECT_GT(brightest, 1.2);  // beyond the base exposure's full scale
   }
+}
+
+TEST(CaptureSessionTest, ExposureMatchesWithinOnePercentOrFiftyMicroseconds) {
+  EXPECT_TRUE(ExposureMatches(10000, 10000));
+  EXPECT_TRUE(ExposureMatches(10000, 10099));  // 1 %: line-time quantisation
+  EXPECT_FALSE(ExposureMatches(10000, 10101));
+  EXPECT_FALSE(ExposureMatches(10000, 9899));
+  EXPECT_TRUE(ExposureMatches(1000, 1049));  // 50 us: one line, V4L2's rounding to 100 us
+  EXPECT_FALSE(ExposureMatches(1000, 1051));
+  EXPECT_FALSE(ExposureMatches(2500, 10000));  // bracket steps are far apart
+}
+
+// The largest difference of the captured grey image of light `number` from the studio's truth
+// (the mean of its channels), in units of the base exposure.
+double WorstErrorFromTruth(SyntheticStudio& studio, const Image& image, int number) {
+  const Image& scene = studio.Render(number);
+  double worst = 0.0;
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
+      const double grey = (scene.at(x, y, 0) + scene.at(x, y, 1) + scene.at(x, y, 2)) / 3;
+      worst = std::max(worst, std::abs(image.at(x, y, 0) - grey));
+    }
+  }
+  return worst;
+}
+
+// A driver that applies each exposure change two frames late, under a bracket {0.25, 1} with two
+// frames per exposure: the frames that come after the settle time still have the previous step's
+// exposure.
+struct LateExposureBracket {
+  testing::TempDir dir;
+  std::vector<LightDirection> lights = ReadLightPlan("30,0;45,120;60,240").lights;
+  SyntheticStudio studio{Material(), lights, 4.0};  // clips at the base exposure
+  fs::path light_file = dir / "light";
+  EmulatedCameraOptions camera;
+  CaptureSettings settings;
+
+  LateExposureBracket() {
+    camera.fourccs = {V4L2_PIX_FMT_Y16};
+    camera.width = camera.height = kSize;
+    camera.scene = studio.SceneFromStateFile(light_file);
+    camera.exposure_delay_frames = 2;
+    settings.frames_per_light = 2;
+    settings.settle = std::chrono::milliseconds(2);
+    settings.frame_timeout = std::chrono::milliseconds(300);
+    settings.controls.exposure_us = 10000.0;
+    settings.bracket = {0.25, 1.0};
+  }
+
+  struct Result {
+    CaptureSummary summary;
+    int frames_kept = 0;
+    int frames_at_another_exposure = 0;  // kept, by the device's record of what each frame had
+    double worst_error = 0.0;            // over the lights, from the truth
+  };
+
+  // Captures into `out` from the emulated camera, which reports each frame's exposure or not
+  // (plain V4L2: the session settles by timestamp alone).
+  Result Run(const fs::path& out, bool reports_exposure) {
+    EmulatedV4l2Device device(camera);
+    V4l2FrameSource v4l2(kDevice, device);
+    testing::ReportedExposureSource reporting(v4l2, device);
+    FrameSource& source = reports_exposure ? static_cast<FrameSource&>(reporting) : v4l2;
+    CommandLightController controller("echo {n} > " + light_file.string());
+    Result result;
+    result.summary = RunCaptureSession(source, controller, out, {lights, "list"}, settings);
+    const CaptureSessionState state = ReadCaptureSession(out / kCaptureSessionName);
+    const LoadedSet set = LoadPhotometricSet(out);
+    const std::size_t k = static_cast<std::size_t>(settings.frames_per_light);
+    for (std::size_t i = 0; i < state.captured.size(); ++i) {
+      const std::vector<std::uint64_t>& frames = state.captured[i].frames;
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        const double requested = *settings.controls.exposure_us * settings.bracket[f / k];
+        ++result.frames_kept;
+        if (device.FrameExposureUs(frames[f]) != requested) ++result.frames_at_another_exposure;
+      }
+      result.worst_error = std::max(
+          result.worst_error,
+          WorstErrorFromTruth(studio, set.set.image(static_cast<int>(i)), static_cast<int>(i) + 1));
+    }
+    return result;
+  }
+};
+
+TEST(CaptureSessionTest, BracketingKeepsOnlyFramesThatHadTheRequestedExposure) {
+  LateExposureBracket bracket;
+  // Plain V4L2 reports no exposure: the session settles by timestamp, as before, and with a
+  // driver two frames late every frame it keeps has the previous step's exposure.
+  const auto settled = bracket.Run(bracket.dir / "by-timestamp", false);
+  EXPECT_EQ(settled.frames_kept, 3 * 2 * 2);
+  EXPECT_EQ(settled.frames_at_another_exposure, settled.frames_kept);
+  EXPECT_EQ(settled.summary.exposure_mismatches, 0u);
+  // The merge of wrong exposures is far from the truth: measured 1.71; bound 0.5 = 1.71 / 3.
+  EXPECT_GT(settled.worst_error, 0.5);
+
+  // A camera that reports each frame's exposure: the late frames are dropped and counted, two per
+  // exposure change (two changes per light), and the HDR image is the truth.
+  const auto checked = bracket.Run(bracket.dir / "by-exposure", true);
+  EXPECT_EQ(checked.frames_kept, 3 * 2 * 2);
+  EXPECT_EQ(checked.frames_at_another_exposure, 0);
+  EXPECT_EQ(checked.summary.exposure_mismatches, 3u * 2 * 2);
+  EXPECT_EQ(ReadCaptureSession(bracket.dir / "by-exposure" / kCaptureSessionName)
+                .captured[0]
+                .exposure_mismatches,
+            4u);
+  // measured 6.1e-5; bound 1e-4 = 6.1e-5 * 1.6
+  EXPECT_LT(checked.worst_error, 1e-4);
+}
+
+TEST(CaptureSessionTest, ACameraThatNeverReachesTheExposureFailsNamingTheLight) {
+  LateExposureBracket bracket;
+  bracket.camera.max_applied_exposure_us = 5000.0;  // the frame time caps the exposure
+  bracket.settings.dark_frame = false;
+  EXPECT_THAT(ErrorOf([&] { bracket.Run(bracket.dir / "capped", true); }),
+              HasSubstr("/dev/video-emulated: light 1 of 3, exposure 2 of 2: the camera did not "
+                        "reach the requested exposure of 10000 us in 30 frames (the last "
+                        "reported 5000 us; tolerance 1 % or 50 us)"));
 }
 
 TEST(CaptureSessionTest, RefusesBadSettingsAndFoldersThatHoldASet) {
