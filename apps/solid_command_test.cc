@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstring>
 
 #include "core/atomic_file.h"
 #include "core/image_io.h"
@@ -18,12 +17,8 @@ namespace {
 using ::testing::HasSubstr;
 using testing::RunPhotomat;
 using testing::RunResult;
+using testing::SameBits;
 using testing::TempDir;
-
-bool SameBytes(const Image& a, const Image& b) {
-  return a.SameShape(b) &&
-         std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
-}
 
 TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
   TempDir dir;
@@ -43,7 +38,7 @@ TEST(SolidCommandTest, ExemplarThenGrowWithAFieldAndACache) {
   EXPECT_THAT(second.output, HasSubstr("read from"));
   const Image a = ReadVolume(dir / "a.vdb");
   EXPECT_EQ(a.extent(), ImageExtent::Cube(16));
-  EXPECT_TRUE(SameBytes(a, ReadVolume(dir / "b.vdb")));
+  EXPECT_TRUE(SameBits(a, ReadVolume(dir / "b.vdb")));
   EXPECT_TRUE(std::filesystem::exists(dir / "slices" / "xz.png"));
   const nlohmann::json report = ReadJsonFile(dir / "r.json");
   EXPECT_TRUE(report["similarity_from_cache"].get<bool>());

@@ -27,6 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using ::testing::HasSubstr;
+using testing::SameBits;
 using testing::TempDir;
 using testing::WriteFile;
 
@@ -142,13 +143,8 @@ Image RandomFloatBits(int width, int height, int channels, std::uint64_t seed) {
   return image;
 }
 
-// memcmp of the float bits of two planar images (EXR sorts channels by name; these are named in
-// sorted order, so planes stay in place).
-bool SameBits(const Image& a, const Image& b) {
-  return a.SameShape(b) &&
-         std::memcmp(a.values().data(), b.values().data(), a.values().size() * sizeof(float)) == 0;
-}
-
+// The images compared bit for bit are named in sorted order (EXR sorts channels by name), so
+// the planes read back in place.
 TEST(ImageIoTest, EveryExrCompressionStoresFloatBitsExactly) {
   TempDir dir;
   const Image image = RandomFloatBits(61, 47, 5, 18);

@@ -7,7 +7,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <numbers>
 
@@ -23,6 +22,8 @@
 namespace photomat {
 namespace {
 
+using testing::SameBits;
+
 // Smooth periodic noise plus a per-voxel hash: no two neighbourhoods are equal.
 Image UniqueExemplar(int n) {
   Image volume = MakeProceduralExemplar(ProceduralPattern::kNoise, n, 5);
@@ -30,11 +31,6 @@ Image UniqueExemplar(int n) {
     volume.values()[i] += 0.01f * HashToSigned(HashVoxel(6, 0, static_cast<std::int64_t>(i), 0, 0));
   }
   return volume;
-}
-
-bool SameBytes(const Image& a, const Image& b) {
-  return a.SameShape(b) &&
-         std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
 }
 
 double AngleDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -62,7 +58,7 @@ TEST(ExemplarSolidTest, IdentityReproduction) {
         }
       }
     }
-    EXPECT_TRUE(SameBytes(result.volume, exemplar));
+    EXPECT_TRUE(SameBits(result.volume, exemplar));
     for (const PassReport& pass : result.passes) EXPECT_EQ(pass.objective, 0.0);
   }
 }
@@ -481,12 +477,12 @@ TEST(ExemplarSolidTest, SameSeedSameBytesWithOneAndTwoThreads) {
                                     options);
     }
     EXPECT_EQ(one.volume.extent(), options.size);
-    EXPECT_TRUE(SameBytes(one.volume, two.volume));
-    EXPECT_TRUE(SameBytes(one.coordinates, two.coordinates));
+    EXPECT_TRUE(SameBits(one.volume, two.volume));
+    EXPECT_TRUE(SameBits(one.coordinates, two.coordinates));
     options.seed = 2;
     const ExemplarSolidResult other =
         SynthesizeExemplarSolid(exemplar, PrepareExemplar(exemplar, {}, {}, std::nullopt), options);
-    EXPECT_FALSE(SameBytes(one.volume, other.volume));
+    EXPECT_FALSE(SameBits(one.volume, other.volume));
     options.seed = 1;
   }
 }
@@ -631,8 +627,8 @@ TEST(ProceduralExemplarTest, PatternsTileAndDiffer) {
       }
     }
     EXPECT_LT(across, 3 * inside + 1.0) << ToString(pattern);
-    EXPECT_TRUE(SameBytes(volume, MakeProceduralExemplar(pattern, 16, 1)));
-    EXPECT_FALSE(SameBytes(volume, MakeProceduralExemplar(pattern, 16, 2)));
+    EXPECT_TRUE(SameBits(volume, MakeProceduralExemplar(pattern, 16, 1)));
+    EXPECT_FALSE(SameBits(volume, MakeProceduralExemplar(pattern, 16, 2)));
   }
   EXPECT_EQ(ParseProceduralPattern("wood"), ProceduralPattern::kWood);
   EXPECT_FALSE(ParseProceduralPattern("plaid"));

@@ -15,6 +15,11 @@
 
 namespace photomat::testing {
 
+bool SameBits(const Image& a, const Image& b) {
+  return a.SameShape(b) &&
+         std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
+}
+
 std::optional<std::filesystem::path> TestDataDir() {
   const char* value = std::getenv(kTestDataVariable);
   if (value == nullptr || *value == '\0') return std::nullopt;

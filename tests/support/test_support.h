@@ -6,6 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "core/image.h"
+
 namespace photomat::testing {
 
 // The real datasets (the shared/data folder) come from $PHOTOMAT_TEST_DATA, which .ci/run sets.
@@ -24,6 +26,10 @@ std::optional<std::filesystem::path> TestDataDir();
   const std::filesystem::path var = *var##_root / (relative);                       \
   ASSERT_TRUE(std::filesystem::exists(var))                                         \
       << var << " is missing but " << ::photomat::testing::kTestDataVariable << " is set"
+
+// Whether two images have the same shape and the same float bits in every value (so -0 differs
+// from 0 and a NaN equals the same NaN): for results that must be bit-identical.
+bool SameBits(const Image& a, const Image& b);
 
 // A fresh folder under the system temp folder, removed with its contents on destruction.
 class TempDir {
