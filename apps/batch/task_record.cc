@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <array>
+
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/json_file.h"
 
@@ -10,26 +13,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::optional<TaskState> ParseState(const std::string& text) {
-  for (TaskState state : {TaskState::kRunning, TaskState::kFailed, TaskState::kDone}) {
-    if (ToString(state) == text) return state;
-  }
-  return std::nullopt;
-}
+constexpr std::array<NamedValue<TaskState>, 3> kTaskStateNames = {
+    {{TaskState::kRunning, "running"}, {TaskState::kFailed, "failed"}, {TaskState::kDone, "done"}}};
 
 }  // namespace
 
-std::string ToString(TaskState state) {
-  switch (state) {
-    case TaskState::kRunning:
-      return "running";
-    case TaskState::kFailed:
-      return "failed";
-    case TaskState::kDone:
-      return "done";
-  }
-  return "?";
-}
+std::string ToString(TaskState state) { return std::string(NameOf(state, kTaskStateNames)); }
 
 fs::path RecordPath(const fs::path& batch_dir, const Task& task) {
   return batch_dir / "records" / fmt::format("{:04}.json", task.index);
@@ -65,7 +54,7 @@ std::optional<TaskRecord> ReadTaskRecord(const fs::path& path) {
     const nlohmann::json json = ReadJsonFile(path);
     const JsonReader root(json, path);
     TaskRecord record;
-    const auto state = ParseState(root["state"].String());
+    const auto state = FindValueNamed(root["state"].String(), kTaskStateNames);
     if (!state) return std::nullopt;
     record.state = *state;
     record.attempt = root["attempt"].Integer();
