@@ -132,111 +132,91 @@ void ReadRawPlanes(HeaderReader& reader, PtmFile& ptm) {
   }
 }
 
-// One greyscale JPEG stream of a compressed PTM, decoded through OpenImageIO from memory.
-std::vector<std::uint8_t> DecodeJpegPlane(std::span<const std::uint8_t> stream, const PtmFile& ptm,
-                                          int plane, const fs::path& file) {
-  const auto fail = [&](const std::string& why) -> std::vector<std::uint8_t> {
-    throw Error(file, fmt::format("JPEG plane {}: {}", plane, why));
-  };
-  if (stream.empty()) return fail("empty stream");
-  // OpenImageIO reads from memory through an IOProxy handed to the JPEG reader it creates.
-  OIIO::Filesystem::IOMemReader memory(stream.data(), stream.size());
-  auto input = OIIO::ImageInput::create("plane.jpg", false, nullptr, &memory);
-  OIIO::ImageSpec spec;
-  if (!input || !input->set_ioproxy(&memory) || !input->open("plane.jpg", spec)) {
-    const std::string why = input ? input->geterror() : OIIO::geterror();
-    return fail(fmt::format("not a readable JPEG ({})", why));
-  }
-  if (spec.width != ptm.width || spec.height != ptm.height || spec.nchannels != 1) {
-    return fail(fmt::format("{}x{} with {} channel(s), expected {}x{} greyscale", spec.width,
-                            spec.height, spec.nchannels, ptm.width, ptm.height));
-  }
-  // Row by row: read_image allocates a large staging buffer per call, which dominates the time
-  // of small planes.
-  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(ptm.width) * ptm.height);
-  for (int y = 0; y < ptm.height; ++y) {
-    if (!input->read_scanline(y, 0, OIIO::TypeDesc::UINT8,
-                              pixels.data() + static_cast<std::size_t>(y) * ptm.width)) {
-      return fail(fmt::format("cannot decode: {}", input->geterror()));
-    }
-  }
-  return pixels;
-}
-
-// The JPEG variants (a real HP sample; relight's legacy reader): after the biases, the JPEG
-// quality, then one line of N integers each for transforms, motion vectors x and y, decoding
-// order, reference planes, stream sizes and side-information sizes (N = 18 for RGB, 9 for LRGB,
-// planes numbered as in PtmFile::planes); then plane 0's stream and side information, plane 1's,
-// ... A plane with a reference r stores its difference to r plus 128 (modulo 256), so r must be
-// decoded first; side information is 5-byte records (big-endian pixel index, byte) of pixels the
-// JPEG could not carry. Planes are stored in the file's row order (bottom to top), like raw ones.
-// photomat supports no transforms or motion vectors (all real files have none).
+// The JPEG variants (a real HP sample; RTIViewer, Perathoner's ptmlib, relight's legacy reader):
+// after the biases, the compression parameter (the JPEG quality), then N integers each for the
+// transforms, the motion vectors (N x, then N y), the decoding order, the reference planes, the
+// stream sizes and the side-information sizes (N = 18 for RGB, 9 for LRGB, planes numbered as in
+// the file: JpegStreamPlane); then plane 0's stream and side information, plane 1's, ... The
+// prediction and its checks: relight/formats/ptm_jpeg.h. Planes are stored in the file's row order
+// (bottom to top), like raw ones.
 void ReadJpegPlanes(HeaderReader& reader, PtmFile& ptm) {
   const std::size_t n = static_cast<std::size_t>(ptm.PlaneCount());
-  reader.Integers(1, "the JPEG quality");
+  // The quality is informational: decoding does not need it, so any integer is accepted.
+  ptm.jpeg.quality = static_cast<int>(
+      std::clamp(reader.Integers(1, "the JPEG quality")[0], -1000000LL, 1000000LL));
   const auto transforms = reader.Integers(n, "the plane transforms");
-  const auto motion_x = reader.Integers(n, "the motion vectors (x)");
-  const auto motion_y = reader.Integers(n, "the motion vectors (y)");
+  // As two lines of N (RTIViewer, ptmlib) or one line of 2 N: all x, then all y.
+  const auto motion = reader.Integers(2 * n, "the motion vectors");
   const auto order = reader.Integers(n, "the plane decoding order");
   const auto reference = reader.Integers(n, "the reference planes");
   const auto sizes = reader.Integers(n, "the compressed plane sizes");
   const auto side = reader.Integers(n, "the side-information sizes");
-  std::vector<int> sequence(n, -1);  // sequence[k] = the plane decoded k-th
+  const auto small = [](long long v) {
+    return static_cast<int>(std::clamp(v, -(1LL << 30), 1LL << 30));
+  };
+  ptm.jpeg.planes.assign(n, {});
   for (std::size_t s = 0; s < n; ++s) {
-    if (transforms[s] != 0 || motion_x[s] != 0 || motion_y[s] != 0) {
-      reader.Fail(fmt::format("JPEG plane {}: transforms and motion vectors are not supported", s));
-    }
-    if (order[s] < 0 || order[s] >= static_cast<long long>(n) || sequence[order[s]] != -1) {
-      reader.Fail("the JPEG plane decoding order is not a permutation of the planes");
-    }
-    sequence[order[s]] = static_cast<int>(s);
-    if (reference[s] < -1 || reference[s] >= static_cast<long long>(n) ||
-        reference[s] == static_cast<long long>(s)) {
-      reader.Fail(fmt::format("JPEG plane {}: invalid reference plane {}", s, reference[s]));
+    if (transforms[s] < 0 || transforms[s] > 3) {
+      reader.Fail(
+          fmt::format("JPEG plane {}: unknown transform {} (0 none, 1 inverted reference, "
+                      "2 motion compensation, 3 both)",
+                      s, transforms[s]));
     }
     if (sizes[s] < 0 || side[s] < 0 || side[s] % 5 != 0) {
       reader.Fail(fmt::format("JPEG plane {}: invalid sizes {} and {}", s, sizes[s], side[s]));
     }
+    PtmPlaneCoding& plane = ptm.jpeg.planes[s];
+    plane.inverted = (transforms[s] & 1) != 0;
+    plane.motion_compensated = (transforms[s] & 2) != 0;
+    plane.motion_x = small(motion[s]);
+    plane.motion_y = small(motion[n + s]);
+    plane.order = small(order[s]);
+    plane.reference = small(reference[s]);
   }
-  for (std::size_t s = 0; s < n; ++s) {
-    if (reference[s] >= 0 && order[reference[s]] > order[s]) {
-      reader.Fail(fmt::format("JPEG plane {} refers to plane {}, which is decoded after it", s,
-                              reference[s]));
-    }
-  }
+  CheckPtmJpegCoding(ptm.jpeg, static_cast<int>(n), ptm.width, ptm.height, reader.file());
   // Locate every plane's stream and side information before decoding any.
-  std::vector<std::span<const std::uint8_t>> streams(n), sides(n);
+  std::vector<PtmJpegStream> streams(n);
   for (std::size_t s = 0; s < n; ++s) {
-    streams[s] = reader.Bytes(static_cast<std::size_t>(sizes[s]), fmt::format("JPEG plane {}", s));
-    sides[s] = reader.Bytes(static_cast<std::size_t>(side[s]),
-                            fmt::format("the side information of JPEG plane {}", s));
+    streams[s].jpeg =
+        reader.Bytes(static_cast<std::size_t>(sizes[s]), fmt::format("JPEG plane {}", s));
+    streams[s].side_information = reader.Bytes(
+        static_cast<std::size_t>(side[s]), fmt::format("the side information of JPEG plane {}", s));
   }
+  const std::vector<PlaneBytes> stored =
+      DecodePtmJpegPlanes(ptm.jpeg, streams, ptm.width, ptm.height, reader.file());
   const std::size_t pixels = static_cast<std::size_t>(ptm.width) * ptm.height;
-  std::vector<std::vector<std::uint8_t>> file_order(n);  // rows as stored
-  for (int s : sequence) {
-    std::vector<std::uint8_t> plane = DecodeJpegPlane(streams[s], ptm, s, reader.file());
-    if (const long long r = reference[s]; r >= 0) {
-      for (std::size_t p = 0; p < pixels; ++p) {
-        plane[p] = static_cast<std::uint8_t>(plane[p] - 128 + file_order[r][p]);
-      }
-    }
-    for (std::size_t k = 0; k < sides[s].size(); k += 5) {
-      const std::size_t index = (std::size_t{sides[s][k]} << 24) |
-                                (std::size_t{sides[s][k + 1]} << 16) |
-                                (std::size_t{sides[s][k + 2]} << 8) | sides[s][k + 3];
-      if (index >= pixels) {
-        reader.Fail(
-            fmt::format("JPEG plane {}: side information names pixel {} of {}", s, index, pixels));
-      }
-      plane[index] = sides[s][k + 4];
-    }
-    file_order[s] = std::move(plane);
-  }
   for (std::size_t s = 0; s < n; ++s) {
-    for (std::size_t p = 0; p < pixels; ++p) {
-      ptm.planes[s][ImageIndexOfFileByte(ptm, p)] = file_order[s][p];
-    }
+    auto& plane = ptm.planes[JpegStreamPlane(ptm.format, static_cast<int>(s))];
+    for (std::size_t p = 0; p < pixels; ++p) plane[ImageIndexOfFileByte(ptm, p)] = stored[s][p];
   }
+}
+
+// The header fields and streams of a JPEG variant (the layout ReadJpegPlanes reads).
+void AppendJpegPlanes(const PtmFile& ptm, std::string& out) {
+  const int n = ptm.PlaneCount();
+  const PtmJpegCoding coding =
+      ptm.jpeg.planes.empty() ? PtmJpegCoding::Unpredicted(n, ptm.jpeg.quality) : ptm.jpeg;
+  const std::size_t pixels = static_cast<std::size_t>(ptm.width) * ptm.height;
+  std::vector<PlaneBytes> stored(n, PlaneBytes(pixels));
+  for (int s = 0; s < n; ++s) {
+    const auto& plane = ptm.planes[JpegStreamPlane(ptm.format, s)];
+    for (std::size_t p = 0; p < pixels; ++p) stored[s][p] = plane[ImageIndexOfFileByte(ptm, p)];
+  }
+  const std::vector<EncodedPtmPlane> encoded =
+      EncodePtmJpegPlanes(coding, stored, ptm.width, ptm.height);
+  const auto line = [&](const auto& value_of) {
+    for (int s = 0; s < n; ++s) out += fmt::format("{}{}", s ? " " : "", value_of(s));
+    out += " \n";
+  };
+  out += fmt::format("{} \n", coding.quality);
+  line([&](int s) { return coding.planes[s].Transform(); });
+  line([&](int s) { return coding.planes[s].motion_x; });
+  line([&](int s) { return coding.planes[s].motion_y; });
+  line([&](int s) { return coding.planes[s].order; });
+  line([&](int s) { return coding.planes[s].reference; });
+  line([&](int s) { return encoded[s].jpeg.size(); });
+  line([&](int s) { return encoded[s].side_information.size(); });
+  for (const EncodedPtmPlane& plane : encoded) out += plane.jpeg + plane.side_information;
 }
 
 }  // namespace
@@ -249,6 +229,15 @@ std::string_view ToString(PtmFormat format) {
 }
 
 int PtmFile::PlaneCount() const { return PlaneCountOf(format); }
+
+int JpegStreamPlane(PtmFormat format, int stream) {
+  // RGB streams run channel by channel, as the raw layout's R, G and B blocks (ptmlib and
+  // RTIViewer's plugin for Cinema 4D read red at 0, green at 6, blue at 12).
+  if (format == PtmFormat::kRgb || format == PtmFormat::kJpegRgb) {
+    return (stream % 6) * 3 + stream / 6;
+  }
+  return stream;
+}
 
 double PtmFile::Coefficient(int plane, std::size_t pixel) const {
   const int j = CoefficientOf(format, plane);
@@ -309,10 +298,6 @@ PtmFile ReadPtmFile(const fs::path& path) {
 }
 
 std::string SerializePtm(const PtmFile& ptm) {
-  if (IsJpeg(ptm.format)) {
-    throw Error(fmt::format("photomat writes PTM_FORMAT_RGB, _LUM and _LRGB, not {}",
-                            ToString(ptm.format)));
-  }
   const std::size_t pixels = static_cast<std::size_t>(ptm.width) * ptm.height;
   if (ptm.width < 1 || ptm.height < 1 || static_cast<int>(ptm.planes.size()) != ptm.PlaneCount()) {
     throw Error("a PTM needs a size and one plane per coefficient");
@@ -327,6 +312,10 @@ std::string SerializePtm(const PtmFile& ptm) {
   out += "\n";
   for (int b : ptm.bias) out += fmt::format("{} ", b);
   out += "\n";
+  if (IsJpeg(ptm.format)) {
+    AppendJpegPlanes(ptm, out);
+    return out;
+  }
   const std::size_t header = out.size();
   out.resize(header + pixels * static_cast<std::size_t>(ptm.PlaneCount()));
   auto* payload = reinterpret_cast<std::uint8_t*>(out.data()) + header;

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "relight/formats/ptm_jpeg.h"
 #include "represent/model/representation.h"
 
 namespace photomat {
@@ -27,8 +28,8 @@ enum class PtmFormat {
   kRgb,       // PTM_FORMAT_RGB: per channel, 6 coefficients
   kLum,       // PTM_FORMAT_LUM: one channel, 6 coefficients
   kLrgb,      // PTM_FORMAT_LRGB: 6 luminance coefficients + 8-bit RGB per pixel
-  kJpegRgb,   // PTM_FORMAT_JPEG_RGB: the RGB planes as JPEG streams (read only)
-  kJpegLrgb,  // PTM_FORMAT_JPEG_LRGB: the LRGB planes as JPEG streams (read only)
+  kJpegRgb,   // PTM_FORMAT_JPEG_RGB: the RGB planes as JPEG streams (relight/formats/ptm_jpeg.h)
+  kJpegLrgb,  // PTM_FORMAT_JPEG_LRGB: the LRGB planes as JPEG streams
 };
 std::string_view ToString(PtmFormat format);  // "PTM_FORMAT_RGB", ...
 
@@ -44,18 +45,26 @@ struct PtmFile {
   // readers and writers flip the file's bottom-to-top rows). RGB: 18 planes, plane 3 j + c is
   // a_j of channel c; LUM: 6 planes a0..a5; LRGB: 9 planes, a0..a5 of the luminance then R, G, B.
   std::vector<std::vector<std::uint8_t>> planes;
+  // The JPEG variants: how the file codes its planes (read from the header; what the writer
+  // does). Streams are numbered as in the file: LRGB as `planes`, RGB channel by channel (stream
+  // 6 c + j is a_j of channel c, plane 3 j + c here; see JpegStreamPlane). An empty coding writes
+  // unpredicted planes at quality 90.
+  PtmJpegCoding jpeg;
 
   int PlaneCount() const;
   // Dequantised a_j of `plane` (its coefficient is j = plane / 3 for RGB, plane for LUM/LRGB).
   double Coefficient(int plane, std::size_t pixel) const;
 };
 
+// The PtmFile plane that stream `stream` of a JPEG variant holds.
+int JpegStreamPlane(PtmFormat format, int stream);
+
 // Parses a whole .ptm file image; `file` names it in errors. Throws Error for anything malformed
 // or truncated, and for the formats photomat does not read (lookup-table and JPEG-LS variants).
 PtmFile ParsePtm(std::span<const std::uint8_t> data, const std::filesystem::path& file);
 PtmFile ReadPtmFile(const std::filesystem::path& path);
 
-// The bytes of a PTM_1.2 file (RGB, LUM or LRGB; the JPEG variants are read only).
+// The bytes of a PTM_1.2 file; the JPEG variants coded as `ptm.jpeg` says.
 std::string SerializePtm(const PtmFile& ptm);
 // Atomic write; throws Error naming `path`.
 void WritePtmFile(const std::filesystem::path& path, const PtmFile& ptm);

@@ -1,9 +1,6 @@
 // Writes the binary seed files of tests/fuzz/corpus (ptm/, rti/): small valid files of every
 // variant the readers take, and a few broken ones. The text seeds (lp/, manifest/, stack/) are
 // written by hand. Usage: make_seed_corpus tests/fuzz/corpus
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-#include <fmt/format.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -39,41 +36,31 @@ PtmFile Ptm(PtmFormat format, int width, int height) {
   return ptm;
 }
 
-std::string Jpeg(const std::vector<std::uint8_t>& plane, int width, int height) {
-  std::vector<unsigned char> buffer;
-  OIIO::Filesystem::IOVecOutput memory(buffer);
-  auto output = OIIO::ImageOutput::create("plane.jpg");
-  output->set_ioproxy(&memory);
-  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::UINT8);
-  spec.attribute("Compression", "jpeg:90");
-  output->open("plane.jpg", spec);
-  output->write_image(OIIO::TypeDesc::UINT8, plane.data());
-  output->close();
-  return std::string(buffer.begin(), buffer.end());
+// A JPEG variant through photomat's writer: plane 1 predicted from plane 0, side information
+// for the pixels the JPEG misses by more than 40 codes (the seeds' planes are not smooth).
+std::string JpegPtm(PtmFormat format, int width, int height) {
+  PtmFile ptm = Ptm(format, width, height);
+  ptm.jpeg = PtmJpegCoding::Unpredicted(ptm.PlaneCount(), 90);
+  ptm.jpeg.planes[1].reference = 0;
+  ptm.jpeg.side_information_tolerance = 40;
+  return SerializePtm(ptm);
 }
 
-// The documented JPEG layout (ptm_file.cc): plane 1 refers to plane 0, plane 2 has one side
-// record.
-std::string JpegPtm(PtmFormat format, int width, int height) {
-  const PtmFile ptm = Ptm(format, width, height);
-  const int n = ptm.PlaneCount();
-  std::vector<std::string> streams;
-  for (int s = 0; s < n; ++s) streams.push_back(Jpeg(ptm.planes[s], width, height));
-  const std::string side = std::string("\0\0\0\1", 4) + "\x7f";
-  std::string out = fmt::format("PTM_1.2\n{}\n{}\n{}\n", ToString(format), width, height);
-  out += "0.500000 0.500000 0.250000 0.500000 0.250000 1.000000 \n167 97 0 0 0 0 \n90\n";
-  const auto line = [&](auto value) {
-    std::string text;
-    for (int s = 0; s < n; ++s) text += fmt::format("{}{}", s ? " " : "", value(s));
-    out += text + "\n";
-  };
-  for (int k = 0; k < 3; ++k) line([](int) { return 0; });
-  line([](int s) { return s; });
-  line([](int s) { return s == 1 ? 0 : -1; });
-  line([&](int s) { return streams[s].size(); });
-  line([&](int s) { return s == 2 ? 5 : 0; });
-  for (int s = 0; s < n; ++s) out += streams[s] + (s == 2 ? side : "");
-  return out;
+// The prediction of HP's JPEG_LRGB files (order 8 4 3 2 1 7 5 0 6, references
+// 5 -1 -1 -1 -1 1 7 -1 7, a0 and a5 from inverted references), R also motion compensated.
+std::string PredictedJpegLrgb(int width, int height) {
+  PtmFile ptm = Ptm(PtmFormat::kJpegLrgb, width, height);
+  const int order[9] = {8, 4, 3, 2, 1, 7, 5, 0, 6};
+  const int references[9] = {5, -1, -1, -1, -1, 1, 7, -1, 7};
+  ptm.jpeg.quality = 75;
+  ptm.jpeg.planes.resize(9);
+  for (int s = 0; s < 9; ++s) {
+    ptm.jpeg.planes[s].order = order[s];
+    ptm.jpeg.planes[s].reference = references[s];
+    ptm.jpeg.planes[s].inverted = s == 0 || s == 5;
+  }
+  ptm.jpeg.planes[6] = {true, true, 2, -1, order[6], references[6]};
+  return SerializePtm(ptm);
 }
 
 RtiFile Rti(int terms, int width, int height) {
@@ -111,6 +98,12 @@ int main(int argc, char** argv) {
   Write(root / "ptm" / "lrgb-v1.1-2x1.ptm", v11);
   Write(root / "ptm" / "jpeg-lrgb-8x8.ptm", JpegPtm(PtmFormat::kJpegLrgb, 8, 8));
   Write(root / "ptm" / "jpeg-rgb-8x4.ptm", JpegPtm(PtmFormat::kJpegRgb, 8, 4));
+  const std::string predicted = PredictedJpegLrgb(16, 8);
+  Write(root / "ptm" / "jpeg-lrgb-predicted-16x8.ptm", predicted);
+  std::string cycle = predicted;
+  const std::string references = "5 -1 -1 -1 -1 1 7 -1 7";
+  cycle.replace(cycle.find(references), references.size(), "5 0 -1 -1 -1 1 7 -1 7");
+  Write(root / "ptm" / "bad-jpeg-reference-cycle.ptm", cycle);
   const std::string rgb = SerializePtm(Ptm(PtmFormat::kRgb, 3, 2));
   Write(root / "ptm" / "bad-truncated.ptm", rgb.substr(0, rgb.size() - 5));
   Write(root / "rti" / "hsh4-3x2.rti", SerializeRti(Rti(4, 3, 2)));
