@@ -37,12 +37,12 @@ PtmFile Ptm(PtmFormat format, int width, int height) {
 }
 
 // A JPEG variant through photomat's writer: plane 1 predicted from plane 0, side information
-// for the pixels the JPEG misses by more than 40 codes (the seeds' planes are not smooth).
+// for the pixels the JPEG misses by more than 3 codes.
 std::string JpegPtm(PtmFormat format, int width, int height) {
   PtmFile ptm = Ptm(format, width, height);
   ptm.jpeg = PtmJpegCoding::Unpredicted(ptm.PlaneCount(), 90);
   ptm.jpeg.planes[1].reference = 0;
-  ptm.jpeg.side_information_tolerance = 40;
+  ptm.jpeg.side_information_tolerance = 3;
   return SerializePtm(ptm);
 }
 
@@ -60,6 +60,7 @@ std::string PredictedJpegLrgb(int width, int height) {
     ptm.jpeg.planes[s].inverted = s == 0 || s == 5;
   }
   ptm.jpeg.planes[6] = {true, true, 2, -1, order[6], references[6]};
+  ptm.jpeg.side_information_tolerance = 8;
   return SerializePtm(ptm);
 }
 
