@@ -117,6 +117,9 @@ void EvaluateSynthesis(const SynthesisEvaluationOptions& options) {
     fmt::print("{:<34} {:>10.3f}   ({} seam pairs)\n", "seams (across / inside pieces)",
                quality.seams->ratio, quality.seams->pairs);
   }
+  if (quality.sample_coverage) {
+    fmt::print("{:<34} {:>10.3f}\n", "sample coverage (variety)", *quality.sample_coverage);
+  }
   if (!options.json.empty()) {
     nlohmann::json json = ToJson(quality);
     json["sample"] = sample.path.string();

@@ -86,7 +86,7 @@ TEST(SynthesizeCliTest, GrowsAStackAndReappliesItsSourceMapToAnother) {
   EXPECT_LT(quality["seams"]["ratio"].get<double>(), 1.47);  // 1.228 * 1.2
 }
 
-TEST(SynthesizeCliTest, QualityPresetTakesLargerBlocksAndTheBestMatches) {
+TEST(SynthesizeCliTest, VarietyPresetTakesSmallerBlocksAndMoreCandidates) {
   TempDir dir;
   MakeStacks(dir);
   const std::string stacks = (dir / "stacks").string();
@@ -96,15 +96,18 @@ TEST(SynthesizeCliTest, QualityPresetTakesLargerBlocksAndTheBestMatches) {
     EXPECT_EQ(run.exit_code, 0) << run.output;
     return LoadRepresentation(dir / "out.exr").representation.details()["synthesis"]["quilt"];
   };
-  const nlohmann::json preset = quilt("--quality");
-  EXPECT_EQ(preset["block"], 13);  // a third of the 40-pixel sample (default: a quarter, 10)
-  EXPECT_EQ(preset["tolerance"], 0.0);
-  EXPECT_EQ(preset["error_floor"], 0.5);
-  EXPECT_EQ(quilt("")["block"], 10);
-  const nlohmann::json overridden = quilt("--quality --block 16 --tolerance 0.05");
+  const nlohmann::json defaults = quilt("");
+  EXPECT_EQ(defaults["block"], 13);  // a third of the 40-pixel sample
+  EXPECT_EQ(defaults["tolerance"], 0.0);
+  EXPECT_EQ(defaults["error_floor"], 0.5);
+  const nlohmann::json preset = quilt("--variety");
+  EXPECT_EQ(preset["block"], 10);  // a quarter
+  EXPECT_EQ(preset["tolerance"], 0.1);
+  EXPECT_EQ(preset["error_floor"], 1.0);
+  const nlohmann::json overridden = quilt("--variety --block 16 --tolerance 0.05");
   EXPECT_EQ(overridden["block"], 16);
   EXPECT_EQ(overridden["tolerance"], 0.05);
-  EXPECT_EQ(overridden["error_floor"], 0.5);
+  EXPECT_EQ(overridden["error_floor"], 1.0);
 }
 
 TEST(SynthesizeCliTest, GrowsPlainImagesPixelByPixel) {

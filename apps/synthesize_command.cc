@@ -47,7 +47,7 @@ void AddSynthesizeCommand(CLI::App& app) {
     QuiltOptions quilt;
     std::string search = "fast";
     bool no_coherence = false;
-    bool quality = false;
+    bool variety = false;
     PixelSynthesisOptions pixel;
     std::optional<double> force_search;
     std::filesystem::path guide;
@@ -81,7 +81,7 @@ void AddSynthesizeCommand(CLI::App& app) {
   command->add_option("--weights", options->weights,
                       "Comma-separated weight per map in the matching error (default all 1)");
   command->add_option("--block", options->quilt.block_size,
-                      "quilt: block size B (default: a quarter of the sample, 8..64)");
+                      "quilt: block size B (default: a third of the sample, 8..64)");
   command->add_option("--overlap", options->quilt.overlap, "quilt: overlap (default B/4)");
   command
       ->add_option("--tolerance", options->quilt.tolerance,
@@ -102,10 +102,11 @@ void AddSynthesizeCommand(CLI::App& app) {
                    "for pixels) or brute (every candidate summed in full); both choose the "
                    "same")
       ->capture_default_str();
-  command->add_flag("--quality", options->quality,
-                    "quilt: fewer, closer seams at some cost in variety: blocks a third "
-                    "of the sample (8..64), tolerance 0, error floor 0.5 (--block, --overlap, "
-                    "--tolerance and --error-floor still override)");
+  command->add_flag("--variety", options->variety,
+                    "quilt: more different pieces of the sample at the cost of more, rougher "
+                    "seams (the defaults before issue 18): blocks a quarter of the sample "
+                    "(8..64), tolerance 0.1, error floor 1 (--block, --tolerance and "
+                    "--error-floor still override)");
   command->add_flag("--no-coherence", options->no_coherence,
                     "quilt: search every block (no neighbour-block reuse)");
   command->add_option("--force-search", options->force_search,
@@ -156,9 +157,8 @@ void AddSynthesizeCommand(CLI::App& app) {
     synthesis.method = ParseSynthesisMethod(options->method);
     synthesis.target = {width, height, options->tileable, options->seed};
     synthesis.quilt = options->quilt;
-    if (options->quality) {
-      const QuiltOptions preset =
-          SeamQualityQuiltOptions(input.image.width(), input.image.height());
+    if (options->variety) {
+      const QuiltOptions preset = VarietyQuiltOptions(input.image.width(), input.image.height());
       auto given = [&](const char* name) { return command->get_option(name)->count() > 0; };
       if (!given("--block")) synthesis.quilt.block_size = preset.block_size;
       if (!given("--tolerance")) synthesis.quilt.tolerance = preset.tolerance;

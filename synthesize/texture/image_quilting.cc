@@ -185,18 +185,18 @@ std::uint64_t BlockSeed(std::uint64_t seed, std::size_t index) {
 
 }  // namespace
 
-QuiltOptions SeamQualityQuiltOptions(int sample_width, int sample_height) {
+QuiltOptions VarietyQuiltOptions(int sample_width, int sample_height) {
   const int side = std::min(sample_width, sample_height);
   QuiltOptions options;
-  options.block_size = std::min(side, std::clamp(side / 3, 8, 64));
-  options.tolerance = 0.0;
-  options.error_floor = 0.5;
+  options.block_size = std::min(side, std::clamp(side / 4, 8, 64));
+  options.tolerance = 0.1;
+  options.error_floor = 1.0;
   return options;
 }
 
 int DefaultBlockSize(int sample_width, int sample_height) {
   const int side = std::min(sample_width, sample_height);
-  return std::min(side, std::clamp(side / 4, 8, 64));
+  return std::min(side, std::clamp(side / 3, 8, 64));
 }
 
 int DefaultOverlap(int block_size) {

@@ -15,15 +15,19 @@ struct QuiltOptions {
   // Overlap w_o; 0 picks DefaultOverlap(B) = round(B / 4), inside the thesis's B/6..B/3.
   int overlap = 0;
   // A candidate qualifies when its error is at most (1 + tolerance) times the best (Efros-Freeman
-  // and the thesis: 0.1; the thesis found 0..0.1 alike).
-  double tolerance = 0.1;
+  // and the thesis: 0.1; the thesis found 0..0.1 alike). IMPLEMENTER CHOICE (issue 18, measured in
+  // bench/synthesis_table and bench/peer_table): 0, the best-matching blocks, with the error
+  // floor below providing the choice among them.
+  double tolerance = 0.0;
   // The best error is taken as at least error_floor times the error a block would have if every
   // overlap pixel differed from it as much as neighbouring sample pixels differ on average
   // (IMPLEMENTER CHOICE, spec 4.3: "when min_error = 0, fall back to an absolute epsilon").
   // Without it the exact continuation of the previous block (error 0, always a candidate at
   // stride 1) would be the only one that qualifies, and every search would copy the sample
-  // verbatim; with it, candidates whose seams are no rougher than the texture itself compete.
-  double error_floor = 1.0;
+  // verbatim; with it, candidates whose seams are at most about as rough as the texture itself
+  // compete. 0.5 (issue 18): a block competes when its overlap differs half as much as
+  // neighbouring sample pixels (1.0, the variety preset's, lets rougher seams through).
+  double error_floor = 0.5;
   // Candidates every `candidate_stride` pixels: 1 = every offset (Efros-Freeman), B = the grid of
   // non-overlapping blocks the thesis's counts suggest.
   int candidate_stride = 1;
@@ -37,19 +41,18 @@ struct QuiltOptions {
   MatchingOptions matching;
 };
 
-// The seam-quality preset for a sample of this size (`photomat synthesize --quality`;
-// IMPLEMENTER CHOICE, measured in bench/synthesis_table): it trades some variety for fewer,
-// closer seams (and, with fewer blocks, runs faster). Blocks a third of the sample's smaller side
-// (clamped to [8, 64]) instead of a quarter: the seams per output area fall by about a quarter, and
-// 2/3 of the sample's offsets per axis remain candidates. Tolerance 0 (the thesis found 0..0.1
-// alike) and error floor 0.5 (blocks compete when their overlap differs half as much as
-// neighbouring sample pixels, not as much): the best-matching blocks are taken. The SSD metric is
-// kept, so the search stays FFT-fast. The same for every input; the quilt's nearest-patch
-// distance comes from its seams.
-QuiltOptions SeamQualityQuiltOptions(int sample_width, int sample_height);
+// The variety preset (`photomat synthesize --variety`; the defaults before issue 18): more
+// different pieces of the sample at the cost of more and rougher seams. Blocks a quarter of the
+// sample's smaller side (clamped to [8, 64]) instead of a third (about a third more seams per
+// output area, 3/4 of the sample's offsets per axis candidates), tolerance 0.1 (Efros-Freeman's)
+// and error floor 1.0 (blocks compete when their overlap differs as much as neighbouring sample
+// pixels). The defaults are chosen for the nearest-patch distance at G'MIC's level or below
+// (README "Synthesis"); this preset's distance is higher, by 1.1 to 2 x on the exemplars.
+QuiltOptions VarietyQuiltOptions(int sample_width, int sample_height);
 
-// min(sample) / 4, clamped to [8, 64] and to the sample (IMPLEMENTER CHOICE: a quarter of the
-// sample keeps its structures whole while leaving 3/4 of the sample's offsets as candidates).
+// min(sample) / 3, clamped to [8, 64] and to the sample (IMPLEMENTER CHOICE, issue 18: a third
+// keeps the sample's structures whole and makes about a quarter fewer seams per output area than
+// a quarter, while 2/3 of the sample's offsets per axis remain candidates).
 int DefaultBlockSize(int sample_width, int sample_height);
 int DefaultOverlap(int block_size);
 

@@ -186,6 +186,16 @@ PairContrast RoughnessRatio(const Image& sample, const Image& output,
   return contrast;
 }
 
+double SampleCoverage(const SourceMap& map) {
+  std::vector<char> copied(static_cast<std::size_t>(map.sample_width()) * map.sample_height(), 0);
+  for (const SamplePixel& source : map.pixels()) {
+    if (source.valid())
+      copied[static_cast<std::size_t>(source.y) * map.sample_width() + source.x] = 1;
+  }
+  const auto count = std::count(copied.begin(), copied.end(), 1);
+  return copied.empty() ? 0.0 : static_cast<double>(count) / static_cast<double>(copied.size());
+}
+
 SynthesisQuality MeasureSynthesis(const Image& sample, const Image& output, const SourceMap* map,
                                   const QualityOptions& options) {
   SynthesisQuality quality;
@@ -194,7 +204,10 @@ SynthesisQuality MeasureSynthesis(const Image& sample, const Image& output, cons
   const ChannelTransform scale = QualityScale(sample, options.scaling);
   quality.roughness = RoughnessRatio(sample, output, scale);
   quality.wrap = WrapScore(output, scale);
-  if (map) quality.seams = SeamScore(output, *map, scale);
+  if (map) {
+    quality.seams = SeamScore(output, *map, scale);
+    quality.sample_coverage = SampleCoverage(*map);
+  }
   return quality;
 }
 
@@ -212,6 +225,7 @@ nlohmann::json ToJson(const SynthesisQuality& quality) {
                          {"roughness", contrast(quality.roughness)},
                          {"wrap", contrast(quality.wrap)}};
   if (quality.seams) json["seams"] = contrast(*quality.seams);
+  if (quality.sample_coverage) json["sample_coverage"] = *quality.sample_coverage;
   return json;
 }
 

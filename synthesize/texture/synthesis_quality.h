@@ -58,15 +58,21 @@ PairContrast WrapScore(const Image& output, const ChannelTransform& scale);
 PairContrast RoughnessRatio(const Image& sample, const Image& output,
                             const ChannelTransform& scale);
 
+// Variety: the share of the sample's pixels that the output copies at least once (from the
+// source map), in (0, 1]. The nearest-patch distance alone rewards copying a few large pieces
+// of the sample over and over (0 for a verbatim tiling); coverage shows what that costs.
+double SampleCoverage(const SourceMap& map);
+
 struct SynthesisQuality {
   double nearest_patch_distance = 0.0;
   int patch_size = 0;
   PairContrast roughness;
   PairContrast wrap;
-  std::optional<PairContrast> seams;  // with a source map
+  std::optional<PairContrast> seams;      // with a source map
+  std::optional<double> sample_coverage;  // with a source map
 };
 
-// Every measure; seams only when `map` is given.
+// Every measure; seams and coverage only when `map` is given.
 SynthesisQuality MeasureSynthesis(const Image& sample, const Image& output,
                                   const SourceMap* map = nullptr,
                                   const QualityOptions& options = {});

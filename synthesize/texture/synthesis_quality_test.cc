@@ -101,6 +101,28 @@ TEST(SynthesisQualityTest, NoiseShowsAsItsRmsInNormalisedUnits) {
   EXPECT_THROW(MeanNearestPatchDistance(sample, Image(5, 40, 2)), Error);
 }
 
+// Coverage counts each sample pixel once, however often it is copied: a 12 x 10 output of two
+// 6 x 10 pieces of a 30 x 10 sample covers 120 of its 300 pixels; copying the first piece twice
+// covers 60; the measure is in MeasureSynthesis only with a map.
+TEST(SynthesisQualityTest, SampleCoverageIsTheShareOfSamplePixelsCopied) {
+  SourceMap two_pieces(12, 10, 30, 10), one_piece_twice(12, 10, 30, 10);
+  for (int y = 0; y < 10; ++y) {
+    for (int x = 0; x < 12; ++x) {
+      two_pieces.Set(x, y, {x < 6 ? x : x + 10, y});
+      one_piece_twice.Set(x, y, {x % 6, y});
+    }
+  }
+  EXPECT_DOUBLE_EQ(SampleCoverage(two_pieces), 120.0 / 300.0);
+  EXPECT_DOUBLE_EQ(SampleCoverage(one_piece_twice), 60.0 / 300.0);
+  Image sample(30, 10, 1);
+  for (int y = 0; y < 10; ++y) {
+    for (int x = 0; x < 30; ++x) sample.at(x, y, 0) = static_cast<float>(x + y);
+  }
+  const Image out = two_pieces.Apply(sample);
+  EXPECT_FALSE(MeasureSynthesis(sample, out).sample_coverage.has_value());
+  EXPECT_DOUBLE_EQ(MeasureSynthesis(sample, out, &two_pieces).sample_coverage.value(), 0.4);
+}
+
 TEST(SynthesisQualityTest, SeamScoreComparesSeamsWithInsidePairs) {
   // A ramp sample; the output joins two pieces of it side by side.
   Image sample(30, 10, 1);
