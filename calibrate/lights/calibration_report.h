@@ -21,6 +21,10 @@ struct LightCalibrationReport {
   std::vector<std::string> names;  // one per recovered light
   std::vector<LightDirection> recovered;
   std::vector<LightDirection> reference;  // empty, or one per recovered light
+  // Empty, or one per recovered light: its expected RMS angular error (degrees; NaN: unknown).
+  std::vector<double> uncertainty_degrees;
+  // Lines said under the title (how the lights were refined, or why not).
+  std::vector<std::string> notes;
 
   // Angle between recovered and reference light, degrees (empty without a reference).
   std::vector<double> AngularDifferences() const;
@@ -34,8 +38,8 @@ struct LightCalibrationReport {
   nlohmann::json ToJson() const;
 };
 
-// Writes the SVG (atomically). Throws Error naming the file on failure or for a reference list of
-// another length.
+// Writes the SVG (atomically). Throws Error naming the file on failure or for a reference or
+// uncertainty list of another length.
 void WriteLightCalibrationSvg(const std::filesystem::path& path,
                               const LightCalibrationReport& report);
 
