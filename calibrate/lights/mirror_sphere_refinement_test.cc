@@ -59,14 +59,15 @@ TEST(MirrorSphereTest, SyntheticSphereWithoutMaskIsDetectedAndCalibrated) {
   const MirrorSphereRender render = RenderMirrorSphere(lights, options);
   const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
       render.images, SphereImageNames(lights.size()), std::nullopt, MirrorSphereOptions{});
-  // Measured errors: centre 0.0073, 0.109 px, radius 0.0038 px, edge RMS 0.166 px, lights 0.249
-  // degrees mean; bounds 0.015 = 0.0073 * 2, 0.165 = 0.109 * 1.5, 0.0076 = 0.0038 * 2,
-  // 0.25 = 0.166 * 1.5, 0.375 = 0.249 * 1.5.
-  EXPECT_NEAR(result.sphere.centre.x(), 110.2, 0.015);
-  EXPECT_NEAR(result.sphere.centre.y(), 72.6, 0.165);
-  EXPECT_NEAR(result.sphere.radius, 55.0, 0.0076);
+  // Measured errors (the joint refinement weighing each residual by its noise): centre 0.0083,
+  // 0.102 px, radius 0.0044 px, edge RMS 0.166 px, lights 0.234 degrees mean; bounds
+  // 0.017 = 0.0083 * 2, 0.155 = 0.102 * 1.5, 0.0088 = 0.0044 * 2, 0.25 = 0.166 * 1.5,
+  // 0.35 = 0.234 * 1.5.
+  EXPECT_NEAR(result.sphere.centre.x(), 110.2, 0.017);
+  EXPECT_NEAR(result.sphere.centre.y(), 72.6, 0.155);
+  EXPECT_NEAR(result.sphere.radius, 55.0, 0.0088);
   EXPECT_LT(result.edge_rms_pixels, 0.25);
-  EXPECT_LT(CompareLights(result.lights, lights).mean, 0.375);
+  EXPECT_LT(CompareLights(result.lights, lights).mean, 0.35);
 }
 
 TEST(MirrorSphereTest, PerspectiveCameraNeedsThePerspectiveModel) {
@@ -180,6 +181,43 @@ TEST(MirrorSphereRefinementTest, ReportedUncertaintyDescribesTheActualErrors) {
   EXPECT_LT(ratio, 1.85);
 }
 
+// The Cauchy loss on the highlights: with three spheres each lamp is seen three times, so one
+// wrong highlight (a bright spurious reflection, 12 px from the lamp's, taken for it on the third
+// sphere) is outvoted instead of dragging its lamp.
+TEST(MirrorSphereRefinementTest, AWrongHighlightIsOutvotedByTheOtherSpheres) {
+  const std::vector<Eigen::Vector3d> lamps = NearLamps();
+  MirrorSphereRenderOptions options = TwoSphereRenderOptions();
+  const SphereCircle third{Eigen::Vector2d(160.4, 190.3), 38.0};
+  options.more_spheres.push_back(third);
+  MirrorSphereRender render = RenderMirrorSpheresUnderLamps(lamps, options);
+  constexpr std::size_t kSpoiled = 5;
+  const Eigen::Vector2d spot = third.centre + Eigen::Vector2d(-14.0, -6.0);
+  Image& image = render.images[kSpoiled];
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      const double d2 = (Eigen::Vector2d(x + 0.5, y + 0.5) - spot).squaredNorm();
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) += static_cast<float>(0.8 * std::exp(-d2 / 8));
+    }
+  }
+  MirrorSphereOptions near;
+  near.light_model = LightModel::kNear;
+  const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
+      render.images, SphereImageNames(lamps.size()), render.coverage, near);
+  ASSERT_EQ(result.spheres.size(), 3u);
+  // The spot was taken for the highlight of the third sphere (the middle one, left to right).
+  EXPECT_LT((result.spheres[1].highlights[kSpoiled].position - spot).norm(), 1.0);
+  const std::vector<LightDirection> truth = DirectionsFromTheCentre(lamps);
+  const double spoiled = result.lights[kSpoiled].AngleToDegrees(truth[kSpoiled]);
+  const AngleStats all = CompareLights(result.lights, truth);
+  std::printf("wrong highlight: its lamp %.3f degrees off, all lamps %.3f mean; noise %.3f px\n",
+              spoiled, all.mean, result.refinement.highlight_sigma_pixels);
+  // Measured: the spoiled lamp 0.080 degrees off (all lamps 0.073 mean), the highlight noise
+  // 0.026 px (the wrong highlight left out of it); bounds 0.12 = 0.080 * 1.5 and
+  // 0.039 = 0.026 * 1.5.
+  EXPECT_LT(spoiled, 0.12);
+  EXPECT_LT(result.refinement.highlight_sigma_pixels, 0.039);
+}
+
 // A solve that stops without converging (here: an iteration budget of one) is not used: the
 // result is the unrefined estimate, and the report says why.
 TEST(MirrorSphereRefinementTest, ASolveThatDoesNotConvergeIsReportedNotUsed) {
@@ -268,7 +306,10 @@ AngleStats UwChromeAgainstTheShippedLights(const std::filesystem::path& folder) 
   return CompareLights(result.lights, reference);
 }
 
-// The target is 2 degrees; measured 3.09 mean, 8.55 max. The shortfall is the file's,
+// The target is 2 degrees; measured 3.09 mean, 8.55 max, with the joint refinement as
+// before it: uw-psm has one sphere, whose highlights cannot check it (each light has exactly its
+// two highlight residuals; mirror_sphere.h, step 4), so the refinement leaves the lights on the
+// outline's circle. The shortfall is the file's,
 // not this calibration's (README "Calibration"): every highlight definition (this weighted
 // centroid, the centroid of the clipped pixels, sRGB or linear decoding) agrees to 0.15 px,
 // while lights.txt puts the highlights 1.2 to 8.9 px away, nearly all to the left; the
@@ -294,8 +335,8 @@ TEST(MirrorSphereRealTest, UwChromeSphereMissesTheTwoDegreeTarget) {
   const AngleStats stats = UwChromeAgainstTheShippedLights(folder);
   std::printf(
       "EXPECTED FAILURE: target %.1f degrees mean against uw-psm lights.txt not met (measured "
-      "%.2f) because lights.txt disagrees with the chrome highlights and with the matte sphere "
-      "(README \"Calibration\")\n",
+      "%.2f) because lights.txt disagrees with the chrome highlights and with the matte sphere, "
+      "and one sphere's highlights cannot correct its outline (README \"Calibration\")\n",
       kTargetDegrees, stats.mean);
   RecordProperty("expected_failure",
                  fmt::format("mean {:.2f} degrees against target {}", stats.mean, kTargetDegrees));
