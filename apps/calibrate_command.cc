@@ -135,54 +135,6 @@ SphereCapture ReadSphereCapture(const fs::path& input, const std::optional<Colou
   return capture;
 }
 
-// Every sphere of the calibration, as the report and the manifest record it.
-nlohmann::json SpheresJson(const MirrorSphereCalibration& result) {
-  nlohmann::json spheres = nlohmann::json::array();
-  for (const MirrorSphereFit& sphere : result.spheres) {
-    spheres.push_back({{"centre", {sphere.refined.centre.x(), sphere.refined.centre.y()}},
-                       {"radius", sphere.refined.radius},
-                       {"initial_centre", {sphere.initial.centre.x(), sphere.initial.centre.y()}},
-                       {"initial_radius", sphere.initial.radius},
-                       {"edge_rms_px", sphere.edge_rms_pixels},
-                       {"edge_points", sphere.edge_points}});
-  }
-  return spheres;
-}
-
-nlohmann::json RefinementJson(const MirrorSphereRefinementReport& refinement) {
-  nlohmann::json json = {{"requested", refinement.requested},
-                         {"used", refinement.used},
-                         {"status", refinement.status},
-                         {"iterations", refinement.iterations}};
-  if (refinement.used && refinement.highlight_sigma_pixels > 0.0) {
-    json["highlight_sigma_px"] = refinement.highlight_sigma_pixels;
-    json["highlight_sigma"] = refinement.highlight_sigma_measured
-                                  ? "measured from the highlights' residuals"
-                                  : "assumed: the outline's RMS (one sphere)";
-  }
-  return json;
-}
-
-// The report's lines on the spheres and the refinement.
-std::vector<std::string> RefinementNotes(const MirrorSphereCalibration& result) {
-  std::vector<std::string> notes;
-  notes.push_back(fmt::format("{} sphere{}, {} lights", result.spheres.size(),
-                              result.spheres.size() == 1 ? "" : "s", ToString(result.light_model)));
-  const MirrorSphereRefinementReport& refinement = result.refinement;
-  if (!refinement.requested) {
-    notes.push_back("refinement: not requested (the unrefined estimate)");
-  } else if (!refinement.used) {
-    notes.push_back(fmt::format("refinement: NOT USED, {}; the lights are the unrefined estimate",
-                                refinement.status));
-  } else {
-    notes.push_back(fmt::format("refinement: {} in {} iterations; highlight noise {:.3f} px ({})",
-                                refinement.status, refinement.iterations,
-                                refinement.highlight_sigma_pixels,
-                                refinement.highlight_sigma_measured ? "measured" : "assumed"));
-  }
-  return notes;
-}
-
 // Near lamps as calibrate apply --near-lights reads them: "x y z intensity" a line (the
 // intensity is unknown here: 1).
 void WriteLampPositions(const fs::path& path, const std::vector<Eigen::Vector3d>& lamps) {
@@ -304,9 +256,9 @@ void AddLightsCommand(CLI::App& calibrate) {
                              {"radius", result.sphere.radius},
                              {"edge_rms_px", result.edge_rms_pixels},
                              {"camera", result.perspective ? "perspective" : "orthographic"}}},
-                           {"spheres", SpheresJson(result)},
+                           {"spheres", MirrorSpheresJson(result)},
                            {"light_model", ToString(result.light_model)},
-                           {"refinement", RefinementJson(result.refinement)}};
+                           {"refinement", MirrorSphereRefinementJson(result.refinement)}};
     WriteCaptureManifest(manifest_path, manifest);
     fs::path lamps_path;
     if (!result.lamp_positions.empty()) {
@@ -320,7 +272,7 @@ void AddLightsCommand(CLI::App& calibrate) {
     report.names = capture.names;
     report.recovered = result.lights;
     report.uncertainty_degrees = result.light_uncertainty_degrees;
-    report.notes = RefinementNotes(result);
+    report.notes = MirrorSphereNotes(result);
     report.reference =
         options->reference.empty() ? capture.lights : ReadLightList(options->reference);
     if (!report.reference.empty() && report.reference.size() != report.recovered.size()) {

@@ -237,6 +237,54 @@ nlohmann::json LightCalibrationReport::ToJson() const {
   return json;
 }
 
+// Every sphere of the calibration, as the report and the manifest record it.
+nlohmann::json MirrorSpheresJson(const MirrorSphereCalibration& result) {
+  nlohmann::json spheres = nlohmann::json::array();
+  for (const MirrorSphereFit& sphere : result.spheres) {
+    spheres.push_back({{"centre", {sphere.refined.centre.x(), sphere.refined.centre.y()}},
+                       {"radius", sphere.refined.radius},
+                       {"initial_centre", {sphere.initial.centre.x(), sphere.initial.centre.y()}},
+                       {"initial_radius", sphere.initial.radius},
+                       {"edge_rms_px", sphere.edge_rms_pixels},
+                       {"edge_points", sphere.edge_points}});
+  }
+  return spheres;
+}
+
+nlohmann::json MirrorSphereRefinementJson(const MirrorSphereRefinementReport& refinement) {
+  nlohmann::json json = {{"requested", refinement.requested},
+                         {"used", refinement.used},
+                         {"status", refinement.status},
+                         {"iterations", refinement.iterations}};
+  if (refinement.used && refinement.highlight_sigma_pixels > 0.0) {
+    json["highlight_sigma_px"] = refinement.highlight_sigma_pixels;
+    json["highlight_sigma"] = refinement.highlight_sigma_measured
+                                  ? "measured from the highlights' residuals"
+                                  : "assumed: the outline's RMS (one sphere)";
+  }
+  return json;
+}
+
+// The report's lines on the spheres and the refinement.
+std::vector<std::string> MirrorSphereNotes(const MirrorSphereCalibration& result) {
+  std::vector<std::string> notes;
+  notes.push_back(fmt::format("{} sphere{}, {} lights", result.spheres.size(),
+                              result.spheres.size() == 1 ? "" : "s", ToString(result.light_model)));
+  const MirrorSphereRefinementReport& refinement = result.refinement;
+  if (!refinement.requested) {
+    notes.push_back("refinement: not requested (the unrefined estimate)");
+  } else if (!refinement.used) {
+    notes.push_back(fmt::format("refinement: NOT USED, {}; the lights are the unrefined estimate",
+                                refinement.status));
+  } else {
+    notes.push_back(fmt::format("refinement: {} in {} iterations; highlight noise {:.3f} px ({})",
+                                refinement.status, refinement.iterations,
+                                refinement.highlight_sigma_pixels,
+                                refinement.highlight_sigma_measured ? "measured" : "assumed"));
+  }
+  return notes;
+}
+
 void WriteLightCalibrationSvg(const std::filesystem::path& path,
                               const LightCalibrationReport& report) {
   std::string svg;

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "calibrate/lights/mirror_sphere.h"
 #include "core/light_direction.h"
 
 namespace photomat {
@@ -37,6 +38,14 @@ struct LightCalibrationReport {
   std::string ToSvg() const;
   nlohmann::json ToJson() const;
 };
+
+// A mirror-sphere calibration as its report records it: every sphere (refined and initial circle,
+// outline RMS and points), the refinement's outcome (requested, used, its status and iterations,
+// the highlight noise it weighed with), and the lines said under the report's title (the
+// spheres and light model; whether the refinement was used, and if not, why).
+nlohmann::json MirrorSpheresJson(const MirrorSphereCalibration& result);
+nlohmann::json MirrorSphereRefinementJson(const MirrorSphereRefinementReport& refinement);
+std::vector<std::string> MirrorSphereNotes(const MirrorSphereCalibration& result);
 
 // Writes the SVG (atomically). Throws Error naming the file on failure or for a reference or
 // uncertainty list of another length.

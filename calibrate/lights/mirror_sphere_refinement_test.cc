@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <numeric>
 
+#include "calibrate/lights/calibration_report.h"
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere.h"
 #include "calibrate/testing/synthetic_calibration.h"
@@ -244,6 +245,17 @@ TEST(MirrorSphereRefinementTest, ASolveThatDoesNotConvergeIsReportedNotUsed) {
   for (std::size_t s = 0; s < 2; ++s) {
     EXPECT_EQ(stopped.spheres[s].refined.radius, stopped.spheres[s].initial.radius);
   }
+  // ... and the report says so, in words and in its JSON.
+  const std::vector<std::string> notes = MirrorSphereNotes(stopped);
+  ASSERT_EQ(notes.size(), 2u);
+  EXPECT_EQ(notes[0], "2 spheres, near lights");
+  EXPECT_EQ(notes[1].rfind("refinement: NOT USED, the solver did not converge (NO_CONVERGENCE", 0),
+            0u)
+      << notes[1];
+  const nlohmann::json json = MirrorSphereRefinementJson(stopped.refinement);
+  EXPECT_TRUE(json["requested"].get<bool>());
+  EXPECT_FALSE(json["used"].get<bool>());
+  EXPECT_EQ(json["status"], stopped.refinement.status);
 }
 
 // A start the residuals cannot even evaluate (a highlight outside its sphere) fails the solve;
