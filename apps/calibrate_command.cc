@@ -21,6 +21,7 @@
 #include "calibrate/radiometry/semi_calibrated.h"
 #include "capture/io/capture_manifest.h"
 #include "capture/io/lp_file.h"
+#include "core/atomic_file.h"
 #include "core/colour.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -134,6 +135,17 @@ SphereCapture ReadSphereCapture(const fs::path& input, const std::optional<Colou
   return capture;
 }
 
+// Near lamps as calibrate apply --near-lights reads them: "x y z intensity" a line (the
+// intensity is unknown here: 1).
+void WriteLampPositions(const fs::path& path, const std::vector<Eigen::Vector3d>& lamps) {
+  std::string text =
+      "# near lamps triangulated from the mirror spheres: x y z intensity (sample frame, pixels)\n";
+  for (const Eigen::Vector3d& lamp : lamps) {
+    text += fmt::format("{:.4f} {:.4f} {:.4f} 1\n", lamp.x(), lamp.y(), lamp.z());
+  }
+  WriteTextFileAtomically(path, text);
+}
+
 // Without --refine or --no-refine the lights are refined when this build can; a build without
 // Ceres says once that it gives the unrefined sphere.
 bool RefineByDefault() {
@@ -152,6 +164,7 @@ void AddLightsCommand(CLI::App& calibrate) {
     fs::path camera;
     fs::path images_for;
     std::string colour_space;
+    std::string light_model = "distant";
     bool refine = false;
     bool no_refine = false;
   };
@@ -188,6 +201,12 @@ void AddLightsCommand(CLI::App& calibrate) {
       "an error when it has not)");
   command->add_flag("--no-refine", options->no_refine, "Skip the Ceres refinement")
       ->excludes(refine);
+  command
+      ->add_option("--light-model", options->light_model,
+                   "distant, or near: point lamps triangulated from two or more spheres in the "
+                   "mask (resting on the sample plane; orthographic camera), their positions "
+                   "written to <out stem>_lamps.txt for calibrate apply --near-lights")
+      ->capture_default_str();
   command->callback([options] {
     const std::optional<ColourSpace> space = ParseColourSpaceOption(options->colour_space);
     SphereCapture capture = ReadSphereCapture(options->input, space);
@@ -198,11 +217,16 @@ void AddLightsCommand(CLI::App& calibrate) {
     }
     MirrorSphereOptions sphere_options;
     sphere_options.refine = options->refine || (!options->no_refine && RefineByDefault());
+    sphere_options.light_model = ParseLightModel(options->light_model);
     if (!options->camera.empty()) sphere_options.camera = ReadCameraIntrinsics(options->camera);
     TerminalProgressBar bar;
     sphere_options.progress = &bar;
     const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
         capture.images, capture.names, capture.mask, sphere_options, options->input);
+    if (result.refinement.requested && !result.refinement.used) {
+      spdlog::warn("the refinement was not used ({}): the lights come from the unrefined sphere",
+                   result.refinement.status);
+    }
 
     // The images the lights belong to.
     std::vector<fs::path> files = capture.files;
@@ -231,13 +255,24 @@ void AddLightsCommand(CLI::App& calibrate) {
                             {{"centre", {result.sphere.centre.x(), result.sphere.centre.y()}},
                              {"radius", result.sphere.radius},
                              {"edge_rms_px", result.edge_rms_pixels},
-                             {"camera", result.perspective ? "perspective" : "orthographic"}}}};
+                             {"camera", result.perspective ? "perspective" : "orthographic"}}},
+                           {"spheres", MirrorSpheresJson(result)},
+                           {"light_model", ToString(result.light_model)},
+                           {"refinement", MirrorSphereRefinementJson(result.refinement)}};
     WriteCaptureManifest(manifest_path, manifest);
+    fs::path lamps_path;
+    if (!result.lamp_positions.empty()) {
+      lamps_path = options->out;
+      lamps_path.replace_filename(options->out.stem().string() + "_lamps.txt");
+      WriteLampPositions(lamps_path, result.lamp_positions);
+    }
 
     LightCalibrationReport report;
     report.title = fmt::format("mirror-sphere lights: {}", options->input.filename().string());
     report.names = capture.names;
     report.recovered = result.lights;
+    report.uncertainty_degrees = result.light_uncertainty_degrees;
+    report.notes = MirrorSphereNotes(result);
     report.reference =
         options->reference.empty() ? capture.lights : ReadLightList(options->reference);
     if (!report.reference.empty() && report.reference.size() != report.recovered.size()) {
@@ -255,6 +290,9 @@ void AddLightsCommand(CLI::App& calibrate) {
     json.replace_extension(".json");
     nlohmann::json details = report.ToJson();
     details["sphere"] = manifest.provenance["sphere"];
+    details["spheres"] = manifest.provenance["spheres"];
+    details["light_model"] = manifest.provenance["light_model"];
+    details["refinement"] = manifest.provenance["refinement"];
     WriteJsonFile(json, details);
     fmt::print(
         "sphere: centre ({:.2f}, {:.2f}) px, radius {:.2f} px, outline RMS {:.3f} px from "
@@ -262,8 +300,8 @@ void AddLightsCommand(CLI::App& calibrate) {
         result.sphere.centre.x(), result.sphere.centre.y(), result.sphere.radius,
         result.edge_rms_pixels, result.edge_points,
         result.perspective ? "perspective" : "orthographic", report.ToTable());
-    fmt::print("wrote {}, {}, {}, {}\n", options->out.string(), manifest_path.string(),
-               svg.string(), json.string());
+    fmt::print("wrote {}, {}, {}, {}{}\n", options->out.string(), manifest_path.string(),
+               svg.string(), json.string(), lamps_path.empty() ? "" : ", " + lamps_path.string());
   });
 }
 

@@ -31,6 +31,16 @@ void CheckSizes(const LightCalibrationReport& report) {
     throw Error(fmt::format("{} recovered lights but {} reference lights", report.recovered.size(),
                             report.reference.size()));
   }
+  if (!report.uncertainty_degrees.empty() &&
+      report.uncertainty_degrees.size() != report.recovered.size()) {
+    throw Error(fmt::format("{} recovered lights but {} uncertainties", report.recovered.size(),
+                            report.uncertainty_degrees.size()));
+  }
+}
+
+// "0.12" degrees, or "?" for an unknown uncertainty.
+std::string UncertaintyText(double degrees) {
+  return std::isfinite(degrees) ? fmt::format("{:.2f}", degrees) : "?";
 }
 
 }  // namespace
@@ -58,7 +68,11 @@ LightCalibrationReport::Summary LightCalibrationReport::DifferenceSummary() cons
 
 std::string LightCalibrationReport::ToTable() const {
   const std::vector<double> differences = AngularDifferences();
-  std::string table = fmt::format("{:>4}  {:<24} {:>8} {:>8}", "#", "image", "slant", "tilt");
+  const bool has_uncertainty = !uncertainty_degrees.empty();
+  std::string table;
+  for (const std::string& note : notes) table += note + "\n";
+  table += fmt::format("{:>4}  {:<24} {:>8} {:>8}", "#", "image", "slant", "tilt");
+  if (has_uncertainty) table += fmt::format(" {:>8}", "+-deg");
   if (!differences.empty())
     table += fmt::format(" {:>10} {:>9} {:>10}", "ref slant", "ref tilt", "angle (deg)");
   table += "\n";
@@ -66,6 +80,7 @@ std::string LightCalibrationReport::ToTable() const {
     const std::string name = i < names.size() ? names[i] : fmt::format("light {}", i);
     table += fmt::format("{:>4}  {:<24} {:>8.2f} {:>8.2f}", i, name, recovered[i].SlantDegrees(),
                          recovered[i].TiltDegrees());
+    if (has_uncertainty) table += fmt::format(" {:>8}", UncertaintyText(uncertainty_degrees[i]));
     if (!differences.empty()) {
       table += fmt::format(" {:>10.2f} {:>9.2f} {:>10.2f}", reference[i].SlantDegrees(),
                            reference[i].TiltDegrees(), differences[i]);
@@ -87,13 +102,20 @@ std::string LightCalibrationReport::ToSvg() const {
   const bool has_reference = !differences.empty();
   const double table_x = 600.0;
   const double row_height = 16.0;
-  const double height = std::max(680.0, 110.0 + row_height * static_cast<double>(recovered.size()));
+  const double height =
+      std::max(680.0 + row_height * static_cast<double>(notes.size()),
+               110.0 + row_height * static_cast<double>(recovered.size() + notes.size()));
   std::string svg = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"1000\" height=\"{0:.0f}\" "
       "viewBox=\"0 0 1000 {0:.0f}\" font-family=\"sans-serif\" font-size=\"12\">\n"
       "<rect width=\"1000\" height=\"{0:.0f}\" fill=\"white\"/>\n",
       height);
   svg += fmt::format("<text x=\"20\" y=\"30\" font-size=\"18\">{}</text>\n", EscapeMarkup(title));
+  for (std::size_t i = 0; i < notes.size(); ++i) {
+    svg += fmt::format("<text x=\"20\" y=\"{:.0f}\" fill=\"#555\">{}</text>\n",
+                       height - 20.0 - row_height * static_cast<double>(notes.size() - 1 - i),
+                       EscapeMarkup(notes[i]));
+  }
   if (has_reference) {
     const Summary s = DifferenceSummary();
     svg += fmt::format(
@@ -162,12 +184,16 @@ std::string LightCalibrationReport::ToSvg() const {
   double y = 90.0;
   svg += fmt::format(
       "<text x=\"{}\" y=\"{}\" font-family=\"monospace\" font-weight=\"bold\" "
-      "xml:space=\"preserve\"> #   slant    tilt{}</text>\n",
-      table_x, y, has_reference ? "   given:  slant    tilt  angle" : "");
+      "xml:space=\"preserve\"> #   slant    tilt{}{}</text>\n",
+      table_x, y, uncertainty_degrees.empty() ? "" : "  +-deg",
+      has_reference ? "   given:  slant    tilt  angle" : "");
   for (std::size_t i = 0; i < recovered.size(); ++i) {
     y += row_height;
     std::string row = fmt::format("{:>2}  {:6.2f} {:7.2f}", i, recovered[i].SlantDegrees(),
                                   recovered[i].TiltDegrees());
+    if (!uncertainty_degrees.empty()) {
+      row += fmt::format("  {:>5}", UncertaintyText(uncertainty_degrees[i]));
+    }
     if (has_reference) {
       row += fmt::format("   {:6.2f} {:7.2f}  {:5.2f}&#176;", reference[i].SlantDegrees(),
                          reference[i].TiltDegrees(), differences[i]);
@@ -190,6 +216,11 @@ nlohmann::json LightCalibrationReport::ToJson() const {
                             {"light", {v.x(), v.y(), v.z()}},
                             {"slant_deg", recovered[i].SlantDegrees()},
                             {"tilt_deg", recovered[i].TiltDegrees()}};
+    if (!uncertainty_degrees.empty()) {
+      entry["uncertainty_deg"] = std::isfinite(uncertainty_degrees[i])
+                                     ? nlohmann::json(uncertainty_degrees[i])
+                                     : nlohmann::json(nullptr);
+    }
     if (!differences.empty()) {
       const Eigen::Vector3d& r = reference[i].vector();
       entry["reference"] = {r.x(), r.y(), r.z()};
@@ -198,11 +229,60 @@ nlohmann::json LightCalibrationReport::ToJson() const {
     lights.push_back(entry);
   }
   nlohmann::json json = {{"title", title}, {"lights", lights}};
+  if (!notes.empty()) json["notes"] = notes;
   if (!differences.empty()) {
     const Summary s = DifferenceSummary();
     json["angle_deg"] = {{"mean", s.mean}, {"median", s.median}, {"max", s.max}};
   }
   return json;
+}
+
+// Every sphere of the calibration, as the report and the manifest record it.
+nlohmann::json MirrorSpheresJson(const MirrorSphereCalibration& result) {
+  nlohmann::json spheres = nlohmann::json::array();
+  for (const MirrorSphereFit& sphere : result.spheres) {
+    spheres.push_back({{"centre", {sphere.refined.centre.x(), sphere.refined.centre.y()}},
+                       {"radius", sphere.refined.radius},
+                       {"initial_centre", {sphere.initial.centre.x(), sphere.initial.centre.y()}},
+                       {"initial_radius", sphere.initial.radius},
+                       {"edge_rms_px", sphere.edge_rms_pixels},
+                       {"edge_points", sphere.edge_points}});
+  }
+  return spheres;
+}
+
+nlohmann::json MirrorSphereRefinementJson(const MirrorSphereRefinementReport& refinement) {
+  nlohmann::json json = {{"requested", refinement.requested},
+                         {"used", refinement.used},
+                         {"status", refinement.status},
+                         {"iterations", refinement.iterations}};
+  if (refinement.used && refinement.highlight_sigma_pixels > 0.0) {
+    json["highlight_sigma_px"] = refinement.highlight_sigma_pixels;
+    json["highlight_sigma"] = refinement.highlight_sigma_measured
+                                  ? "measured from the highlights' residuals"
+                                  : "assumed: the outline's RMS (one sphere)";
+  }
+  return json;
+}
+
+// The report's lines on the spheres and the refinement.
+std::vector<std::string> MirrorSphereNotes(const MirrorSphereCalibration& result) {
+  std::vector<std::string> notes;
+  notes.push_back(fmt::format("{} sphere{}, {} lights", result.spheres.size(),
+                              result.spheres.size() == 1 ? "" : "s", ToString(result.light_model)));
+  const MirrorSphereRefinementReport& refinement = result.refinement;
+  if (!refinement.requested) {
+    notes.push_back("refinement: not requested (the unrefined estimate)");
+  } else if (!refinement.used) {
+    notes.push_back(fmt::format("refinement: NOT USED, {}; the lights are the unrefined estimate",
+                                refinement.status));
+  } else {
+    notes.push_back(fmt::format("refinement: {} in {} iterations; highlight noise {:.3f} px ({})",
+                                refinement.status, refinement.iterations,
+                                refinement.highlight_sigma_pixels,
+                                refinement.highlight_sigma_measured ? "measured" : "assumed"));
+  }
+  return notes;
 }
 
 void WriteLightCalibrationSvg(const std::filesystem::path& path,

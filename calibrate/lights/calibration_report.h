@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "calibrate/lights/mirror_sphere.h"
 #include "core/light_direction.h"
 
 namespace photomat {
@@ -21,6 +22,10 @@ struct LightCalibrationReport {
   std::vector<std::string> names;  // one per recovered light
   std::vector<LightDirection> recovered;
   std::vector<LightDirection> reference;  // empty, or one per recovered light
+  // Empty, or one per recovered light: its expected RMS angular error (degrees; NaN: unknown).
+  std::vector<double> uncertainty_degrees;
+  // Lines said under the title (how the lights were refined, or why not).
+  std::vector<std::string> notes;
 
   // Angle between recovered and reference light, degrees (empty without a reference).
   std::vector<double> AngularDifferences() const;
@@ -34,8 +39,16 @@ struct LightCalibrationReport {
   nlohmann::json ToJson() const;
 };
 
-// Writes the SVG (atomically). Throws Error naming the file on failure or for a reference list of
-// another length.
+// A mirror-sphere calibration as its report records it: every sphere (refined and initial circle,
+// outline RMS and points), the refinement's outcome (requested, used, its status and iterations,
+// the highlight noise it weighed with), and the lines said under the report's title (the
+// spheres and light model; whether the refinement was used, and if not, why).
+nlohmann::json MirrorSpheresJson(const MirrorSphereCalibration& result);
+nlohmann::json MirrorSphereRefinementJson(const MirrorSphereRefinementReport& refinement);
+std::vector<std::string> MirrorSphereNotes(const MirrorSphereCalibration& result);
+
+// Writes the SVG (atomically). Throws Error naming the file on failure or for a reference or
+// uncertainty list of another length.
 void WriteLightCalibrationSvg(const std::filesystem::path& path,
                               const LightCalibrationReport& report);
 

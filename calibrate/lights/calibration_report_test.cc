@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "calibrate/lights/light_list.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -52,6 +54,26 @@ TEST(CalibrationReportTest, MismatchedReferenceIsAnError) {
   testing::TempDir dir;
   EXPECT_THROW(WriteLightCalibrationSvg(dir / "r.svg", report), Error);
   EXPECT_FALSE(std::filesystem::exists(dir / "r.svg"));
+}
+
+TEST(CalibrationReportTest, UncertaintiesAndNotesInEveryForm) {
+  LightCalibrationReport report = TwoLights();
+  report.uncertainty_degrees = {0.25, std::numeric_limits<double>::quiet_NaN()};
+  report.notes = {"refinement: converged"};
+  const std::string table = report.ToTable();
+  EXPECT_EQ(table.rfind("refinement: converged\n", 0), 0u) << table;
+  EXPECT_NE(table.find("+-deg"), std::string::npos) << table;
+  EXPECT_NE(table.find("0.25"), std::string::npos) << table;
+  const nlohmann::json json = report.ToJson();
+  EXPECT_DOUBLE_EQ(json["lights"][0]["uncertainty_deg"].get<double>(), 0.25);
+  EXPECT_TRUE(json["lights"][1]["uncertainty_deg"].is_null());  // unknown, not a number
+  EXPECT_EQ(json["notes"][0], "refinement: converged");
+  const std::string svg = report.ToSvg();
+  EXPECT_NE(svg.find("+-deg"), std::string::npos);
+  EXPECT_NE(svg.find(" 0.25"), std::string::npos);
+  EXPECT_NE(svg.find("refinement: converged"), std::string::npos);
+  report.uncertainty_degrees.pop_back();
+  EXPECT_THROW(report.ToTable(), Error);
 }
 
 TEST(LightListTest, ReadsPlainVectorListsWithAnOptionalCount) {

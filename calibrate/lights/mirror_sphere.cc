@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <opencv2/core.hpp>
@@ -12,6 +13,7 @@
 #include <queue>
 
 #include "calibrate/lights/mirror_sphere_refinement.h"
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/text_parsing.h"
 
@@ -19,6 +21,11 @@ namespace photomat {
 namespace {
 
 namespace fs = std::filesystem;
+
+constexpr std::array<NamedValue<LightModel>, 2> kLightModelNames = {{
+    {LightModel::kDistant, "distant"},
+    {LightModel::kNear, "near"},
+}};
 
 constexpr double kPi = std::numbers::pi;
 // Radial profiles sampled around a detected circle to refine it.
@@ -157,6 +164,83 @@ SphereCircle FitCircle(const SphereCircle& start, const std::vector<Eigen::Vecto
   return AlgebraicCircle(points).value_or(start);
 }
 
+// A sub-pixel point where the mask's coverage crosses one half between two neighbouring pixels,
+// and which of the two is inside.
+struct MaskEdge {
+  Eigen::Vector2d point;
+  int inside_x = 0, inside_y = 0;
+};
+
+std::vector<MaskEdge> MaskEdges(const Image& mask) {
+  std::vector<MaskEdge> edges;
+  const auto coverage = [&](int x, int y) { return static_cast<double>(mask.at(x, y, 0)); };
+  // Between (x, y) and (x + dx, y + dy), if the coverage crosses one half.
+  const auto add = [&](int x, int y, int dx, int dy) {
+    const double v0 = coverage(x, y), v1 = coverage(x + dx, y + dy);
+    if ((v0 - 0.5) * (v1 - 0.5) >= 0.0) return;
+    const double t = (0.5 - v0) / (v1 - v0);
+    const bool first_inside = v0 > 0.5;
+    edges.push_back({Eigen::Vector2d(x + 0.5 + t * dx, y + 0.5 + t * dy), first_inside ? x : x + dx,
+                     first_inside ? y : y + dy});
+  };
+  for (int y = 0; y < mask.height(); ++y) {
+    for (int x = 0; x + 1 < mask.width(); ++x) add(x, y, 1, 0);
+  }
+  for (int x = 0; x < mask.width(); ++x) {
+    for (int y = 0; y + 1 < mask.height(); ++y) add(x, y, 0, 1);
+  }
+  return edges;
+}
+
+// The circle of a mask's outline points; throws Error naming `source` when they are too few or
+// not a circle.
+SphereCircle FitMaskOutline(const std::vector<Eigen::Vector2d>& points, const fs::path& source) {
+  const auto start = AlgebraicCircle(points);
+  if (static_cast<int>(points.size()) < kMinimumEdgePoints || !start) {
+    throw Error(source, "sphere not found: the mask has no outline (is it empty or full?)");
+  }
+  const SphereCircle circle = FitCircle(*start, points);
+  const double rms = EdgeRms(circle, points);
+  if (!(circle.radius > 2.0) || rms > 0.05 * circle.radius) {
+    throw Error(source, fmt::format("sphere not found: the mask's outline is not a circle (RMS "
+                                    "distance {:.2f} px from the best circle of radius {:.1f} px)",
+                                    rms, circle.radius));
+  }
+  return circle;
+}
+
+// The normalised mean of the directions that the spheres' highlights of one image give (one
+// sphere: its direction): the unrefined distant light.
+Eigen::Vector3d MeanDirection(const std::vector<MirrorSphereFit>& spheres, std::size_t image) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const MirrorSphereFit& sphere : spheres) {
+    sum += LightFromHighlight(sphere.initial, sphere.highlights[image].position).vector();
+  }
+  return sum.normalized();
+}
+
+// The point nearest to every sphere's mirror ray of one image (least squares): the near lamp's
+// start for the refinement. Rays that are (nearly) parallel meet far away; the lamp is then put
+// far along their mean direction.
+Eigen::Vector3d TriangulateLamp(const std::vector<MirrorSphereFit>& spheres, std::size_t image,
+                                int width, int height) {
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d right_side = Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean_point = Eigen::Vector3d::Zero();
+  for (const MirrorSphereFit& sphere : spheres) {
+    const Eigen::Vector2d& h = sphere.highlights[image].position;
+    const Eigen::Vector3d point = MirrorPointInSampleFrame(sphere.initial, h, width, height);
+    const Eigen::Vector3d d = LightFromHighlight(sphere.initial, h).vector();
+    const Eigen::Matrix3d across = Eigen::Matrix3d::Identity() - d * d.transpose();
+    normal_matrix += across;
+    right_side += across * point;
+    mean_point += point / static_cast<double>(spheres.size());
+  }
+  const Eigen::Vector3d lamp = normal_matrix.ldlt().solve(right_side);
+  if (lamp.allFinite() && lamp.z() > mean_point.z()) return lamp;
+  return mean_point + 10.0 * std::max(width, height) * MeanDirection(spheres, image);
+}
+
 }  // namespace
 
 CameraIntrinsics ReadCameraIntrinsics(const fs::path& path) {
@@ -177,40 +261,38 @@ CameraIntrinsics ReadCameraIntrinsics(const fs::path& path) {
 
 std::vector<Eigen::Vector2d> MaskEdgePoints(const Image& mask) {
   std::vector<Eigen::Vector2d> points;
-  const auto coverage = [&](int x, int y) { return static_cast<double>(mask.at(x, y, 0)); };
-  for (int y = 0; y < mask.height(); ++y) {
-    for (int x = 0; x + 1 < mask.width(); ++x) {
-      const double v0 = coverage(x, y), v1 = coverage(x + 1, y);
-      if ((v0 - 0.5) * (v1 - 0.5) < 0.0) {
-        points.emplace_back(x + 0.5 + (0.5 - v0) / (v1 - v0), y + 0.5);
-      }
-    }
-  }
-  for (int x = 0; x < mask.width(); ++x) {
-    for (int y = 0; y + 1 < mask.height(); ++y) {
-      const double v0 = coverage(x, y), v1 = coverage(x, y + 1);
-      if ((v0 - 0.5) * (v1 - 0.5) < 0.0) {
-        points.emplace_back(x + 0.5, y + 0.5 + (0.5 - v0) / (v1 - v0));
-      }
-    }
-  }
+  for (const MaskEdge& edge : MaskEdges(mask)) points.push_back(edge.point);
   return points;
 }
 
 SphereCircle FitSphereToMask(const Image& mask, const fs::path& source) {
-  const std::vector<Eigen::Vector2d> points = MaskEdgePoints(mask);
-  const auto start = AlgebraicCircle(points);
-  if (static_cast<int>(points.size()) < kMinimumEdgePoints || !start) {
-    throw Error(source, "sphere not found: the mask has no outline (is it empty or full?)");
+  return FitMaskOutline(MaskEdgePoints(mask), source);
+}
+
+std::vector<std::vector<Eigen::Vector2d>> MaskSphereOutlines(const Image& mask) {
+  cv::Mat inside(mask.height(), mask.width(), CV_8U);
+  for (int y = 0; y < mask.height(); ++y) {
+    for (int x = 0; x < mask.width(); ++x) inside.at<std::uint8_t>(y, x) = mask.at(x, y, 0) > 0.5f;
   }
-  const SphereCircle circle = FitCircle(*start, points);
-  const double rms = EdgeRms(circle, points);
-  if (!(circle.radius > 2.0) || rms > 0.05 * circle.radius) {
-    throw Error(source, fmt::format("sphere not found: the mask's outline is not a circle (RMS "
-                                    "distance {:.2f} px from the best circle of radius {:.1f} px)",
-                                    rms, circle.radius));
+  cv::Mat labels;
+  const int regions = cv::connectedComponents(inside, labels, 8, CV_32S);
+  std::vector<std::vector<Eigen::Vector2d>> outlines(static_cast<std::size_t>(regions));
+  // Each edge point belongs to the region of the pixel of its pair that is inside.
+  for (const MaskEdge& edge : MaskEdges(mask)) {
+    const int label = labels.at<int>(edge.inside_y, edge.inside_x);
+    outlines[static_cast<std::size_t>(label)].push_back(edge.point);
   }
-  return circle;
+  std::erase_if(outlines, [](const std::vector<Eigen::Vector2d>& points) {
+    return static_cast<int>(points.size()) < kMinimumEdgePoints;
+  });
+  const auto mean_x = [](const std::vector<Eigen::Vector2d>& points) {
+    double sum = 0.0;
+    for (const auto& p : points) sum += p.x();
+    return sum / static_cast<double>(points.size());
+  };
+  std::sort(outlines.begin(), outlines.end(),
+            [&](const auto& a, const auto& b) { return mean_x(a) < mean_x(b); });
+  return outlines;
 }
 
 SphereCircle DetectSphere(const std::vector<Image>& images, const fs::path& source,
@@ -266,6 +348,23 @@ SphereCircle DetectSphere(const std::vector<Image>& images, const fs::path& sour
   }
   if (edge_points) *edge_points = std::move(points);
   return circle;
+}
+
+std::string_view ToString(LightModel model) { return NameOf(model, kLightModelNames); }
+
+LightModel ParseLightModel(std::string_view name) {
+  return ValueNamed(name, kLightModelNames, "light model");
+}
+
+Eigen::Vector3d SphereCentreInSampleFrame(const SphereCircle& circle, int width, int height) {
+  return {circle.centre.x() - width / 2.0, height / 2.0 - circle.centre.y(), circle.radius};
+}
+
+Eigen::Vector3d MirrorPointInSampleFrame(const SphereCircle& circle,
+                                         const Eigen::Vector2d& highlight, int width, int height) {
+  const Eigen::Vector2d d = highlight - circle.centre;
+  const double above = std::sqrt(std::max(0.0, circle.radius * circle.radius - d.squaredNorm()));
+  return SphereCentreInSampleFrame(circle, width, height) + Eigen::Vector3d(d.x(), -d.y(), above);
 }
 
 Highlight LocateHighlight(const Image& image, const SphereCircle& sphere,
@@ -379,37 +478,27 @@ Eigen::Vector2d HighlightFromLight(const SphereCircle& sphere, const LightDirect
   return sphere.centre + sphere.radius * Eigen::Vector2d(half.x(), -half.y());
 }
 
-MirrorSphereCalibration CalibrateLightsFromMirrorSphere(const std::vector<Image>& images,
-                                                        const std::vector<std::string>& names,
-                                                        const std::optional<Image>& mask,
-                                                        const MirrorSphereOptions& options,
-                                                        const fs::path& source) {
-  if (images.empty()) throw Error(source, "no sphere images");
-  MirrorSphereCalibration result;
-  std::vector<Eigen::Vector2d> edges;
-  if (mask) {
-    if (mask->width() != images.front().width() || mask->height() != images.front().height()) {
-      throw Error(source,
-                  fmt::format("the sphere mask is {}x{} but the images are {}x{}", mask->width(),
-                              mask->height(), images.front().width(), images.front().height()));
-    }
-    result.initial = FitSphereToMask(*mask, source);
-    edges = MaskEdgePoints(*mask);
-  } else {
-    result.initial = DetectSphere(images, source, &edges);
-  }
+namespace {
 
+// Every sphere's highlight in every image; one Error lists every failure.
+void LocateAllHighlights(const std::vector<Image>& images, const std::vector<std::string>& names,
+                         const MirrorSphereOptions& options, const fs::path& source,
+                         std::vector<MirrorSphereFit>& spheres) {
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
-  progress.Start("highlights", images.size());
-  result.highlights.resize(images.size());
-  std::vector<std::string> failures(images.size());
-  tbb::parallel_for(std::size_t{0}, images.size(), [&](std::size_t i) {
-    const std::string name = i < names.size() ? names[i] : fmt::format("image {}", i);
+  const std::size_t count = images.size() * spheres.size();
+  progress.Start("highlights", count);
+  for (auto& sphere : spheres) sphere.highlights.resize(images.size());
+  std::vector<std::string> failures(count);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t job) {
+    const std::size_t i = job / spheres.size(), s = job % spheres.size();
+    std::string name = i < names.size() ? names[i] : fmt::format("image {}", i);
+    if (spheres.size() > 1) name += fmt::format(" (sphere {})", s + 1);
     try {
-      result.highlights[i] = LocateHighlight(images[i], result.initial, options.highlight, name);
+      spheres[s].highlights[i] =
+          LocateHighlight(images[i], spheres[s].initial, options.highlight, name);
     } catch (const Error& error) {
-      failures[i] = error.what();
+      failures[job] = error.what();
     }
     progress.Advance();
   });
@@ -421,54 +510,160 @@ MirrorSphereCalibration CalibrateLightsFromMirrorSphere(const std::vector<Image>
     message += (failed++ ? "; " : "") + failure;
   }
   if (failed) {
-    throw Error(source,
-                fmt::format("{} of {} sphere images failed: {}", failed, images.size(), message));
+    throw Error(source, fmt::format("{} of {} sphere images failed: {}", failed, count, message));
   }
+}
 
-  result.perspective = options.camera.has_value();
-  result.edge_points = static_cast<int>(edges.size());
-  const std::size_t n = images.size();
-  std::vector<Eigen::Vector3d> lights(n);
-  std::vector<Eigen::Vector2d> highlights(n);
-  for (std::size_t i = 0; i < n; ++i) highlights[i] = result.highlights[i].position;
-  if (!result.perspective) {
-    result.sphere = result.initial;
-    for (std::size_t i = 0; i < n; ++i) {
-      lights[i] = LightFromHighlight(result.initial, highlights[i]).vector();
-    }
-    if (options.refine) RefineOrthographicSphere(edges, highlights, &result.sphere, &lights);
-    result.edge_rms_pixels = EdgeRms(result.sphere, edges);
-  } else {
-    const CameraIntrinsics& camera = *options.camera;
-    Eigen::Vector3d centre = SphereCentreFromCircle(result.initial, camera);
-    for (std::size_t i = 0; i < n; ++i) {
-      lights[i] = PhotomatToCamera(PerspectiveLight(centre, highlights[i], camera).vector());
-    }
-    if (options.refine) {
-      std::vector<Eigen::Vector3d> edge_rays;
-      for (const auto& p : edges) edge_rays.push_back(CameraRay(camera, p));
-      std::vector<Eigen::Vector2d> opencv_highlights;
-      for (const auto& h : highlights) opencv_highlights.push_back(ToOpenCvPixel(h));
-      RefinePerspectiveSphere(edge_rays, MeanFocal(camera), opencv_highlights, camera, &centre,
-                              &lights);
-    }
-    // Report the refined sphere as its image circle (centre of the outline, mean radius).
-    const Eigen::Vector3d projected_centre(camera.fx * centre.x() / centre.z() + camera.cx,
-                                           camera.fy * centre.y() / centre.z() + camera.cy, 1.0);
-    result.sphere.centre = Eigen::Vector2d(projected_centre.x() + 0.5, projected_centre.y() + 0.5);
-    result.sphere.radius = MeanFocal(camera) * std::tan(std::asin(1.0 / centre.norm()));
-    double sum = 0.0;
-    for (const auto& p : edges) {
-      const Eigen::Vector3d ray = CameraRay(camera, p);
-      const double angle = std::atan2(ray.cross(centre).norm(), ray.dot(centre));
-      const double d = MeanFocal(camera) * (angle - std::asin(1.0 / centre.norm()));
-      sum += d * d;
-    }
-    result.edge_rms_pixels =
-        edges.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(edges.size()));
-    for (auto& light : lights) light = CameraToPhotomat(light);
+// Step 4 for an orthographic camera: the joint refinement of every sphere with the lights; its
+// result replaces the unrefined one only when the solve is usable.
+void RefineOrthographic(const std::vector<std::vector<Eigen::Vector2d>>& outlines,
+                        const MirrorSphereOptions& options, int width, int height,
+                        MirrorSphereCalibration& result) {
+  std::vector<MirrorSphereObservations> observations;
+  MirrorSphereEstimate start;
+  for (std::size_t s = 0; s < result.spheres.size(); ++s) {
+    MirrorSphereObservations sphere{outlines[s], {}};
+    for (const Highlight& h : result.spheres[s].highlights) sphere.highlights.push_back(h.position);
+    observations.push_back(std::move(sphere));
+    start.spheres.push_back(result.spheres[s].initial);
   }
-  for (const auto& light : lights) result.lights.push_back(LightDirection::FromVector(light));
+  for (std::size_t i = 0; i < result.lights.size(); ++i) {
+    start.lights.push_back(options.light_model == LightModel::kNear
+                               ? TriangulateLamp(result.spheres, i, width, height)
+                               : result.lights[i].vector());
+  }
+  const MirrorSphereRefinement refinement = RefineMirrorSpheres(
+      observations, options.light_model, start, width, height, options.refine_max_iterations);
+  result.refinement.status = refinement.status;
+  result.refinement.iterations = refinement.iterations;
+  if (!refinement.usable) return;
+  result.refinement.used = true;
+  result.refinement.highlight_sigma_pixels = refinement.highlight_sigma_pixels;
+  result.refinement.highlight_sigma_measured = refinement.highlight_sigma_measured;
+  result.light_uncertainty_degrees = refinement.light_sigma_degrees;
+  for (std::size_t s = 0; s < result.spheres.size(); ++s) {
+    result.spheres[s].refined = refinement.estimate.spheres[s];
+  }
+  result.lights.clear();
+  for (const Eigen::Vector3d& light : refinement.estimate.lights) {
+    result.lights.push_back(LightDirection::FromVector(light));
+  }
+  if (options.light_model == LightModel::kNear) result.lamp_positions = refinement.estimate.lights;
+}
+
+// The perspective camera (one sphere): the lights from the sphere's 3-D centre, refined jointly
+// when asked.
+void CalibratePerspective(const std::vector<Eigen::Vector2d>& edges,
+                          const MirrorSphereOptions& options, MirrorSphereCalibration& result) {
+  const CameraIntrinsics& camera = *options.camera;
+  MirrorSphereFit& sphere = result.spheres.front();
+  Eigen::Vector3d centre = SphereCentreFromCircle(sphere.initial, camera);
+  std::vector<Eigen::Vector3d> lights;
+  for (const Highlight& h : sphere.highlights) {
+    lights.push_back(PhotomatToCamera(PerspectiveLight(centre, h.position, camera).vector()));
+  }
+  if (options.refine) {
+    std::vector<Eigen::Vector3d> edge_rays;
+    for (const auto& p : edges) edge_rays.push_back(CameraRay(camera, p));
+    std::vector<Eigen::Vector2d> opencv_highlights;
+    for (const Highlight& h : sphere.highlights)
+      opencv_highlights.push_back(ToOpenCvPixel(h.position));
+    result.refinement.status =
+        RefinePerspectiveSphere(edge_rays, MeanFocal(camera), opencv_highlights, camera,
+                                options.refine_max_iterations, &centre, &lights);
+    result.refinement.used = result.refinement.status == "converged";
+  }
+  // Report the sphere as its image circle (centre of the outline, mean radius).
+  const Eigen::Vector3d projected_centre(camera.fx * centre.x() / centre.z() + camera.cx,
+                                         camera.fy * centre.y() / centre.z() + camera.cy, 1.0);
+  sphere.refined.centre = Eigen::Vector2d(projected_centre.x() + 0.5, projected_centre.y() + 0.5);
+  sphere.refined.radius = MeanFocal(camera) * std::tan(std::asin(1.0 / centre.norm()));
+  double sum = 0.0;
+  for (const auto& p : edges) {
+    const Eigen::Vector3d ray = CameraRay(camera, p);
+    const double angle = std::atan2(ray.cross(centre).norm(), ray.dot(centre));
+    const double d = MeanFocal(camera) * (angle - std::asin(1.0 / centre.norm()));
+    sum += d * d;
+  }
+  sphere.edge_rms_pixels = edges.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(edges.size()));
+  result.lights.clear();
+  for (const auto& light : lights)
+    result.lights.push_back(LightDirection::FromVector(CameraToPhotomat(light)));
+}
+
+}  // namespace
+
+MirrorSphereCalibration CalibrateLightsFromMirrorSphere(const std::vector<Image>& images,
+                                                        const std::vector<std::string>& names,
+                                                        const std::optional<Image>& mask,
+                                                        const MirrorSphereOptions& options,
+                                                        const fs::path& source) {
+  if (images.empty()) throw Error(source, "no sphere images");
+  const int width = images.front().width(), height = images.front().height();
+  MirrorSphereCalibration result;
+  result.perspective = options.camera.has_value();
+  result.light_model = options.light_model;
+  std::vector<std::vector<Eigen::Vector2d>> outlines;
+  if (mask) {
+    if (mask->width() != width || mask->height() != height) {
+      throw Error(source, fmt::format("the sphere mask is {}x{} but the images are {}x{}",
+                                      mask->width(), mask->height(), width, height));
+    }
+    outlines = MaskSphereOutlines(*mask);
+    if (outlines.empty()) {
+      throw Error(source, "sphere not found: the mask has no outline (is it empty or full?)");
+    }
+    for (const auto& points : outlines) {
+      result.spheres.emplace_back().initial = FitMaskOutline(points, source);
+    }
+  } else {
+    outlines.emplace_back();
+    result.spheres.emplace_back().initial = DetectSphere(images, source, &outlines.back());
+  }
+  const std::size_t sphere_count = result.spheres.size();
+  if (result.perspective && sphere_count > 1) {
+    throw Error(source, fmt::format("the mask holds {} spheres, but a perspective camera "
+                                    "(--camera) takes one sphere",
+                                    sphere_count));
+  }
+  if (options.light_model == LightModel::kNear && (sphere_count < 2 || result.perspective)) {
+    throw Error(source,
+                fmt::format("near lights are triangulated from two or more spheres seen "
+                            "by an orthographic camera; the mask holds {}{}",
+                            sphere_count, result.perspective ? " and --camera is given" : ""));
+  }
+  if (options.refine && !MirrorSphereRefinementAvailable()) {
+    throw Error(MirrorSphereRefinementAbsence() +
+                ": calibrate the lights without it (the unrefined sphere: --no-refine)");
+  }
+  LocateAllHighlights(images, names, options, source, result.spheres);
+
+  for (std::size_t s = 0; s < sphere_count; ++s) {
+    result.spheres[s].refined = result.spheres[s].initial;
+    result.spheres[s].edge_points = static_cast<int>(outlines[s].size());
+  }
+  result.refinement.requested = options.refine;
+  result.refinement.status = options.refine ? "" : "not requested";
+  const std::size_t n = images.size();
+  if (!result.perspective) {
+    for (std::size_t i = 0; i < n; ++i) {
+      result.lights.push_back(LightDirection::FromVector(MeanDirection(result.spheres, i)));
+    }
+    if (options.refine) RefineOrthographic(outlines, options, width, height, result);
+  } else {
+    CalibratePerspective(outlines.front(), options, result);
+  }
+  for (std::size_t s = 0; s < sphere_count; ++s) {
+    if (!result.perspective) {
+      result.spheres[s].edge_rms_pixels = EdgeRms(result.spheres[s].refined, outlines[s]);
+    }
+  }
+  const MirrorSphereFit& first = result.spheres.front();
+  result.sphere = first.refined;
+  result.initial = first.initial;
+  result.highlights = first.highlights;
+  result.edge_rms_pixels = first.edge_rms_pixels;
+  result.edge_points = first.edge_points;
   return result;
 }
 

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/image.h"
@@ -19,25 +20,31 @@ namespace photomat {
 // y up, z toward the camera).
 //
 // Pipeline (CalibrateLightsFromMirrorSphere):
-//   1. the sphere's outline: from a given mask (sub-pixel edge points where an anti-aliased or
-//      binary mask crosses one half) or, without a mask, by OpenCV's Hough circle detection on the
-//      median of every pixel over the images, refined with sub-pixel edge points along
+//   1. the spheres' outlines: from a given mask (sub-pixel edge points where an anti-aliased or
+//      binary mask crosses one half; each connected region of the mask is one sphere, ordered
+//      left to right) or, without a mask, one sphere found by OpenCV's Hough circle detection on
+//      the median of every pixel over the images, refined with sub-pixel edge points along
 //      radial profiles;
-//   2. per image, the specular highlight: the brightest smoothed pixel inside the sphere, its blob
-//      (connected pixels above half of the peak over the sphere's median) and the blob's
-//      intensity-weighted centroid, with a clear error for a highlight that is too weak, a large
-//      saturated blob (its centre is not measurable), or one at the sphere's rim;
-//   3. Ceres refines the sphere (centre and radius, or its 3-D centre for a perspective camera)
-//      from the edge points (Huber loss) jointly with one unit light direction per image whose
-//      predicted highlight must land on the measured one. In this single-sphere problem each
-//      direction is free, so the highlight residuals vanish at the optimum and the sphere is set
-//      by its outline; the lights follow the refined sphere in one consistent solve
-//      (mirror_sphere_refinement.h; a build without Ceres keeps the unrefined estimate, and the
-//      outlines of steps 1 and 3 are Kasa's algebraic circle fits);
-//   4. the direction is the reflection of the view vector about the sphere's normal at the
-//      highlight: orthographic camera by default (view vector +z), or perspective with known
-//      intrinsics (the view ray through the highlight pixel).
-
+//   2. per image and sphere, the specular highlight: the brightest smoothed pixel inside the
+//      sphere, its blob (connected pixels above half of the peak over the sphere's median) and
+//      the blob's intensity-weighted centroid, with a clear error for a highlight that is too
+//      weak, a large saturated blob (its centre is not measurable), or one at the sphere's rim;
+//   3. the unrefined estimate: per sphere, the light is the view vector reflected about the
+//      sphere's normal at the highlight (orthographic camera by default, view vector +z; or
+//      perspective with known intrinsics, the view ray through the highlight pixel); with several
+//      spheres the light is the normalised mean of their directions (the distant-light
+//      assumption);
+//   4. the refinement (Ceres, mirror_sphere_refinement.h): one problem whose unknowns are every
+//      sphere's circle and one light per image, with residuals from every outline (Huber loss)
+//      and every highlight (Cauchy loss): the highlight each sphere would show under the light,
+//      where its normal bisects the view vector and the direction to the light, minus the one
+//      measured. With one sphere and distant lights each light has exactly its two highlight
+//      residuals, so the highlights cannot check the sphere (the lights just follow the fitted
+//      outline); with two or more spheres each light is seen several times, the highlights
+//      constrain the spheres and the noise of each highlight averages out, and near point lights
+//      (LightModel::kNear) are triangulated: the lamp's position is where the mirror rays of all
+//      spheres meet. The solver's result is used only when it converged; otherwise the
+//      unrefined estimate is kept and the refinement's report says why.
 struct SphereCircle {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // continuous pixel coordinates
   double radius = 0.0;                               // pixels
@@ -103,28 +110,87 @@ LightDirection LightFromHighlight(const SphereCircle& sphere, const Eigen::Vecto
 // Inverse of the orthographic LightFromHighlight: where the highlight of `light` appears.
 Eigen::Vector2d HighlightFromLight(const SphereCircle& sphere, const LightDirection& light);
 
+// What the lights are. IMPLEMENTER CHOICE: distant by default (what an .lp file holds); near
+// point lights need two or more spheres in the images (one sphere sees a near lamp in one
+// direction only, not at a distance) and an orthographic camera. The spheres are taken to rest
+// on the sample plane (their centres one radius above it), the frame being near_light.h's
+// sample frame: pixel units, origin at the image centre, x right, y up, z toward the camera.
+enum class LightModel { kDistant, kNear };
+std::string_view ToString(LightModel model);
+// "distant" or "near"; throws Error for any other name.
+LightModel ParseLightModel(std::string_view name);
+
+// The centre of the sphere of `circle` (in a width x height image) in the sample frame: the
+// sphere rests on the sample plane.
+Eigen::Vector3d SphereCentreInSampleFrame(const SphereCircle& circle, int width, int height);
+// The point of that sphere where its highlight is seen at `highlight` (sample frame).
+Eigen::Vector3d MirrorPointInSampleFrame(const SphereCircle& circle,
+                                         const Eigen::Vector2d& highlight, int width, int height);
+
 struct MirrorSphereOptions {
   HighlightOptions highlight;
   std::optional<CameraIntrinsics> camera;  // unset: orthographic
-  // The Ceres joint refinement (step 3). In a build without Ceres, true is an Error
+  LightModel light_model = LightModel::kDistant;
+  // The Ceres joint refinement (step 4). In a build without Ceres, true is an Error
   // (MirrorSphereRefinementAvailable() in mirror_sphere_refinement.h).
   bool refine = true;
+  // The solver's iteration budget for each of its passes; a solve that does not converge within
+  // it is not used (the unrefined estimate is kept and the report says so).
+  int refine_max_iterations = 100;
   Progress* progress = nullptr;
 };
 
-struct MirrorSphereCalibration {
-  SphereCircle sphere;   // as refined
-  SphereCircle initial;  // before refinement
-  std::vector<Highlight> highlights;
-  std::vector<LightDirection> lights;
-  double edge_rms_pixels = 0.0;  // RMS distance of the edge points from the refined outline
-  int edge_points = 0;
-  bool perspective = false;
+// What became of the refinement.
+struct MirrorSphereRefinementReport {
+  bool requested = false;
+  bool used = false;   // the refined estimate is the result
+  std::string status;  // "not requested", "converged", or why it was not used
+  int iterations = 0;  // over both passes
+  // The highlight localisation noise the refinement weighed the highlights with (pixels), and
+  // whether it was measured from the highlights' own residuals (two or more spheres) or assumed
+  // equal to the outline's RMS (one sphere: the highlights have no redundancy).
+  double highlight_sigma_pixels = 0.0;
+  bool highlight_sigma_measured = false;
 };
 
-// The whole pipeline. `mask` (coverage in [0, 1]) selects the sphere when given; otherwise it is
-// detected. `names` name the images in messages. Every image's highlight is located; if any
-// fails, one Error lists every failing image with its fault.
+// One sphere of the calibration.
+struct MirrorSphereFit {
+  SphereCircle initial;               // from its outline alone
+  SphereCircle refined;               // as refined (the initial circle when not refined)
+  std::vector<Highlight> highlights;  // one per image
+  double edge_rms_pixels = 0.0;       // RMS distance of the edge points from `refined`
+  int edge_points = 0;
+};
+
+struct MirrorSphereCalibration {
+  // The first (leftmost) sphere, as refined and before; its highlights and outline.
+  SphereCircle sphere;
+  SphereCircle initial;
+  std::vector<Highlight> highlights;
+  double edge_rms_pixels = 0.0;
+  int edge_points = 0;
+  bool perspective = false;
+  std::vector<MirrorSphereFit> spheres;  // every sphere, left to right
+  LightModel light_model = LightModel::kDistant;
+  // One per image: the distant light, or for near lights the direction from the sample's centre
+  // (the origin of the sample frame) to the lamp.
+  std::vector<LightDirection> lights;
+  // Near lights, refined: the lamps' positions in the sample frame (pixel units); else empty.
+  std::vector<Eigen::Vector3d> lamp_positions;
+  // One per light when refined: the light's expected RMS angular error in degrees (the square
+  // root of the trace of its direction's covariance, from the Ceres covariance of the solve
+  // with each residual weighed by its noise); empty when not refined.
+  std::vector<double> light_uncertainty_degrees;
+  MirrorSphereRefinementReport refinement;
+};
+
+// Each connected region of the mask (coverage over one half) with at least a few edge points is
+// a sphere: its sub-pixel edge points, the regions ordered by the mean x of their points.
+std::vector<std::vector<Eigen::Vector2d>> MaskSphereOutlines(const Image& mask);
+
+// The whole pipeline. `mask` (coverage in [0, 1]) selects the spheres when given; otherwise one
+// sphere is detected. `names` name the images in messages. Every image's highlight is located on
+// every sphere; if any fails, one Error lists every failing image with its fault.
 MirrorSphereCalibration CalibrateLightsFromMirrorSphere(const std::vector<Image>& images,
                                                         const std::vector<std::string>& names,
                                                         const std::optional<Image>& mask,

@@ -28,15 +28,14 @@ SphereCircle RefineCircle(const SphereCircle&, const std::vector<Eigen::Vector2d
   ThrowWithoutCeres();
 }
 
-void RefineOrthographicSphere(const std::vector<Eigen::Vector2d>&,
-                              const std::vector<Eigen::Vector2d>&, SphereCircle*,
-                              std::vector<Eigen::Vector3d>*) {
+MirrorSphereRefinement RefineMirrorSpheres(const std::vector<MirrorSphereObservations>&, LightModel,
+                                           const MirrorSphereEstimate&, int, int, int) {
   ThrowWithoutCeres();
 }
 
-void RefinePerspectiveSphere(const std::vector<Eigen::Vector3d>&, double,
-                             const std::vector<Eigen::Vector2d>&, const CameraIntrinsics&,
-                             Eigen::Vector3d*, std::vector<Eigen::Vector3d>*) {
+std::string RefinePerspectiveSphere(const std::vector<Eigen::Vector3d>&, double,
+                                    const std::vector<Eigen::Vector2d>&, const CameraIntrinsics&,
+                                    int, Eigen::Vector3d*, std::vector<Eigen::Vector3d>*) {
   ThrowWithoutCeres();
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
 #include "core/random.h"
@@ -24,33 +25,74 @@ void AddNoise(Image& image, double sigma, std::uint64_t seed) {
 
 }  // namespace
 
-MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
-                                      const MirrorSphereRenderOptions& options) {
-  if (lights.empty()) throw Error("no lights to render");
+namespace {
+
+// Where a sub-sample sees a sphere: the reflected direction (photomat frame) and the point of the
+// sphere (sample frame; orthographic camera only).
+struct MirrorSample {
+  Eigen::Vector3d reflected;
+  Eigen::Vector3d point;
+};
+
+std::optional<MirrorSample> OrthographicSample(const MirrorSphereRenderOptions& options,
+                                               const Eigen::Vector2d& p) {
+  std::vector<SphereCircle> spheres = {options.sphere};
+  spheres.insert(spheres.end(), options.more_spheres.begin(), options.more_spheres.end());
+  for (const SphereCircle& sphere : spheres) {
+    const Eigen::Vector2d d = (p - sphere.centre) / sphere.radius;
+    if (d.squaredNorm() >= 1.0) continue;
+    const Eigen::Vector3d n(d.x(), -d.y(), std::sqrt(1.0 - d.squaredNorm()));
+    const Eigen::Vector3d centre(sphere.centre.x() - options.width / 2.0,
+                                 options.height / 2.0 - sphere.centre.y(), sphere.radius);
+    return MirrorSample{2.0 * n.z() * n - Eigen::Vector3d::UnitZ(), centre + sphere.radius * n};
+  }
+  return std::nullopt;
+}
+
+std::optional<MirrorSample> PerspectiveSample(const MirrorSphereRenderOptions& options,
+                                              const Eigen::Vector2d& p) {
+  const CameraIntrinsics& k = *options.camera;
+  const Eigen::Vector3d c = options.sphere_centre_camera;
+  const Eigen::Vector3d u =
+      Eigen::Vector3d((p.x() - 0.5 - k.cx) / k.fx, (p.y() - 0.5 - k.cy) / k.fy, 1.0).normalized();
+  const double uc = u.dot(c);
+  const double discriminant = uc * uc - c.squaredNorm() + 1.0;
+  if (discriminant <= 0.0) return std::nullopt;
+  const Eigen::Vector3d n = ((uc - std::sqrt(discriminant)) * u - c).normalized();
+  const Eigen::Vector3d r = 2.0 * n.dot(-u) * n + u;  // camera frame
+  return MirrorSample{Eigen::Vector3d(r.x(), -r.y(), -r.z()), Eigen::Vector3d::Zero()};
+}
+
+void Blur(Image& image, double sigma) {
+  if (sigma <= 0.0) return;
+  for (int c = 0; c < image.channels(); ++c) {
+    cv::Mat plane(image.height(), image.width(), CV_32F);
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x < image.width(); ++x) plane.at<float>(y, x) = image.at(x, y, c);
+    }
+    cv::GaussianBlur(plane, plane, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x < image.width(); ++x) image.at(x, y, c) = plane.at<float>(y, x);
+    }
+  }
+}
+
+// The render of `count` images; `light_towards(i, point)` is the direction of image i's light
+// seen from a point of a sphere.
+template <typename LightTowards>
+MirrorSphereRender RenderSpheres(std::size_t count, const MirrorSphereRenderOptions& options,
+                                 const LightTowards& light_towards) {
   if (options.width < 8 || options.height < 8 || options.supersampling < 1 ||
       !(options.sphere.radius > 1.0)) {
     throw Error("mirror sphere render: bad size, radius or supersampling");
   }
+  if (options.camera && !options.more_spheres.empty()) {
+    throw Error("mirror sphere render: more spheres need the orthographic camera");
+  }
   const int w = options.width, h = options.height, s = options.supersampling;
   const double sigma = options.lamp_sigma_degrees * kPi / 180.0;
-  // Per sub-sample: the reflected direction (photomat frame) where the sub-sample sees the sphere.
-  const auto reflected_at = [&](const Eigen::Vector2d& p) -> std::optional<Eigen::Vector3d> {
-    if (!options.camera) {
-      const Eigen::Vector2d d = (p - options.sphere.centre) / options.sphere.radius;
-      if (d.squaredNorm() >= 1.0) return std::nullopt;
-      const Eigen::Vector3d n(d.x(), -d.y(), std::sqrt(1.0 - d.squaredNorm()));
-      return 2.0 * n.z() * n - Eigen::Vector3d::UnitZ();
-    }
-    const CameraIntrinsics& k = *options.camera;
-    const Eigen::Vector3d c = options.sphere_centre_camera;
-    const Eigen::Vector3d u =
-        Eigen::Vector3d((p.x() - 0.5 - k.cx) / k.fx, (p.y() - 0.5 - k.cy) / k.fy, 1.0).normalized();
-    const double uc = u.dot(c);
-    const double discriminant = uc * uc - c.squaredNorm() + 1.0;
-    if (discriminant <= 0.0) return std::nullopt;
-    const Eigen::Vector3d n = ((uc - std::sqrt(discriminant)) * u - c).normalized();
-    const Eigen::Vector3d r = 2.0 * n.dot(-u) * n + u;  // camera frame
-    return Eigen::Vector3d(r.x(), -r.y(), -r.z());
+  const auto sample_at = [&](const Eigen::Vector2d& p) {
+    return options.camera ? PerspectiveSample(options, p) : OrthographicSample(options, p);
   };
   MirrorSphereRender render;
   render.coverage = Image(w, h, std::vector<std::string>{"Y"});
@@ -59,40 +101,60 @@ MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
       int inside = 0;
       for (int sy = 0; sy < s; ++sy) {
         for (int sx = 0; sx < s; ++sx) {
-          if (reflected_at(Eigen::Vector2d(x + (sx + 0.5) / s, y + (sy + 0.5) / s))) ++inside;
+          if (sample_at(Eigen::Vector2d(x + (sx + 0.5) / s, y + (sy + 0.5) / s))) ++inside;
         }
       }
       render.coverage.at(x, y, 0) = static_cast<float>(inside) / static_cast<float>(s * s);
     }
   }
-  render.images.resize(lights.size());
-  tbb::parallel_for(std::size_t{0}, lights.size(), [&](std::size_t i) {
-    const Eigen::Vector3d l = lights[i].vector();
+  Blur(render.coverage, options.blur_sigma);
+  render.images.resize(count);
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
     Image image(w, h, std::vector<std::string>{"R", "G", "B"});
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         double sum = 0.0;
         for (int sy = 0; sy < s; ++sy) {
           for (int sx = 0; sx < s; ++sx) {
-            const auto reflected =
-                reflected_at(Eigen::Vector2d(x + (sx + 0.5) / s, y + (sy + 0.5) / s));
-            if (!reflected) {
+            const auto sample = sample_at(Eigen::Vector2d(x + (sx + 0.5) / s, y + (sy + 0.5) / s));
+            if (!sample) {
               sum += options.background;
               continue;
             }
-            const double angle = std::atan2(reflected->cross(l).norm(), reflected->dot(l));
+            const Eigen::Vector3d l = light_towards(i, sample->point);
+            const Eigen::Vector3d& reflected = sample->reflected;
+            const double angle = std::atan2(reflected.cross(l).norm(), reflected.dot(l));
             sum += options.lamp_peak * std::exp(-angle * angle / (2 * sigma * sigma)) +
-                   options.environment * (0.6 + 0.4 * reflected->y());
+                   options.environment * (0.6 + 0.4 * reflected.y());
           }
         }
         const auto value = static_cast<float>(sum / (s * s));
         for (int c = 0; c < 3; ++c) image.at(x, y, c) = value;
       }
     }
+    Blur(image, options.blur_sigma);
     AddNoise(image, options.noise_sigma, options.noise_seed * 1000003ULL + i);
     render.images[i] = std::move(image);
   });
   return render;
+}
+
+}  // namespace
+
+MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
+                                      const MirrorSphereRenderOptions& options) {
+  if (lights.empty()) throw Error("no lights to render");
+  return RenderSpheres(lights.size(), options,
+                       [&](std::size_t i, const Eigen::Vector3d&) { return lights[i].vector(); });
+}
+
+MirrorSphereRender RenderMirrorSpheresUnderLamps(const std::vector<Eigen::Vector3d>& lamps,
+                                                 const MirrorSphereRenderOptions& options) {
+  if (lamps.empty()) throw Error("no lamps to render");
+  if (options.camera) throw Error("mirror sphere render: near lamps need the orthographic camera");
+  return RenderSpheres(lamps.size(), options, [&](std::size_t i, const Eigen::Vector3d& point) {
+    return (lamps[i] - point).normalized().eval();
+  });
 }
 
 MirrorSphereRenderOptions SmallSphereRenderOptions() {
@@ -102,6 +164,29 @@ MirrorSphereRenderOptions SmallSphereRenderOptions() {
   options.sphere = {Eigen::Vector2d(97.3, 76.6), 60.0};
   options.supersampling = 3;
   return options;
+}
+
+MirrorSphereRenderOptions TwoSphereRenderOptions() {
+  MirrorSphereRenderOptions options;
+  options.width = 320;
+  options.height = 240;
+  options.sphere = {Eigen::Vector2d(70.3, 150.6), 40.0};
+  options.more_spheres = {{Eigen::Vector2d(248.7, 96.2), 41.5}};
+  options.supersampling = 3;
+  options.lamp_sigma_degrees = 2.0;
+  options.blur_sigma = 1.0;
+  options.noise_sigma = 0.01;
+  options.noise_seed = 17;
+  return options;
+}
+
+std::vector<Eigen::Vector3d> NearLampRing(int count, double distance) {
+  std::vector<Eigen::Vector3d> lamps;
+  for (int i = 0; i < count; ++i) {
+    const double slant = 15.0 + 40.0 * (i % 4) / 3.0, tilt = 360.0 * i / count + 7.0;
+    lamps.push_back(distance * LightDirection::FromSlantTilt(slant, tilt).vector());
+  }
+  return lamps;
 }
 
 std::vector<std::string> SphereImageNames(std::size_t count) {

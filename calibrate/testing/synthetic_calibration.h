@@ -35,6 +35,11 @@ struct MirrorSphereRenderOptions {
   // camera frame (OpenCV: x right, y down, z forward) and `sphere` is ignored.
   std::optional<CameraIntrinsics> camera;
   Eigen::Vector3d sphere_centre_camera = Eigen::Vector3d(0.0, 0.0, 10.0);
+  // More spheres in the same images beside `sphere` (orthographic camera only).
+  std::vector<SphereCircle> more_spheres;
+  // The lens's blur: a Gaussian of this standard deviation (pixels) over the images and the
+  // mask, before the noise.
+  double blur_sigma = 0.0;
 };
 
 struct MirrorSphereRender {
@@ -45,9 +50,23 @@ struct MirrorSphereRender {
 MirrorSphereRender RenderMirrorSphere(const std::vector<LightDirection>& lights,
                                       const MirrorSphereRenderOptions& options = {});
 
+// The same spheres (orthographic camera) under near point lamps at `lamps` (the sample frame of
+// near_light.h, pixel units): each sphere rests on the sample plane (mirror_sphere.h,
+// LightModel), and each of its points mirrors the lamp in the direction from that point.
+MirrorSphereRender RenderMirrorSpheresUnderLamps(const std::vector<Eigen::Vector3d>& lamps,
+                                                 const MirrorSphereRenderOptions& options);
+
 // A small render (200 x 150, a sphere of radius 60 px, 3 x 3 supersampling): plenty for
 // 0.1-degree accuracy, and fast.
 MirrorSphereRenderOptions SmallSphereRenderOptions();
+// Two spheres on the sample plane, left and right of a 320 x 240 image (radii 40 and 41.5 px),
+// with the flaws of a real capture: a blurred lens (the outline and the highlights, Gaussian
+// 1 px), sensor noise (0.01 of full scale, which moves each highlight's centroid) and lamps of
+// finite size (2 degrees).
+MirrorSphereRenderOptions TwoSphereRenderOptions();
+// `count` lamps `distance` px from the sample's centre (sample frame), slants 15 to 55 degrees
+// all around: for two spheres in TwoSphereRenderOptions about two image widths away.
+std::vector<Eigen::Vector3d> NearLampRing(int count = 16, double distance = 600.0);
 // "sphere_0.png", "sphere_1.png", ...: the names a calibration gives its images in messages.
 std::vector<std::string> SphereImageNames(std::size_t count);
 // The angles between the lights of two lists of the same length, in degrees.
