@@ -44,6 +44,16 @@ std::pair<int, int> ParseSize(const std::string& text) {
   return {static_cast<int>(*w), static_cast<int>(*h)};
 }
 
+std::pair<double, double> ParseRange(std::string_view option, const std::string& text) {
+  const auto comma = text.find(',');
+  const auto low = ParseNumber(text.substr(0, comma));
+  const auto high = comma == std::string::npos ? low : ParseNumber(text.substr(comma + 1));
+  if (!low || !high) {
+    throw Error(fmt::format("{} \"{}\": expected MIN,MAX or one number", option, text));
+  }
+  return {*low, *high};
+}
+
 LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options) {
   TerminalProgressBar bar;
   LoadOptions with_progress = options;

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "capture/io/load_photometric_set.h"
@@ -22,6 +24,8 @@ LightDirection ParseSlantTilt(const std::string& text);
 std::vector<LightDirection> ParseSweep(const std::string& text);
 // "WxH".
 std::pair<int, int> ParseSize(const std::string& text);
+// "MIN,MAX" or one value (MIN = MAX) of the option `option`; throws Error naming it.
+std::pair<double, double> ParseRange(std::string_view option, const std::string& text);
 
 // Loads a set with a progress bar and warns (stderr) about clipped pixels.
 LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options);

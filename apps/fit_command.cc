@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <numeric>
 #include <optional>
 
@@ -26,6 +27,7 @@ void AddFitCommand(CLI::App& app) {
     bool robust = false;
     std::string loss = "cauchy";
     std::string exr_compression{ToString(kDefaultExrCompression)};
+    PbrFitOptions pbr;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "fit");
@@ -35,8 +37,9 @@ void AddFitCommand(CLI::App& app) {
       ->required();
   command
       ->add_option("--method", options->methods,
-                   "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), a "
-                   "comma-separated list, or all")
+                   "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), hsh4, "
+                   "hsh9, hsh16, pbr (microfacet maps; implies --robust), a comma-separated list, "
+                   "or all (the first six)")
       ->capture_default_str();
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_flag("--ignore-intensities", options->raw_intensities,
@@ -49,9 +52,15 @@ void AddFitCommand(CLI::App& app) {
                     "(robust photometric stereo; PTM and Eigen-k share its outlier weights)");
   command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
       ->capture_default_str();
+  AddPbrOptions(*command, options->pbr);
   AddExrCompressionOption(*command, options->exr_compression);
   command->callback([options] {
     const std::vector<Method> methods = ParseMethodList(options->methods);
+    // pbr starts from the robust photometric stereo, and shares its measured masks.
+    if (std::any_of(methods.begin(), methods.end(),
+                    [](const Method& m) { return m.kind == Method::Kind::kPbr; })) {
+      options->robust = true;
+    }
     const ExrCompression compression = ParseExrCompression(options->exr_compression);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
@@ -65,12 +74,13 @@ void AddFitCommand(CLI::App& app) {
     // Robust: one robust fit, whose weights every method shares.
     std::optional<Observations> observations;
     std::optional<RobustFit> robust;
+    TerminalProgressBar bar;  // the robust fit's, and the pbr fit's later: outlives both
     if (options->robust) {
       observations.emplace(loaded.set);
       std::vector<int> all(loaded.set.size());
       std::iota(all.begin(), all.end(), 0);
       RobustFitOptions robust_options = RobustOptionsFromCommandLine(options->loss, input.measured);
-      TerminalProgressBar bar;
+      robust_options.pbr = options->pbr;
       robust_options.progress = &bar;
       robust.emplace(*observations, loaded.set.lights(), all, robust_options, loaded.set.source());
       fmt::print("{}\n", DescribeRobustFit(robust->summary()));

@@ -14,6 +14,8 @@ void AddGenerateCommand(CLI::App& app) {
     std::string size = "128x128";
     std::string pattern = "bricks";
     std::string lights;
+    std::string roughness = "0.35,0.65";
+    std::string f0 = "0.04,0.08";
     GenerateOptions generate;
   };
   auto options = std::make_shared<Options>();
@@ -35,6 +37,15 @@ void AddGenerateCommand(CLI::App& app) {
       ->capture_default_str();
   command->add_option("--shininess", options->generate.render.shininess, "Blinn-Phong exponent")
       ->capture_default_str();
+  command->add_flag("--ggx", options->generate.render.microfacet,
+                    "GGX microfacet material (the model `fit --method pbr` fits): base colour = "
+                    "the albedo, roughness and F0 maps from the ranges below");
+  command
+      ->add_option("--roughness", options->roughness,
+                   "GGX perceptual roughness range MIN,MAX (alpha = roughness^2)")
+      ->capture_default_str();
+  command->add_option("--f0", options->f0, "GGX Fresnel reflectance F0 range MIN,MAX")
+      ->capture_default_str();
   command
       ->add_option("--noise", options->generate.render.noise_sigma,
                    "Gaussian noise sigma, in units of full scale")
@@ -55,6 +66,9 @@ void AddGenerateCommand(CLI::App& app) {
                               options->pattern));
     }
     generate.material.pattern = *pattern;
+    std::tie(generate.material.roughness_min, generate.material.roughness_max) =
+        ParseRange("--roughness", options->roughness);
+    std::tie(generate.material.f0_min, generate.material.f0_max) = ParseRange("--f0", options->f0);
     generate.render.noise_seed = generate.material.seed;
     if (!options->lights.empty()) generate.lights = options->lights;
     const int images = WriteSyntheticSet(options->out, generate);

@@ -27,6 +27,32 @@ RobustFitOptions RobustOptionsFromCommandLine(const std::string& loss,
   return options;
 }
 
+void AddPbrOptions(CLI::App& command, PbrFitOptions& options) {
+  command
+      .add_option("--pbr-start-roughness", options.start_roughness,
+                  "pbr: roughness every pixel starts from")
+      ->capture_default_str();
+  command
+      .add_option("--pbr-min-roughness", options.min_roughness,
+                  "pbr: lower bound of the roughness (the GGX peak grows as 1/roughness^4)")
+      ->capture_default_str();
+  command
+      .add_option("--pbr-loss-scale", options.loss_scale,
+                  "pbr: Cauchy loss scale, as a fraction of the pixel's brightness (shadows and "
+                  "clipped samples lose their pull beyond it)")
+      ->capture_default_str();
+  command
+      .add_option("--pbr-prior-weight", options.prior_weight,
+                  "pbr: regularise the pixels whose lights never sample the specular lobe: "
+                  "roughness and F0 pulled towards the priors with this weight (0: off)")
+      ->capture_default_str();
+  command.add_option("--pbr-prior-roughness", options.prior_roughness, "pbr: roughness prior")
+      ->capture_default_str();
+  command.add_option("--pbr-prior-f0", options.prior_f0, "pbr: F0 prior")->capture_default_str();
+  command.add_option("--pbr-iterations", options.max_iterations, "pbr: Ceres iterations per pixel")
+      ->capture_default_str();
+}
+
 std::string DescribeRobustFit(const RobustFitSummary& summary) {
   const auto share = [&](std::size_t count) {
     return summary.observations

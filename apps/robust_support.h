@@ -1,5 +1,6 @@
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -22,6 +23,9 @@ RobustInput LoadSetForRobustFit(const std::filesystem::path& input, const LoadOp
 // RobustFitOptions from the command line's --loss (huber, cauchy, tukey); `measured` is not owned.
 RobustFitOptions RobustOptionsFromCommandLine(const std::string& loss,
                                               const std::vector<Mask>& measured);
+
+// The pbr fit's options (--pbr-...), for `fit` and `evaluate`.
+void AddPbrOptions(CLI::App& command, PbrFitOptions& options);
 
 // One line on what the weights rejected.
 std::string DescribeRobustFit(const RobustFitSummary& summary);

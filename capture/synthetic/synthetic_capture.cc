@@ -11,6 +11,7 @@
 #include "core/enum_names.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/microfacet_brdf.h"
 #include "core/random.h"
 
 namespace photomat {
@@ -232,6 +233,34 @@ constexpr std::array<NamedValue<SurfacePattern>, 3> kPatternNames = {
      {SurfacePattern::kGrooves, "grooves"},
      {SurfacePattern::kBricks, "bricks"}}};
 
+// The GGX maps: smooth periodic fields over [min, max], from a stream of their own so that the
+// height and albedo of a seed stay what they were before these maps existed.
+void AddMicrofacetMaps(const SyntheticMaterialOptions& options, SyntheticMaterial& material) {
+  if (!(options.roughness_min >= 0.0 && options.roughness_min <= options.roughness_max &&
+        options.roughness_max <= 1.0)) {
+    throw Error("the roughness range must satisfy 0 <= min <= max <= 1");
+  }
+  if (!(options.f0_min >= 0.0 && options.f0_min <= options.f0_max && options.f0_max <= 1.0)) {
+    throw Error("the F0 range must satisfy 0 <= min <= max <= 1");
+  }
+  Random random(options.seed * 1000003ULL + 0x9e37);
+  const int w = options.width, h = options.height;
+  const PeriodicNoise roughness_noise(random, w, h, 8, 3);
+  const PeriodicNoise f0_noise(random, w, h, 8, 3);
+  material.roughness = Image(w, h, std::vector<std::string>{"roughness"});
+  material.f0 = Image(w, h, std::vector<std::string>{"f0"});
+  for (int row = 0; row < h; ++row) {
+    for (int col = 0; col < w; ++col) {
+      const double u = col + 0.5, v = h - row - 0.5;
+      material.roughness.at(col, row, 0) = static_cast<float>(
+          options.roughness_min +
+          (options.roughness_max - options.roughness_min) * roughness_noise(u, v));
+      material.f0.at(col, row, 0) =
+          static_cast<float>(options.f0_min + (options.f0_max - options.f0_min) * f0_noise(u, v));
+    }
+  }
+}
+
 }  // namespace
 
 std::string_view ToString(SurfacePattern pattern) { return NameOf(pattern, kPatternNames); }
@@ -254,7 +283,8 @@ SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options)
   Image height(w, h, std::vector<std::string>{"height"});
   Image gradient(w, h, 2);
   SyntheticMaterial material{Image(w, h, 1), Image(w, h, std::vector<std::string>{"R", "G", "B"}),
-                             Image(w, h, std::vector<std::string>{"R", "G", "B"})};
+                             Image(w, h, std::vector<std::string>{"R", "G", "B"}),
+                             Image(), Image()};  // roughness and F0: AddMicrofacetMaps
   // Gradients by central differences of the smooth pattern, 1e-3 pixel apart: the truth is the
   // pattern's own slope at the pixel centre, not a finite difference between pixels.
   constexpr double kDelta = 1e-3;
@@ -283,6 +313,7 @@ SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options)
     for (int c = 0; c < 3; ++c) material.normals.pixel(p)[c] = static_cast<float>(n[c]);
   }
   material.height = std::move(height);
+  AddMicrofacetMaps(options, material);
   return material;
 }
 
@@ -290,6 +321,9 @@ PhotometricSet RenderSyntheticCapture(const SyntheticMaterial& material,
                                       const std::vector<LightDirection>& lights,
                                       const SyntheticRenderOptions& options) {
   if (lights.empty()) throw Error("no lights to render");
+  if (options.microfacet && options.specular > 0.0) {
+    throw Error("a synthetic capture has either Blinn-Phong or GGX highlights, not both");
+  }
   const int w = material.normals.width(), h = material.normals.height();
   float max_height = -INFINITY;
   for (float v : material.height.values()) max_height = std::max(max_height, v);
@@ -310,6 +344,16 @@ PhotometricSet RenderSyntheticCapture(const SyntheticMaterial& material,
         if (options.shadows && !lit) shading = 0.0;
         if (options.specular > 0.0 && lit) {
           highlight = options.specular * std::pow(std::max(0.0, n.dot(half)), options.shininess);
+        }
+        if (options.microfacet) {
+          // Attached shadows are in the BRDF (0 for n.l <= 0); cast shadows as above.
+          const MicrofacetResponse<double> response =
+              lit || !options.shadows ? MicrofacetRadiance<double>(
+                                            n.data(), l.data(), material.roughness.at(col, row, 0),
+                                            material.f0.at(col, row, 0))
+                                      : MicrofacetResponse<double>{0.0, 0.0};
+          shading = response.diffuse;
+          highlight = response.specular;
         }
         for (int c = 0; c < 3; ++c) {
           image.at(col, row, c) =
@@ -338,6 +382,8 @@ void WriteSyntheticCapture(const fs::path& folder, const SyntheticMaterial& mate
   WriteImage(folder / "gt_normals.exr", material.normals);
   WriteImage(folder / "gt_albedo.exr", material.albedo);
   WriteImage(folder / "gt_height.exr", material.height);
+  WriteImage(folder / "gt_roughness.exr", material.roughness);
+  WriteImage(folder / "gt_f0.exr", material.f0);
   manifest.ground_truth_normals = "gt_normals.exr";
   manifest.ground_truth_albedo = "gt_albedo.exr";
   manifest.ground_truth_height = "gt_height.exr";

@@ -35,13 +35,21 @@ struct SyntheticMaterialOptions {
   // shadows.
   double max_slope_degrees = 25.0;
   std::uint64_t seed = 1;
+  // The GGX maps (SyntheticMaterial::roughness, ::f0): smooth periodic fields spanning
+  // [min, max], drawn from their own stream of `seed` (the height and albedo do not change).
+  double roughness_min = 0.35;
+  double roughness_max = 0.65;
+  double f0_min = 0.04;
+  double f0_max = 0.08;
 };
 
 // The truth, sampled at pixel centres; periodic in x and y (the sample tiles seamlessly).
 struct SyntheticMaterial {
-  Image height;   // 1 channel "height", in pixel units (x right, y up)
-  Image normals;  // 3 channels "R","G","B" = unit normal x, y, z (as DiLiGenT's gt_normals.exr)
-  Image albedo;   // 3 channels linear RGB in [0.05, 0.9]
+  Image height;     // 1 channel "height", in pixel units (x right, y up)
+  Image normals;    // 3 channels "R","G","B" = unit normal x, y, z (as DiLiGenT's gt_normals.exr)
+  Image albedo;     // 3 channels linear RGB in [0.05, 0.9]; the base colour of the GGX material
+  Image roughness;  // 1 channel "roughness": perceptual roughness (GGX alpha = roughness^2)
+  Image f0;         // 1 channel "f0": grey Fresnel reflectance at normal incidence
 };
 
 SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options);
@@ -53,6 +61,9 @@ struct SyntheticRenderOptions {
   bool shadows = false;
   // Blinn-Phong specular coefficient k_s (white highlights); 0 is Lambertian.
   double specular = 0.0;
+  // The GGX material instead (core/microfacet_brdf.h, the model `pbr` fits): base colour =
+  // albedo, the material's roughness and F0 maps. Excludes `specular`.
+  bool microfacet = false;
   double shininess = 40.0;
   // Standard deviation of additive Gaussian noise, in units of full scale (1.0).
   double noise_sigma = 0.0;
@@ -65,7 +76,8 @@ PhotometricSet RenderSyntheticCapture(const SyntheticMaterial& material,
                                       const SyntheticRenderOptions& options = {});
 
 // Writes the set (images, manifest.json) and the truth (gt_normals.exr, gt_albedo.exr,
-// gt_height.exr, referenced from the manifest) into `folder`.
+// gt_height.exr, referenced from the manifest; gt_roughness.exr and gt_f0.exr beside them) into
+// `folder`.
 void WriteSyntheticCapture(const std::filesystem::path& folder, const SyntheticMaterial& material,
                            const PhotometricSet& set, const SaveSetOptions& options = {});
 

@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "capture/io/load_photometric_set.h"
 #include "core/error.h"
+#include "core/microfacet_brdf.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {
@@ -135,6 +137,55 @@ TEST(SyntheticCaptureTest, SpecularAddsWhiteHighlightsAndNoiseIsSeeded) {
   EXPECT_NEAR(std::sqrt(sum_sq / a.image(0).values().size()), 0.01, 0.001);
 }
 
+TEST(SyntheticCaptureTest, GgxImagesAreTheMicrofacetBrdfOfTheMaterialMaps) {
+  const SyntheticMaterial m = Material(SurfacePattern::kBumps);
+  double lowest = 1.0, highest = 0.0;
+  for (float r : m.roughness.values()) {
+    lowest = std::min<double>(lowest, r);
+    highest = std::max<double>(highest, r);
+  }
+  EXPECT_GE(lowest, 0.35);
+  EXPECT_LE(highest, 0.65);
+  EXPECT_GT(highest - lowest, 0.1);  // a map, not a constant
+  const std::vector<LightDirection> lights = {LightDirection::FromSlantTilt(0, 0),
+                                              LightDirection::FromSlantTilt(40, 120)};
+  SyntheticRenderOptions ggx;
+  ggx.microfacet = true;
+  const PhotometricSet set = RenderSyntheticCapture(m, lights, ggx);
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Vector3d l = lights[i].vector();
+    for (std::size_t p : {std::size_t{0}, std::size_t{777}, std::size_t{2000}}) {
+      const Eigen::Vector3d n(m.normals.pixel(p)[0], m.normals.pixel(p)[1], m.normals.pixel(p)[2]);
+      const MicrofacetResponse<double> r =
+          MicrofacetRadiance<double>(n.data(), l.data(), m.roughness.pixel(p)[0], m.f0.pixel(p)[0]);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(set.image(i).pixel(p)[c], r.diffuse * m.albedo.pixel(p)[c] + r.specular, 1e-6);
+      }
+    }
+  }
+  // F0 = 0 leaves Schlick's (1 - v.h)^5 alone (4e-5 at slant 60, the grid's lowest), which the
+  // GGX peak multiplies where a normal faces the half vector.
+  SyntheticMaterialOptions matte;
+  matte.width = 32;
+  matte.height = 32;
+  matte.f0_min = matte.f0_max = 0.0;
+  const SyntheticMaterial d = MakeSyntheticMaterial(matte);
+  const PhotometricSet lambert = RenderSyntheticCapture(d, ThesisLightGrid());
+  const PhotometricSet diffuse_ggx = RenderSyntheticCapture(d, ThesisLightGrid(), ggx);
+  double worst = 0.0;
+  for (int i = 0; i < lambert.size(); ++i) {
+    for (std::size_t v = 0; v < lambert.image(i).values().size(); ++v) {
+      worst = std::max<double>(
+          worst, std::abs(diffuse_ggx.image(i).values()[v] - lambert.image(i).values()[v]));
+    }
+  }
+  std::printf("GGX with F0 = 0 against Lambertian: largest difference %.3g\n", worst);
+  EXPECT_LT(worst, 2.4e-4);  // measured 1.59e-4, bound = 1.5 x measured
+  SyntheticRenderOptions both = ggx;
+  both.specular = 0.5;
+  EXPECT_THROW(RenderSyntheticCapture(m, lights, both), Error);
+}
+
 TEST(SyntheticCaptureTest, WrittenCaptureLoadsWithTruth) {
   testing::TempDir dir;
   const SyntheticMaterial m = Material(SurfacePattern::kGrooves);
@@ -154,6 +205,13 @@ TEST(SyntheticCaptureTest, RejectsBadOptions) {
   EXPECT_THROW(MakeSyntheticMaterial(options), Error);
   options.width = 64;
   options.max_slope_degrees = 90;
+  EXPECT_THROW(MakeSyntheticMaterial(options), Error);
+  options.max_slope_degrees = 25;
+  options.roughness_max = 1.5;
+  EXPECT_THROW(MakeSyntheticMaterial(options), Error);
+  options.roughness_max = 0.5;
+  options.f0_min = 0.2;
+  options.f0_max = 0.1;
   EXPECT_THROW(MakeSyntheticMaterial(options), Error);
 }
 

@@ -10,6 +10,7 @@
 #include "core/json_file.h"
 #include "relight/export/gltf_tile.h"
 #include "relight/formats/stack_file.h"
+#include "represent/model/shading.h"
 
 namespace photomat {
 namespace {
@@ -60,6 +61,89 @@ Image ExtraLayers(const Representation& r, const MaterialMaps& maps) {
   return extra;
 }
 
+// The glTF F0 of a dielectric is min(0.04 specularColor, 1) specular (KHR_materials_specular,
+// default IOR 1.5); Blender's Principled "Specular" and Substance's "specular level" s give
+// F0 = 0.08 s.
+constexpr double kGltfDielectricF0 = 0.04;
+constexpr double kSpecularLevelF0 = 0.08;
+
+struct PbrFiles {
+  std::string metallic_roughness;
+  std::string specular;
+  double specular_color_factor = 1.0;
+  nlohmann::json description;
+};
+
+// The microfacet maps beyond normal and base colour, for glTF, Blender and Substance.
+PbrFiles WritePbrMaps(const Representation& r, const Mask& mask, const fs::path& folder,
+                      const ImageWriteOptions& png16) {
+  const Image& maps = r.maps();
+  double largest_f0 = kGltfDielectricF0;
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    if (mask[p]) largest_f0 = std::max(largest_f0, double{maps.pixel(p)[MicrofacetShading::kF0]});
+  }
+  Image roughness(r.width(), r.height(), std::vector<std::string>{"roughness"});
+  Image f0(r.width(), r.height(), std::vector<std::string>{"f0"});
+  Image level(r.width(), r.height(), std::vector<std::string>{"Y"});
+  Image metallic_roughness(r.width(), r.height(), std::vector<std::string>{"R", "G", "B"});
+  Image specular(r.width(), r.height(), std::vector<std::string>{"R", "G", "B"});
+  Image base(r.width(), r.height(), std::vector<std::string>{"R", "G", "B"});
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    if (!mask[p]) continue;
+    const auto m = maps.pixel(p);
+    roughness.pixel(p)[0] = m[MicrofacetShading::kRoughness];
+    f0.pixel(p)[0] = m[MicrofacetShading::kF0];
+    level.pixel(p)[0] = static_cast<float>(m[MicrofacetShading::kF0] / kSpecularLevelF0);
+    // glTF: R unused (occlusion lives in its own texture), G roughness, B metallic (a dielectric).
+    metallic_roughness.pixel(p)[0] = 1.0f;
+    metallic_roughness.pixel(p)[1] = m[MicrofacetShading::kRoughness];
+    for (int c = 0; c < 3; ++c) {
+      specular.pixel(p)[c] = static_cast<float>(m[MicrofacetShading::kF0] / largest_f0);
+    }
+    for (int c = 0; c < 3; ++c) base.pixel(p)[c] = m[MicrofacetShading::kBase + c];
+  }
+  WriteImage(folder / "roughness.exr", roughness);
+  WriteImage(folder / "roughness.png", roughness, png16);
+  WriteImage(folder / "f0.exr", f0);
+  WriteImage(folder / "specular_level.png", level, png16);
+  WriteImage(folder / "metallic_roughness.png", metallic_roughness, png16);
+  ImageWriteOptions srgb16 = png16;
+  srgb16.encoding = ColourSpace::kSrgb;
+  WriteImage(folder / "specular.png", specular, srgb16);
+  WriteImage(folder / "base_color.exr", base);
+  WriteImage(folder / "base_color.png", base, srgb16);
+  PbrFiles files;
+  files.metallic_roughness = "metallic_roughness.png";
+  files.specular = "specular.png";
+  files.specular_color_factor = largest_f0 / kGltfDielectricF0;
+  files.description = {
+      {"model", "diffuse + GGX, Smith height-correlated, Schlick; alpha = roughness^2"},
+      {"base_color",
+       {{"exr", "base_color.exr"},
+        {"png", "base_color.png"},
+        {"encoding", "linear float / 16-bit sRGB"}}},
+      {"roughness",
+       {{"exr", "roughness.exr"},
+        {"png", "roughness.png"},
+        {"encoding", "perceptual roughness, linear"}}},
+      {"f0", {{"exr", "f0.exr"}, {"encoding", "grey Fresnel reflectance at normal incidence"}}},
+      {"specular_level",
+       {{"png", "specular_level.png"},
+        {"encoding",
+         "F0 / 0.08, 16-bit linear (Blender Principled Specular, "
+         "Substance specular level)"}}},
+      {"metallic_roughness",
+       {{"png", "metallic_roughness.png"},
+        {"encoding", "glTF: G roughness, B metallic (0), 16-bit linear"}}},
+      {"specular",
+       {{"png", "specular.png"},
+        {"encoding",
+         "KHR_materials_specular specularColorTexture, 16-bit sRGB: "
+         "grey F0 / (0.04 specularColorFactor)"},
+        {"specular_color_factor", files.specular_color_factor}}}};
+  return files;
+}
+
 }  // namespace
 
 nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
@@ -67,7 +151,7 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
   NullProgress no_progress;
   Progress& report = OrNull(progress, no_progress);
   const Representation& r = stack.representation;
-  report.Start("export", options.gltf ? 7 : 6);
+  report.Start("export", (options.gltf ? 7 : 6) + (r.shading() ? 1 : 0));
   MaterialMapOptions map_options;
   map_options.height = options.height;
   map_options.values = StackValueEncoding(stack.provenance);
@@ -120,6 +204,12 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
         {"max", range.high}}},
       {"stack", "stack.exr"},
   };
+  PbrFiles pbr;
+  if (r.shading()) {
+    pbr = WritePbrMaps(r, maps.mask, folder, png16);
+    description["pbr"] = pbr.description;
+    report.Advance();
+  }
   if (options.gltf) {
     GltfTile tile;
     tile.aspect = static_cast<double>(r.height()) / r.width();
@@ -132,6 +222,9 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
                  png16);
     }
     tile.height_uri = "height.png";
+    tile.metallic_roughness_uri = pbr.metallic_roughness;
+    tile.specular_uri = pbr.specular;
+    tile.specular_color_factor = pbr.specular_color_factor;
     // Height in pixels, one pixel = tile.width / image width scene units.
     const double pixel = tile.width / r.width();
     tile.displacement_scale = (range.high - range.low) * pixel;

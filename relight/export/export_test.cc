@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/atomic_file.h"
+#include "core/colour.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -18,6 +19,7 @@
 #include "relight/formats/stack_file.h"
 #include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
+#include "represent/model/shading.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 
@@ -290,6 +292,82 @@ TEST(ExportTest, PtmFilesExportThroughTheirEncoding) {
   EXPECT_THAT(
       [&] { LoadStackFile(dir / "s.ptm", "hsh9"); },
       ::testing::ThrowsMessage<Error>(HasSubstr("s.ptm: holds a ptm representation, not hsh9")));
+}
+
+// A pbr stack of known maps: the synthetic GGX material's truth.
+Representation TruthPbr(int size) {
+  SyntheticMaterialOptions options;
+  options.pattern = SurfacePattern::kBumps;
+  options.width = options.height = size;
+  options.f0_min = 0.03;
+  options.f0_max = 0.1;
+  const SyntheticMaterial m = MakeSyntheticMaterial(options);
+  Image maps(size, size, MicrofacetShading().MapNames());
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    for (int c = 0; c < 3; ++c) maps.pixel(p)[MicrofacetShading::kBase + c] = m.albedo.pixel(p)[c];
+    maps.pixel(p)[MicrofacetShading::kRoughness] = m.roughness.pixel(p)[0];
+    maps.pixel(p)[MicrofacetShading::kF0] = m.f0.pixel(p)[0];
+    for (int c = 0; c < 3; ++c) {
+      maps.pixel(p)[MicrofacetShading::kNormal + c] = m.normals.pixel(p)[c];
+    }
+  }
+  return Representation("pbr", std::move(maps), std::make_shared<MicrofacetShading>());
+}
+
+TEST(ExportTest, PbrTileCarriesRoughnessAndSpecularThatDecodeToTheMaps) {
+  testing::TempDir dir;
+  const Representation pbr = TruthPbr(32);
+  const nlohmann::json description = ExportMaps(LoadedStack{pbr, {}}, dir.path());
+  ExpectValidGltf(dir / "tile.gltf");
+  const nlohmann::json gltf = ReadJsonFile(dir / "tile.gltf");
+  const auto& material = gltf["materials"][0];
+  EXPECT_EQ(material["pbrMetallicRoughness"]["metallicFactor"], 1.0);
+  EXPECT_EQ(gltf["extensionsUsed"], nlohmann::json::array({"KHR_materials_specular"}));
+  const auto& specular = material["extensions"]["KHR_materials_specular"];
+  const double factor = specular["specularColorFactor"][0];
+  const auto uri = [&](const nlohmann::json& info) {
+    const auto& texture = gltf["textures"][info["index"].get<std::size_t>()];
+    return gltf["images"][texture["source"].get<std::size_t>()]["uri"].get<std::string>();
+  };
+  const std::string mr = uri(material["pbrMetallicRoughness"]["metallicRoughnessTexture"]);
+  const std::string sc = uri(specular["specularColorTexture"]);
+  EXPECT_EQ(mr, "metallic_roughness.png");
+  EXPECT_EQ(sc, "specular.png");
+  // Decode as a glTF viewer does: roughness = G, metallic = B (linear); the dielectric F0 =
+  // min(0.04 specularColorFactor specularColorTexture, 1) specularFactor, the texture sRGB.
+  ImageReadOptions linear;
+  linear.colour_space = ColourSpace::kLinear;
+  const Image mr_image = ReadImage(dir / mr, linear).image;
+  const Image sc_image = ReadImage(dir / sc, linear).image;
+  double worst_roughness = 0.0, worst_f0 = 0.0;
+  for (std::size_t p = 0; p < mr_image.pixel_count(); ++p) {
+    const auto maps = pbr.maps().pixel(p);
+    EXPECT_EQ(mr_image.pixel(p)[2], 0.0f);
+    worst_roughness = std::max<double>(
+        worst_roughness, std::abs(mr_image.pixel(p)[1] - maps[MicrofacetShading::kRoughness]));
+    const double f0 = std::min(0.04 * factor * SrgbToLinear(sc_image.pixel(p)[0]), 1.0) *
+                      specular["specularFactor"].get<double>();
+    worst_f0 = std::max(worst_f0, std::abs(f0 / maps[MicrofacetShading::kF0] - 1.0));
+  }
+  // 16-bit quantisation: roughness within 1/65535; F0 relative within the sRGB code step at
+  // the smallest F0 (measured below 1e-4).
+  EXPECT_LT(worst_roughness, 1.0 / 65535);
+  EXPECT_LT(worst_f0, 1e-3);
+  // The Blender / Substance maps: specular level F0 / 0.08, float roughness and F0.
+  const Image level = ReadImage(dir / "specular_level.png").image;
+  const Image f0 = ReadImage(dir / "f0.exr").image;
+  EXPECT_NEAR(level.pixel(5)[0], f0.pixel(5)[0] / 0.08, 1.0 / 65535);
+  EXPECT_EQ(f0.pixel(5)[0], pbr.maps().pixel(5)[MicrofacetShading::kF0]);
+  EXPECT_EQ(description["pbr"]["specular"]["specular_color_factor"], factor);
+  // The base colour is the albedo map of the tile.
+  const Image albedo = ReadImage(dir / "albedo.png").image;
+  EXPECT_NEAR(albedo.pixel(7)[1], pbr.maps().pixel(7)[MicrofacetShading::kBase + 1], 0.01);
+}
+
+TEST(ExportTest, PbrHasNoPtmOrRtiForm) {
+  const Representation pbr = TruthPbr(8);
+  EXPECT_THAT([&] { PtmFromRepresentation(pbr); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("nonlinear microfacet shading")));
 }
 
 }  // namespace

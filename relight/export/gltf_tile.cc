@@ -94,15 +94,33 @@ void WriteGltfTile(const fs::path& path, const GltfTile& tile) {
        {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}},
       {"normalTexture", {{"index", 1}}},
   };
+  // The next texture's index, its image added.
+  const auto add_texture = [&](const std::string& uri) {
+    images.push_back({{"uri", uri}});
+    textures.push_back({{"sampler", 0}, {"source", images.size() - 1}});
+    return textures.size() - 1;
+  };
   if (!tile.height_uri.empty()) {
-    images.push_back({{"uri", tile.height_uri}});
-    textures.push_back({{"sampler", 0}, {"source", 2}});
     material["extras"] = {{"displacement",
-                           {{"texture", 2},
+                           {{"texture", add_texture(tile.height_uri)},
                             {"scale", tile.displacement_scale},
                             {"offset", tile.displacement_offset}}}};
   }
-  const json document = {
+  json extensions_used = json::array();
+  if (!tile.metallic_roughness_uri.empty()) {
+    json& pbr = material["pbrMetallicRoughness"];
+    pbr["metallicRoughnessTexture"] = {{"index", add_texture(tile.metallic_roughness_uri)}};
+    pbr["metallicFactor"] = 1.0;
+  }
+  if (!tile.specular_uri.empty()) {
+    const double f = tile.specular_color_factor;
+    material["extensions"]["KHR_materials_specular"] = {
+        {"specularFactor", 1.0},
+        {"specularColorTexture", {{"index", add_texture(tile.specular_uri)}}},
+        {"specularColorFactor", {f, f, f}}};
+    extensions_used.push_back("KHR_materials_specular");
+  }
+  json document = {
       {"asset", {{"version", "2.0"}, {"generator", "photomat"}}},
       {"scene", 0},
       {"scenes", {{{"name", tile.name}, {"nodes", {0}}}}},
@@ -130,6 +148,7 @@ void WriteGltfTile(const fs::path& path, const GltfTile& tile) {
       {"bufferViews", buffer_views},
       {"accessors", accessors},
   };
+  if (!extensions_used.empty()) document["extensionsUsed"] = extensions_used;
   WriteTextFileAtomically(path.parent_path() / bin_name, buffer);
   WriteTextFileAtomically(path, document.dump(2) + "\n");
 }

@@ -28,6 +28,17 @@ struct GltfTile {
   std::string height_uri;      // normalised height texture; empty: none
   double displacement_scale = 0.0;
   double displacement_offset = 0.0;
+  // A microfacet fit (pbr): glTF's metallicRoughnessTexture (G = roughness, B = metallic, linear;
+  // metallicFactor = roughnessFactor = 1), and KHR_materials_specular where `specular_uri` is set:
+  // specularColorTexture (grey, sRGB-encoded as the extension requires) times specularColorFactor
+  // = specular_color_factor (grey), specularFactor 1, so that the dielectric F0 = min(0.04
+  // specularColor, 1) (the extension's dielectric_f0 with the default IOR 1.5). IMPLEMENTER
+  // CHOICE: the colour texture rather than specularTexture's alpha, because Blender's importer
+  // (3.4) converts specularColor into its Principled Specular and ignores specularTexture.
+  // Empty: the plain metallic 0, roughness 1 material.
+  std::string metallic_roughness_uri;
+  std::string specular_uri;
+  double specular_color_factor = 1.0;
 };
 
 // Writes `path` (.gltf) and the buffer beside it (same stem, .bin), each atomically. The textures

@@ -390,6 +390,13 @@ PtmFile PtmFromRepresentation(const Representation& representation) {
   const std::string& method = representation.method();
   const MapLayout& layout = representation.layout();
   const bool lrgb = method == "ptm-lrgb";
+  if (representation.shading()) {
+    throw Error(
+        fmt::format("a {} representation is a nonlinear {} shading that a PTM file's "
+                    "polynomials cannot hold: export its maps with `photomat export` "
+                    "(glTF tile, PNG/EXR maps) instead",
+                    method, representation.shading()->kind()));
+  }
   if ((method != "ptm" && !lrgb) || representation.basis().kind() != "ptm" ||
       (lrgb && (layout.output_channels != 3 || !layout.has_gain || layout.basis_per_channel)) ||
       (!lrgb &&

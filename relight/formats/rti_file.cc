@@ -155,6 +155,13 @@ Representation RepresentationFromRti(const RtiFile& rti) {
 
 RtiFile RtiFromRepresentation(const Representation& representation) {
   const MapLayout& layout = representation.layout();
+  if (representation.shading()) {
+    throw Error(
+        fmt::format("a {} representation is a nonlinear {} shading that an .rti file's "
+                    "harmonics cannot hold: export its maps with `photomat export` "
+                    "(glTF tile, PNG/EXR maps) instead",
+                    representation.method(), representation.shading()->kind()));
+  }
   if (representation.basis().kind() != "hsh" || !layout.basis_per_channel || layout.has_gain ||
       (layout.output_channels != 1 && layout.output_channels != 3)) {
     throw Error(fmt::format("a {} representation cannot be stored as an HSH .rti file as it is",

@@ -343,6 +343,15 @@ nlohmann::json ViewerBasisJson(const LightBasis& basis) {
 void ExportViewer(const fs::path& folder, const std::vector<Representation>& representations,
                   const ViewerExportOptions& options) {
   CheckSameSample(representations);
+  for (const Representation& r : representations) {
+    // The viewer evaluates linear bases (exactly or by a coefficient table) in the browser.
+    if (r.shading()) {
+      throw Error(
+          fmt::format("the viewer has no {} shading: leave {} out of the viewer (its "
+                      "maps export with `photomat export`)",
+                      r.shading()->kind(), r.method()));
+    }
+  }
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   WriteFolderAtomically(folder, kViewerManifest, kViewerFormat, [&](const fs::path& temp) {

@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "represent/fitting/robust_fit.h"
 #include "represent/model/hsh.h"
 
 namespace photomat {
@@ -328,6 +329,9 @@ Representation FitObservations(const Observations& observations,
       return FitPtmLrgb(fit);
     case Method::Kind::kHsh:
       return FitHsh(fit, method.hsh_terms);
+    case Method::Kind::kPbr:
+      // A nonlinear fit needs a start: always the robust photometric stereo's (default options).
+      return RobustFit(observations, lights, selected, RobustFitOptions{}, source).Fit(method);
     case Method::Kind::kEigen:
       break;
   }

@@ -364,6 +364,11 @@ Representation RobustFit::Fit(const Method& method) const {
       return FitEigen(method.eigen_k);
     case Method::Kind::kHsh:
       return FitHsh(method.hsh_terms);
+    case Method::Kind::kPbr:
+      return FitPbr(observations_, lights_, selected_, normals_, albedo_, options_.measured,
+                    options_.pbr,
+                    {{"robust", options_.ToJson()}, {"robust_summary", summary_.ToJson()}}, source_,
+                    options_.progress);
   }
   return FitObservations(observations_, lights_, method, selected_, source_);
 }

@@ -13,6 +13,7 @@
 #include "core/photometric_set.h"
 #include "core/progress.h"
 #include "represent/fitting/observations.h"
+#include "represent/fitting/pbr_fit.h"
 #include "represent/model/method.h"
 #include "represent/model/representation.h"
 
@@ -79,7 +80,10 @@ struct RobustFitOptions {
   // calibrate's MeasuredPixelMasks; empty: every pixel of every image. Not owned: the masks must
   // outlive the fit's constructor.
   std::span<const Mask> measured;
+  // Not owned; used by the constructor and by Fit(pbr), so it must outlive both.
   Progress* progress = nullptr;
+  // The `pbr` method's fit, started from this robust fit's normals and albedo.
+  PbrFitOptions pbr;
 
   nlohmann::json ToJson() const;
 };
@@ -117,7 +121,8 @@ class RobustFit {
   // `method` fitted by weighted least squares with the shared weights: gradient (the robust
   // normals, albedo per channel along them), ptm and ptm-lrgb (weighted per-pixel polynomials),
   // eigenK (weighted low-rank approximation by EM imputation). 3i has no robust form (it uses
-  // three images whole) and is fitted as usual. The representation's details record "robust".
+  // three images whole) and is fitted as usual; pbr: the Ceres microfacet fit (pbr_fit.h) from the
+  // robust normals and albedo. The representation's details record "robust".
   Representation Fit(const Method& method) const;
 
  private:

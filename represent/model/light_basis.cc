@@ -65,6 +65,7 @@ std::shared_ptr<const LightBasis> LightBasisFromJson(const JsonReader& json) {
       return std::make_shared<LinearLightBasis>(MatrixFromJson(json["matrix"], 3));
     }
     if (kind == "ptm") return std::make_shared<PtmLightBasis>();
+    if (kind == "direction") return std::make_shared<DirectionLightBasis>();
     if (kind == "hsh") return std::make_shared<HshLightBasis>(json["terms"].Integer());
     if (kind == "interpolated") {
       const Eigen::MatrixXd lights = MatrixFromJson(json["lights"], 3);

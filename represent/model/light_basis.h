@@ -58,6 +58,18 @@ class PtmLightBasis final : public LightBasis {
   nlohmann::json ToJson() const override { return {{"kind", "ptm"}}; }
 };
 
+// c = l, the light direction itself: the input of a nonlinear per-pixel shading
+// (represent/model/shading.h, the `pbr` method). Not LinearInLight: the output is not A l.
+class DirectionLightBasis final : public LightBasis {
+ public:
+  std::string_view kind() const override { return "direction"; }
+  int size() const override { return 3; }
+  Eigen::VectorXd Coefficients(const LightDirection& light) const override {
+    return light.vector();
+  }
+  nlohmann::json ToJson() const override { return {{"kind", "direction"}}; }
+};
+
 // Coefficients known at the fitted lights (Eigen-k's M2 columns), interpolated in between
 // (LightInterpolator, thesis eq. 4.4.16 and its generalisation to irregular sets).
 class InterpolatedLightBasis final : public LightBasis {

@@ -20,6 +20,8 @@ std::string Method::Name() const {
       return "ptm-lrgb";
     case Kind::kHsh:
       return fmt::format("hsh{}", hsh_terms);
+    case Kind::kPbr:
+      return "pbr";
     case Kind::kEigen:
       break;
   }
@@ -36,6 +38,10 @@ int Method::MinimumImages() const {
       return 6;
     case Kind::kHsh:
       return hsh_terms;
+    case Kind::kPbr:
+      // Eight parameters per pixel (base colour 3, roughness, F0, normal 2) from 3 channels
+      // per image; the robust start needs a few more than its 3.
+      return 6;
     case Kind::kEigen:
       break;
   }
@@ -43,7 +49,7 @@ int Method::MinimumImages() const {
 }
 
 Method Method::Parse(std::string_view name) {
-  for (Kind kind : {Kind::kThreeImage, Kind::kGradient, Kind::kPtm, Kind::kPtmLrgb}) {
+  for (Kind kind : {Kind::kThreeImage, Kind::kGradient, Kind::kPtm, Kind::kPtmLrgb, Kind::kPbr}) {
     if (name == Method{kind}.Name()) return {kind};
   }
   if (name.starts_with("eigen")) {
@@ -61,7 +67,7 @@ Method Method::Parse(std::string_view name) {
   }
   throw Error(fmt::format(
       "unknown method \"{}\": expected 3i, gradient, ptm, ptm-lrgb, eigenK (K = 1..64, e.g. "
-      "eigen3, eigen6), hsh4, hsh9 or hsh16, or all",
+      "eigen3, eigen6), hsh4, hsh9, hsh16 or pbr, or all",
       name));
 }
 

@@ -15,6 +15,7 @@ struct Method {
     kPtmLrgb,     // "ptm-lrgb": one luminance polynomial times an RGB chroma (PTM files' LRGB)
     kEigen,       // "eigenK": the first K SVD basis images, "eigen3" and "eigen6" (4.4.5)
     kHsh,         // "hsh4", "hsh9", "hsh16": hemispherical harmonics per colour channel (.rti)
+    kPbr,         // "pbr": diffuse + GGX microfacet maps per pixel (represent/model/shading.h)
   };
   Kind kind = Kind::kGradient;
   int eigen_k = 0;    // for kEigen
@@ -31,7 +32,8 @@ struct Method {
 
 // "all" (AllMethods) or a comma-separated list of names.
 std::vector<Method> ParseMethodList(std::string_view list);
-// 3i, gradient, ptm, ptm-lrgb, eigen3, eigen6: the thesis's five and PTM's LRGB form.
+// 3i, gradient, ptm, ptm-lrgb, eigen3, eigen6: the thesis's five and PTM's LRGB form (not pbr, a
+// nonlinear fit that needs Ceres and takes far longer).
 std::vector<Method> AllMethods();
 
 }  // namespace photomat

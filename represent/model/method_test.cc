@@ -18,6 +18,8 @@ TEST(MethodTest, NamesRoundTrip) {
   }
   EXPECT_EQ(Method::Parse("hsh16").MinimumImages(), 16);
   EXPECT_THROW(Method::Parse("hsh"), Error);
+  EXPECT_EQ(Method::Parse("pbr").kind, Method::Kind::kPbr);
+  EXPECT_EQ(Method::Parse("pbr").Name(), "pbr");
 }
 
 TEST(MethodTest, AllIsTheThesisFiveAndLrgb) {

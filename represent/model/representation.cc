@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/error.h"
@@ -11,10 +12,12 @@
 namespace photomat {
 
 nlohmann::json MapLayout::ToJson() const {
-  return {{"basis_size", basis_size},
-          {"basis_per_channel", basis_per_channel},
-          {"has_gain", has_gain},
-          {"output_channels", output_channels}};
+  nlohmann::json json = {{"basis_size", basis_size},
+                         {"basis_per_channel", basis_per_channel},
+                         {"has_gain", has_gain},
+                         {"output_channels", output_channels}};
+  if (shading_maps > 0) json["shading_maps"] = shading_maps;
+  return json;
 }
 
 std::vector<std::string> OutputChannelNames(int channels) {
@@ -51,14 +54,45 @@ Representation::Representation(std::string method, Image maps, MapLayout layout,
     throw Error(fmt::format("{}: {} maps, but the layout needs {}", method_, maps_.channels(),
                             layout_.MapCount()));
   }
+  if (layout_.shading_maps > 0 && basis_->kind() != "direction") {
+    throw Error(fmt::format("{}: a shading takes the light direction, not a \"{}\" basis", method_,
+                            basis_->kind()));
+  }
   if (basis_->size() != layout_.basis_size) {
     throw Error(fmt::format("{}: the light basis has {} terms, the maps {}", method_,
                             basis_->size(), layout_.basis_size));
   }
 }
 
+namespace {
+
+MapLayout ShadingLayout(const PixelShading* shading) {
+  if (!shading) return {};
+  MapLayout layout;
+  layout.basis_size = 3;
+  layout.basis_per_channel = false;
+  layout.output_channels = shading->output_channels();
+  layout.shading_maps = shading->map_count();
+  return layout;
+}
+
+}  // namespace
+
+Representation::Representation(std::string method, Image maps,
+                               std::shared_ptr<const PixelShading> shading, nlohmann::json details)
+    : Representation(std::move(method), std::move(maps), ShadingLayout(shading.get()),
+                     std::make_shared<DirectionLightBasis>(), std::move(details)) {
+  if (!shading) throw Error(fmt::format("{}: no shading", method_));
+  shading_ = std::move(shading);
+}
+
 void Representation::RelightPixel(PixelValues<const float> maps,
                                   const Eigen::VectorXf& coefficients, std::span<float> out) const {
+  if (shading_) {
+    // The basis is the light direction (DirectionLightBasis).
+    shading_->Shade(maps, std::span<const float>(coefficients.data(), 3), out);
+    return;
+  }
   const int per_term = layout_.BasisMapsPerTerm();
   for (int o = 0; o < layout_.output_channels; ++o) {
     const int b = layout_.basis_per_channel ? o : 0;
@@ -71,6 +105,16 @@ void Representation::RelightPixel(PixelValues<const float> maps,
 Image Representation::Relight(const LightDirection& light, const RelightOptions& options) const {
   const Eigen::VectorXf coefficients = basis_->Coefficients(light).cast<float>();
   Image image(maps_.width(), maps_.height(), OutputChannelNames(layout_.output_channels));
+  if (shading_) {
+    tbb::parallel_for(std::size_t{0}, image.pixel_count(), [&](std::size_t p) {
+      std::array<float, 16> out{};
+      RelightPixel(maps_.pixel(p), coefficients, std::span<float>(out.data(), image.channels()));
+      for (int c = 0; c < image.channels(); ++c) {
+        image.pixel(p)[c] = options.clamp_negative ? std::max(out[c], 0.0f) : out[c];
+      }
+    });
+    return image;
+  }
   // Row by row, plane by plane: out_o = gain_o * sum_j c_j B_j,o is an axpy per basis map (the
   // same sums, in the same order, as RelightPixel).
   const int per_term = layout_.BasisMapsPerTerm();
@@ -98,12 +142,17 @@ Image Representation::Relight(const LightDirection& light, const RelightOptions&
 }
 
 Representation Representation::WithMaps(Image maps) const {
+  return WithMapsAndDetails(std::move(maps), details_);
+}
+
+Representation Representation::WithMapsAndDetails(Image maps, nlohmann::json details) const {
   if (maps.channels() != maps_.channels()) {
     throw Error(fmt::format("{}: {} maps given, the representation has {}", method_,
                             maps.channels(), maps_.channels()));
   }
   if (maps.channel_names().empty()) maps.set_channel_names(maps_.channel_names());
-  return Representation(method_, std::move(maps), layout_, basis_, details_);
+  if (shading_) return Representation(method_, std::move(maps), shading_, std::move(details));
+  return Representation(method_, std::move(maps), layout_, basis_, std::move(details));
 }
 
 namespace {
@@ -132,6 +181,15 @@ double CombinedBasis(const Representation& r, PixelValues<const float> maps, int
 }  // namespace
 
 std::optional<Image> EstimateNormals(const Representation& r) {
+  if (const PixelShading* shading = r.shading()) {
+    Image normals = NormalImage(r.width(), r.height());
+    tbb::parallel_for(std::size_t{0}, normals.pixel_count(), [&](std::size_t p) {
+      const auto maps = r.maps().pixel(p);
+      const int n = shading->normal_offset();
+      StoreNormal(normals, p, Eigen::Vector3d(maps[n], maps[n + 1], maps[n + 2]));
+    });
+    return normals;
+  }
   const std::optional<Eigen::MatrixXd> linear = r.basis().LinearInLight();
   const bool ptm = r.basis().kind() == "ptm";
   if (!linear && !ptm) return std::nullopt;

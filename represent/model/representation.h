@@ -11,6 +11,7 @@
 #include "core/image.h"
 #include "core/light_direction.h"
 #include "represent/model/light_basis.h"
+#include "represent/model/shading.h"
 
 namespace photomat {
 
@@ -28,9 +29,13 @@ struct MapLayout {
   bool basis_per_channel = true;  // B_j,o per output channel, or one B_j shared
   bool has_gain = false;          // C gain maps follow the basis maps
   int output_channels = 0;        // C
+  // > 0: a nonlinear per-pixel shading (represent/model/shading.h) of this many maps replaces the
+  // linear sum; the basis then gives the shading its light input (k = 3, the direction).
+  int shading_maps = 0;
 
   int BasisMapsPerTerm() const { return basis_per_channel ? output_channels : 1; }
   int MapCount() const {
+    if (shading_maps > 0) return shading_maps;
     return basis_size * BasisMapsPerTerm() + (has_gain ? output_channels : 0);
   }
   int GainOffset() const { return basis_size * BasisMapsPerTerm(); }
@@ -50,6 +55,10 @@ class Representation {
   // Throws Error if the maps do not have layout.MapCount() channels or the basis size differs.
   Representation(std::string method, Image maps, MapLayout layout,
                  std::shared_ptr<const LightBasis> basis, nlohmann::json details = {});
+  // A nonlinear per-pixel shading (the `pbr` method): the layout follows from it (shading_maps,
+  // its output channels) and the basis is the light direction (DirectionLightBasis).
+  Representation(std::string method, Image maps, std::shared_ptr<const PixelShading> shading,
+                 nlohmann::json details = {});
 
   // "3i", "gradient", "ptm", "ptm-lrgb", "eigen3", ...
   const std::string& method() const { return method_; }
@@ -57,6 +66,9 @@ class Representation {
   const MapLayout& layout() const { return layout_; }
   const LightBasis& basis() const { return *basis_; }
   std::shared_ptr<const LightBasis> shared_basis() const { return basis_; }
+  // The nonlinear shading, or null for the linear methods (every method but `pbr`).
+  const PixelShading* shading() const { return shading_.get(); }
+  std::shared_ptr<const PixelShading> shared_shading() const { return shading_; }
   // Method-specific facts of the fit (singular values, the images 3I used, ...).
   const nlohmann::json& details() const { return details_; }
   int width() const { return maps_.width(); }
@@ -69,8 +81,10 @@ class Representation {
   void RelightPixel(PixelValues<const float> maps, const Eigen::VectorXf& coefficients,
                     std::span<float> out) const;
 
-  // The same method and light basis over other maps of the same layout (a synthesised texture).
+  // The same method and light basis (and shading) over other maps of the same layout (a
+  // synthesised texture), and with other details.
   Representation WithMaps(Image maps) const;
+  Representation WithMapsAndDetails(Image maps, nlohmann::json details) const;
 
  private:
   std::string method_;
@@ -78,6 +92,7 @@ class Representation {
   MapLayout layout_;
   std::shared_ptr<const LightBasis> basis_;
   nlohmann::json details_;
+  std::shared_ptr<const PixelShading> shading_;
 };
 
 // Names of C output channels: "Y" for 1, "R","G","B" for 3, "C0".. otherwise.
@@ -90,8 +105,8 @@ std::vector<std::string> CoefficientMapNames(const std::string& prefix, int term
 
 // Unit normals (3 channels "normal.X/Y/Z") where the method defines them: any representation whose
 // light basis is linear in l (Gradient, 3I: the albedo-scaled normal is sum_j A_j B_j,o, summed
-// over channels) and PTM (the light direction of maximal luminance, Malzbender et al. 2001).
-// nullopt for others (Eigen-k).
+// over channels), PTM (the light direction of maximal luminance, Malzbender et al. 2001) and a
+// shading's normal maps (pbr). nullopt for others (Eigen-k).
 std::optional<Image> EstimateNormals(const Representation& representation);
 
 }  // namespace photomat

@@ -19,6 +19,10 @@ MapLayout LayoutFromJson(const JsonReader& json) {
   layout.basis_per_channel = json["basis_per_channel"].Boolean();
   layout.has_gain = json["has_gain"].Boolean();
   layout.output_channels = json["output_channels"].Integer();
+  if (json.Has("shading_maps")) {
+    layout.shading_maps = json["shading_maps"].Integer();
+    if (layout.shading_maps < 1 || layout.shading_maps > 1024) json.Fail("implausible shading");
+  }
   if (layout.basis_size < 1 || layout.basis_size > 1024 || layout.output_channels < 1 ||
       layout.output_channels > 64) {
     json.Fail("implausible map layout");
@@ -50,11 +54,12 @@ void SaveRepresentation(const fs::path& path, const Representation& representati
       {"channels", maps.channel_names()},
       {"basis", representation.basis().ToJson()},
       {"details", representation.details()},
-      {"capture",
-       {{"lights", lights},
-        {"colour_space", provenance.colour_space},
-        {"source", provenance.source}}},
   };
+  if (const PixelShading* shading = representation.shading()) {
+    description["shading"] = shading->ToJson();
+  }
+  description["capture"] = {
+      {"lights", lights}, {"colour_space", provenance.colour_space}, {"source", provenance.source}};
   ImageWriteOptions options;
   options.exr_compression = compression;
   if (extra_layers.empty()) {
@@ -162,9 +167,21 @@ LoadedStack StackFromDescription(const std::string& text, const Image& stored,
     if (capture.Has("source")) provenance.source = capture["source"].String();
   }
   try {
+    nlohmann::json details = description.value("details", nlohmann::json::object());
+    if (layout.shading_maps > 0) {
+      if (!json.Has("shading")) json["layout"].Fail("shading maps but no \"shading\"");
+      std::shared_ptr<const PixelShading> shading = PixelShadingFromJson(json["shading"]);
+      if (shading->map_count() != layout.shading_maps) {
+        json["shading"].Fail(fmt::format("{} shading needs {} maps, the layout has {}",
+                                         shading->kind(), shading->map_count(),
+                                         layout.shading_maps));
+      }
+      return {Representation(json["method"].String(), std::move(maps), std::move(shading),
+                             std::move(details)),
+              std::move(provenance), std::move(extra_layers)};
+    }
     return {Representation(json["method"].String(), std::move(maps), layout,
-                           LightBasisFromJson(json["basis"]),
-                           description.value("details", nlohmann::json::object())),
+                           LightBasisFromJson(json["basis"]), std::move(details)),
             std::move(provenance), std::move(extra_layers)};
   } catch (const Error& error) {
     throw error.InFile(path);

@@ -18,7 +18,8 @@ namespace photomat {
 //   {"format": "photomat-map-stack", "version": 1, "method": "ptm",
 //    "layout": {...MapLayout}, "channels": [map names in layout order],
 //    "basis": {...LightBasis, everything needed to turn a light into coefficients},
-//    "details": {...}, "capture": {"lights": [[x, y, z], ...], "colour_space": "linear",
+//    "details": {...}, ["shading": {"kind": "microfacet"} for pbr, with layout.shading_maps],
+//    "capture": {"lights": [[x, y, z], ...], "colour_space": "linear",
 //    "source": "..."}}
 inline constexpr const char* kStackAttribute = "photomat:stack";
 inline constexpr const char* kStackFormat = "photomat-map-stack";

@@ -37,6 +37,25 @@ TEST(MapStackTest, EveryMethodRoundTripsExactly) {
   }
 }
 
+TEST(MapStackTest, PbrStackRoundTripsWithItsShading) {
+  testing::TempDir dir;
+  Image maps(3, 2, MicrofacetShading().MapNames());
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    const float values[] = {0.5f, 0.4f, 0.3f, 0.3f + 0.1f * p, 0.05f, 0.1f, 0.0f, 0.995f};
+    for (int c = 0; c < 8; ++c) maps.pixel(p)[c] = values[c];
+  }
+  const Representation pbr("pbr", maps, std::make_shared<MicrofacetShading>(), {{"x", 1}});
+  const auto path = dir / "pbr.exr";
+  SaveRepresentation(path, pbr);
+  const LoadedStack loaded = LoadRepresentation(path);
+  ASSERT_NE(loaded.representation.shading(), nullptr);
+  EXPECT_EQ(loaded.representation.shading()->kind(), "microfacet");
+  const LightDirection light = LightDirection::FromSlantTilt(20, 10);
+  const Image a = pbr.Relight(light), b = loaded.representation.Relight(light);
+  for (std::size_t v = 0; v < a.values().size(); ++v) ASSERT_EQ(a.values()[v], b.values()[v]);
+  EXPECT_GT(a.at(0, 0, 0), 0.0f);
+}
+
 TEST(MapStackTest, ExtraLayersTravelBesideTheMaps) {
   testing::TempDir dir;
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);

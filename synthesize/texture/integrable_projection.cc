@@ -58,8 +58,7 @@ Representation ProjectNormalsToIntegrable(const Representation& representation) 
   nlohmann::json details = representation.details();
   if (!details.is_object()) details = nlohmann::json::object();
   details["integrable_projection"] = true;
-  return Representation(representation.method(), std::move(maps), representation.layout(),
-                        representation.shared_basis(), std::move(details));
+  return representation.WithMapsAndDetails(std::move(maps), std::move(details));
 }
 
 Image HeightFromRepresentation(const Representation& representation) {

@@ -80,12 +80,10 @@ SynthesisPlan PlanSynthesis(const Image& guide, const SynthesisOptions& options,
 
 Representation ApplySourceMap(const Representation& representation, const SourceMap& map,
                               const nlohmann::json& description) {
-  const Representation grown = representation.WithMaps(map.Apply(representation.maps()));
-  nlohmann::json details = grown.details();
+  nlohmann::json details = representation.details();
   if (!details.is_object()) details = nlohmann::json::object();
   details["synthesis"] = description;
-  return Representation(grown.method(), grown.maps(), grown.layout(), grown.shared_basis(),
-                        std::move(details));
+  return representation.WithMapsAndDetails(map.Apply(representation.maps()), std::move(details));
 }
 
 Representation Synthesize(const Representation& representation, const SynthesisOptions& options,

@@ -2,7 +2,7 @@
 
 Imports what photomat wrote into DIR (see run-blender-import-test) with Blender's own importers
 and checks that Blender sees what photomat meant: the glTF tile's textures wired as base colour and
-normal map, per-vertex colours of the carved and reaction-diffusion meshes (glTF and PLY), and the
+normal map (and a pbr tile's roughness, metallic and specular, with their colour spaces and values), per-vertex colours of the carved and reaction-diffusion meshes (glTF and PLY), and the
 solid texture's OpenVDB grids. Any failed check raises, and Blender exits non-zero.
 """
 import json
@@ -81,6 +81,67 @@ def check_tile(path, width, height):
     if normal_image is not None and normal_image.image is not None:
         check(normal_image.image.colorspace_settings.name == "Non-Color",
               "tile.gltf: the normal image is read as non-colour data")
+
+
+def image_channel(image, channel):
+    """One channel of a Blender image's pixels (RGBA floats, as Blender decodes them)."""
+    pixels = numpy.array(image.pixels[:], dtype=numpy.float64).reshape(-1, 4)
+    return pixels[:, channel]
+
+
+def load_data_image(path):
+    image = bpy.data.images.load(path)
+    image.colorspace_settings.name = "Non-Color"
+    return image
+
+
+def check_pbr_tile(folder):
+    """The pbr export: glTF's metallic-roughness texture drives the Principled BSDF's roughness
+    (G) and metallic (B) as non-colour data, KHR_materials_specular its Specular, the base colour
+    is sRGB, and the values are photomat's maps."""
+    fresh_scene()
+    bpy.ops.import_scene.gltf(filepath=os.path.join(folder, "tile.gltf"))
+    meshes = imported_meshes()
+    check(len(meshes) == 1 and meshes[0].active_material is not None, "pbr tile: one material")
+    if not meshes or meshes[0].active_material is None:
+        return
+    nodes = meshes[0].active_material.node_tree.nodes
+    bsdf = next((n for n in nodes if n.type == "BSDF_PRINCIPLED"), None)
+    check(bsdf is not None, "pbr tile: a Principled BSDF")
+    if bsdf is None:
+        return
+    base = linked_from(bsdf.inputs["Base Color"])
+    check(base is not None and base.type == "TEX_IMAGE" and base.image is not None and
+          base.image.colorspace_settings.name == "sRGB", "pbr tile: base colour from an sRGB image")
+    separate = linked_from(bsdf.inputs["Roughness"])
+    check(separate is not None and separate.type == "SEPARATE_COLOR" and
+          bsdf.inputs["Roughness"].links[0].from_socket.name == "Green",
+          "pbr tile: roughness from the green channel of a texture")
+    check(bsdf.inputs["Metallic"].is_linked and
+          bsdf.inputs["Metallic"].links[0].from_socket.name == "Blue",
+          "pbr tile: metallic from the blue channel")
+    texture = linked_from(separate.inputs[0]) if separate is not None else None
+    check(texture is not None and texture.type == "TEX_IMAGE" and texture.image is not None and
+          texture.image.colorspace_settings.name == "Non-Color",
+          "pbr tile: the metallic-roughness image is non-colour data")
+    if texture is not None and texture.image is not None:
+        roughness = load_data_image(os.path.join(folder, "roughness.png"))
+        # Both images are stored with row 0 at the top: compare texel by texel.
+        difference = numpy.abs(image_channel(texture.image, 1) - image_channel(roughness, 0)).max()
+        check(difference < 1e-3, f"pbr tile: Blender's roughness is photomat's (max diff {difference:.2e})")
+        metallic = image_channel(texture.image, 2).max()
+        check(metallic == 0.0, f"pbr tile: a dielectric, metallic 0 (max {metallic})")
+    specular = linked_from(bsdf.inputs["Specular"])
+    check(specular is not None and specular.type == "TEX_IMAGE" and specular.image is not None and
+          specular.image.colorspace_settings.name == "Non-Color",
+          "pbr tile: KHR_materials_specular arrives as a non-colour Specular texture")
+    if specular is not None and specular.image is not None:
+        # Blender's Principled Specular s gives F0 = 0.08 s: its mean is the fit's mean F0 / 0.08.
+        f0 = load_data_image(os.path.join(folder, "specular_level.png"))
+        expected = image_channel(f0, 0).mean()
+        got = image_channel(specular.image, 0).mean()
+        check(abs(got - expected) < 0.02 * max(expected, 1e-3),
+              f"pbr tile: Blender's Specular mean {got:.4f} is F0 / 0.08 = {expected:.4f}")
 
 
 def colour_values(mesh):
@@ -166,6 +227,8 @@ def main():
             rd_vertices = json.load(f)["vertices"]
         check_coloured_mesh("rd pattern.glb", rd_vertices, lambda: bpy.ops.import_scene.gltf(
             filepath=os.path.join(out, "rd", "pattern.glb")))
+    if "pbr" in parts:
+        check_pbr_tile(os.path.join(out, "ggx-export"))
     if "solid" in parts:
         check_volume(os.path.join(out, "marble.vdb"), expected["vdb_grids"])
     if failures:

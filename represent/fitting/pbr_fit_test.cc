@@ -1,0 +1,251 @@
+#include "represent/fitting/pbr_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "capture/synthetic/synthetic_capture.h"
+#include "core/error.h"
+#include "represent/fitting/robust_fit.h"
+#include "represent/model/normal_error.h"
+#include "represent/model/shading.h"
+
+namespace photomat {
+namespace {
+
+using M = MicrofacetShading;
+
+// A dense dome: `count` lights on a golden-angle spiral, uniform in solid angle up to slant
+// `max_slant`, so that every normal of a 25-degree relief has lights near its mirror direction.
+std::vector<LightDirection> SpiralDome(int count, double max_slant) {
+  std::vector<LightDirection> lights;
+  const double lowest_z = std::cos(max_slant * std::numbers::pi / 180);
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < count; ++i) {
+    const double z = 1.0 - (1.0 - lowest_z) * (i + 0.5) / count;
+    const double r = std::sqrt(1.0 - z * z);
+    lights.push_back(
+        LightDirection::FromVector(r * std::cos(golden * i), r * std::sin(golden * i), z));
+  }
+  return lights;
+}
+
+SyntheticMaterial GgxMaterial(double f0_min, double f0_max, double relief = 25.0) {
+  SyntheticMaterialOptions options;
+  options.max_slope_degrees = relief;
+  options.pattern = SurfacePattern::kBumps;
+  options.width = 24;
+  options.height = 24;
+  options.seed = 5;
+  options.roughness_min = 0.3;
+  options.roughness_max = 0.6;
+  options.f0_min = f0_min;
+  options.f0_max = f0_max;
+  return MakeSyntheticMaterial(options);
+}
+
+PhotometricSet Render(const SyntheticMaterial& material, const std::vector<LightDirection>& lights,
+                      bool microfacet, double noise = 0.0, bool shadows = false) {
+  SyntheticRenderOptions render;
+  render.microfacet = microfacet;
+  render.noise_sigma = noise;
+  render.shadows = shadows;
+  return RenderSyntheticCapture(material, lights, render);
+}
+
+Representation FitPbrSet(const PhotometricSet& set, const PbrFitOptions& pbr = {}) {
+  RobustFitOptions options;
+  options.pbr = pbr;
+  return FitRobust(set, Method::Parse("pbr"), options);
+}
+
+Eigen::Vector3d Normal(const Image& maps, std::size_t p, int offset) {
+  return Eigen::Vector3d(maps.pixel(p)[offset], maps.pixel(p)[offset + 1],
+                         maps.pixel(p)[offset + 2]);
+}
+
+bool LobeSampled(const SyntheticMaterial& m, const std::vector<LightDirection>& lights,
+                 std::size_t p) {
+  const Eigen::Vector3d n = Normal(m.normals, p, 0);
+  for (const LightDirection& l : lights) {
+    if (InSpecularLobe(n, l.vector(), m.roughness.pixel(p)[0])) return true;
+  }
+  return false;
+}
+
+struct RecoveryErrors {
+  int sampled = 0;
+  std::vector<double> roughness, f0, normal_degrees, base;  // per lobe-sampled pixel
+  double Worst(const std::vector<double>& v) const { return *std::max_element(v.begin(), v.end()); }
+  double Quantile(std::vector<double> v, double q) const {
+    std::sort(v.begin(), v.end());
+    return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
+  }
+};
+
+// The fit's errors against the truth on the pixels whose lobe the lights sample (at the true
+// normal and roughness).
+RecoveryErrors Errors(const Representation& pbr, const SyntheticMaterial& truth,
+                      const std::vector<LightDirection>& lights) {
+  RecoveryErrors e;
+  const Image& maps = pbr.maps();
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    if (!LobeSampled(truth, lights, p)) continue;
+    ++e.sampled;
+    e.roughness.push_back(std::abs(maps.pixel(p)[M::kRoughness] - truth.roughness.pixel(p)[0]));
+    e.f0.push_back(std::abs(maps.pixel(p)[M::kF0] / truth.f0.pixel(p)[0] - 1.0));
+    const double cosine = Normal(maps, p, M::kNormal).dot(Normal(truth.normals, p, 0));
+    e.normal_degrees.push_back(std::acos(std::min(1.0, cosine)) * 180 / std::numbers::pi);
+    double base = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      base =
+          std::max<double>(base, std::abs(maps.pixel(p)[M::kBase + c] - truth.albedo.pixel(p)[c]));
+    }
+    e.base.push_back(base);
+  }
+  return e;
+}
+
+TEST(PbrFitTest, RecoversAKnownGgxMaterialExactlyFromExactImages) {
+  const SyntheticMaterial truth = GgxMaterial(0.04, 0.12);
+  const std::vector<LightDirection> lights = SpiralDome(150, 70.0);
+  const Representation pbr = FitPbrSet(Render(truth, lights, true));
+  ASSERT_NE(pbr.shading(), nullptr);
+  const RecoveryErrors e = Errors(pbr, truth, lights);
+  std::printf(
+      "exact images, %d lobe-sampled pixels of %zu: worst roughness error %.2e, F0 %.2e "
+      "(relative), normal %.2e degrees, base colour %.2e\n",
+      e.sampled, pbr.maps().pixel_count(), e.Worst(e.roughness), e.Worst(e.f0),
+      e.Worst(e.normal_degrees), e.Worst(e.base));
+  EXPECT_EQ(e.sampled, static_cast<int>(pbr.maps().pixel_count()));  // this dome: every pixel
+  // Noise-free images of the model itself: the solver's tolerance. Measured 5.1e-7, 5.8e-6,
+  // 0.020 degrees, 3.0e-7; bounds well above (1e-4, 1e-4, 0.1 degree, 1e-4) and far below the
+  // issue's targets (0.05, 10 %, 1 degree), so a wrong model or start shows at once.
+  EXPECT_LT(e.Worst(e.roughness), 1e-4);
+  EXPECT_LT(e.Worst(e.f0), 1e-4);
+  EXPECT_LT(e.Worst(e.normal_degrees), 0.1);
+  EXPECT_LT(e.Worst(e.base), 1e-4);
+  EXPECT_EQ(pbr.details()["pbr_summary"]["pixels"], pbr.maps().pixel_count());
+  EXPECT_EQ(pbr.details()["pbr_summary"]["lobe_unsampled"], 0);
+}
+
+TEST(PbrFitTest, MeetsTheTargetsOnNoisyShadowedCaptures) {
+  // Steeper relief with cast shadows and 0.3 % noise: the robust loss must keep the shadows from
+  // pulling the fit.
+  const SyntheticMaterial truth = GgxMaterial(0.04, 0.12, 35.0);
+  const std::vector<LightDirection> lights = SpiralDome(150, 70.0);
+  const Representation pbr = FitPbrSet(Render(truth, lights, true, 0.003, true));
+  const RecoveryErrors e = Errors(pbr, truth, lights);
+  const double r95 = e.Quantile(e.roughness, 0.95), f95 = e.Quantile(e.f0, 0.95),
+               n95 = e.Quantile(e.normal_degrees, 0.95);
+  std::printf(
+      "noisy, shadowed: %d lobe-sampled pixels: 95th percentile / worst roughness error "
+      "%.3f / %.3f, F0 %.3f / %.3f (relative), normal %.3f / %.3f degrees\n",
+      e.sampled, r95, e.Worst(e.roughness), f95, e.Worst(e.f0), n95, e.Worst(e.normal_degrees));
+  // The targets are 0.05, 10 % and 1 degree on every lobe-sampled pixel. Measured worst
+  // 0.003, 0.024 and 0.053 degrees; bounds = 2 x measured.
+  EXPECT_LT(e.Worst(e.roughness), 0.006);
+  EXPECT_LT(e.Worst(e.f0), 0.048);
+  EXPECT_LT(e.Worst(e.normal_degrees), 0.11);
+}
+
+TEST(PbrFitTest, LambertianCapturesGiveDiffuseOnlyFitsWhateverTheStartRoughness) {
+  const SyntheticMaterial truth = GgxMaterial(0.0, 0.0);
+  const std::vector<LightDirection> lights = SpiralDome(60, 65.0);
+  const PhotometricSet lambertian = Render(truth, lights, false);
+  // Lights the fit never saw, one straight above (where a spurious lobe would show first).
+  const std::vector<LightDirection> unseen = {LightDirection::FromSlantTilt(0, 0),
+                                              LightDirection::FromSlantTilt(20, 77),
+                                              LightDirection::FromSlantTilt(50, 200)};
+  const PhotometricSet expected = Render(truth, unseen, false);
+  for (double start : {0.2, 0.5, 0.9}) {
+    PbrFitOptions options;
+    options.start_roughness = start;
+    const Representation pbr = FitPbrSet(lambertian, options);
+    double largest_f0 = 0.0, worst_relit = 0.0;
+    for (std::size_t p = 0; p < pbr.maps().pixel_count(); ++p) {
+      largest_f0 = std::max<double>(largest_f0, std::abs(pbr.maps().pixel(p)[M::kF0]));
+    }
+    for (std::size_t i = 0; i < unseen.size(); ++i) {
+      const Image relit = pbr.Relight(unseen[i]);
+      for (std::size_t v = 0; v < relit.values().size(); ++v) {
+        worst_relit = std::max<double>(
+            worst_relit,
+            std::abs(relit.values()[v] - expected.image(static_cast<int>(i)).values()[v]));
+      }
+    }
+    std::printf("Lambertian, start roughness %.1f: largest F0 %.2e, worst relit error %.2e\n",
+                start, largest_f0, worst_relit);
+    // Measured largest F0 4.1e-5, 1.9e-5, 2.4e-4 and worst relit error 1.0e-5, 5.8e-6, 1.7e-6
+    // for the three starts; bounds = 2 x the largest of each.
+    EXPECT_LT(largest_f0, 5e-4) << start;
+    EXPECT_LT(worst_relit, 2.1e-5) << start;
+  }
+}
+
+TEST(PbrFitTest, PixelsWhoseLobeNoLightSamplesAreCountedAndRegularised) {
+  // A gentle relief under grazing lights only (slants 60..70): the mirror directions of normals
+  // within 10 degrees of +z lie within slant 20, where no light is, so no lobe is sampled.
+  const SyntheticMaterial truth = GgxMaterial(0.04, 0.12, 10.0);
+  std::vector<LightDirection> grazing;
+  for (double slant : {60.0, 70.0}) {
+    for (int tilt = 0; tilt < 360; tilt += 20) {
+      grazing.push_back(LightDirection::FromSlantTilt(slant, tilt + slant));
+    }
+  }
+  const PhotometricSet set = Render(truth, grazing, true);
+  const Representation free = FitPbrSet(set);
+  const auto& summary = free.details()["pbr_summary"];
+  const int unsampled = summary["lobe_unsampled"];
+  std::printf("grazing lights: %d of %zu pixels with no light in the lobe\n", unsampled,
+              free.maps().pixel_count());
+  EXPECT_GT(unsampled, static_cast<int>(free.maps().pixel_count()) / 2);
+  EXPECT_EQ(summary["regularised"], 0);
+
+  PbrFitOptions prior;
+  prior.prior_weight = 1.0;
+  prior.prior_roughness = 0.45;
+  prior.prior_f0 = 0.08;
+  const Representation regularised = FitPbrSet(set, prior);
+  const auto& with_prior = regularised.details()["pbr_summary"];
+  EXPECT_EQ(with_prior["regularised"], with_prior["lobe_unsampled"]);
+  double farthest_roughness = 0.0, farthest_f0 = 0.0;
+  int pulled = 0;
+  for (std::size_t p = 0; p < regularised.maps().pixel_count(); ++p) {
+    const Eigen::Vector3d n = Normal(regularised.maps(), p, M::kNormal);
+    const float roughness = regularised.maps().pixel(p)[M::kRoughness];
+    const bool sampled = std::any_of(grazing.begin(), grazing.end(), [&](const LightDirection& l) {
+      return InSpecularLobe(n, l.vector(), roughness);
+    });
+    if (sampled) continue;
+    ++pulled;
+    farthest_roughness = std::max<double>(farthest_roughness, std::abs(roughness - 0.45));
+    farthest_f0 =
+        std::max<double>(farthest_f0, std::abs(regularised.maps().pixel(p)[M::kF0] - 0.08));
+  }
+  std::printf("regularised %d pixels: roughness within %.3f of the prior, F0 within %.4f\n", pulled,
+              farthest_roughness, farthest_f0);
+  EXPECT_GT(pulled, 0);
+  // Measured: roughness exactly the prior (the data say nothing about it), F0 within 0.0004;
+  // bounds 0.001 (2.5 x).
+  EXPECT_LT(farthest_roughness, 0.001);
+  EXPECT_LT(farthest_f0, 0.001);
+}
+
+TEST(PbrFitTest, GreyImagesAreAnError) {
+  const SyntheticMaterial truth = GgxMaterial(0.04, 0.04);
+  const PhotometricSet rgb = Render(truth, SpiralDome(12, 60.0), true);
+  std::vector<Image> grey;
+  for (const Image& image : rgb.images()) {
+    Image y(image.width(), image.height(), std::vector<std::string>{"Y"});
+    std::copy(image.plane(0).begin(), image.plane(0).end(), y.plane(0).begin());
+    grey.push_back(std::move(y));
+  }
+  EXPECT_THROW(FitPbrSet(PhotometricSet(grey, rgb.lights())), Error);
+}
+
+}  // namespace
+}  // namespace photomat
