@@ -79,8 +79,11 @@ TEST(ChildProcessTest, PeakMemoryFollowsWhatTheChildTouches) {
   command.arguments = {"allocate", "300"};
   const ChildOutcome outcome = RunChild(command);
   ASSERT_TRUE(outcome.Succeeded()) << outcome.Describe();
-  // 300 MiB more than the program alone; 40 MiB of room for the allocator and page rounding.
-  EXPECT_GE(outcome.peak_rss_bytes, base + (290LL << 20));
+  // 300 MiB more than the program alone; 40 MiB of room for the allocator and page rounding
+  // above. Below, 20 MiB: the program's own resident size (about 140 MB, most of it the
+  // file-backed pages of the libraries it maps) is not the same in every run, since the kernel may
+  // drop those pages under memory pressure (a CI root measured 288.6 MiB above a base run).
+  EXPECT_GE(outcome.peak_rss_bytes, base + (280LL << 20));
   EXPECT_LT(outcome.peak_rss_bytes, base + (340LL << 20));
 }
 
