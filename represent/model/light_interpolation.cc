@@ -14,7 +14,6 @@ namespace photomat {
 namespace {
 
 constexpr double kRingToleranceDegrees = 0.5;
-constexpr double kPoleSlantDegrees = LightInterpolator::kPoleSlantDegrees;
 // cv::Subdiv2D works in float on an integer bounding rectangle: radians are scaled to this.
 constexpr double kProjectionScale = LightInterpolator::kProjectionScale;
 
@@ -64,7 +63,7 @@ bool LightInterpolator::BuildRings() {
     for (const auto& [tilt, node] : ring.by_tilt) sum += nodes_[node].SlantDegrees();
     ring.slant = sum / ring.by_tilt.size();
     std::sort(ring.by_tilt.begin(), ring.by_tilt.end());
-    const bool pole = ring.slant < kPoleSlantDegrees;
+    const bool pole = ring.slant < LightInterpolator::kPoleSlantDegrees;
     if (!pole && ring.by_tilt.size() < 3) return false;
     for (std::size_t i = 1; !pole && i < ring.by_tilt.size(); ++i) {
       if (ring.by_tilt[i].first - ring.by_tilt[i - 1].first < 1e-6) return false;
@@ -122,7 +121,7 @@ std::vector<std::pair<int, double>> LightInterpolator::Weights(const LightDirect
 void LightInterpolator::AddRingWeights(const Ring& ring, double tilt, double scale,
                                        std::vector<std::pair<int, double>>& weights) const {
   const auto& nodes = ring.by_tilt;
-  if (ring.slant < kPoleSlantDegrees) {
+  if (ring.slant < LightInterpolator::kPoleSlantDegrees) {
     for (const auto& [node_tilt, node] : nodes) weights.emplace_back(node, scale / nodes.size());
     return;
   }
