@@ -4,6 +4,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/image_io.h"
@@ -30,8 +31,17 @@ inline constexpr const char* kStackFormat = "photomat-map-stack";
 
 // Where the maps came from.
 struct StackProvenance {
+  // A constructor rather than aggregate initialisation, so that {lights, space, source} leaves
+  // `images` empty without a missing-initializer warning.
+  StackProvenance(std::vector<LightDirection> lights = {}, std::string space = "linear",
+                  std::string from = {}, std::vector<ImageEncodingRecord> decoded = {})
+      : capture_lights(std::move(lights)),
+        colour_space(std::move(space)),
+        source(std::move(from)),
+        images(std::move(decoded)) {}
+
   std::vector<LightDirection> capture_lights;
-  std::string colour_space = "linear";
+  std::string colour_space;
   std::string source;
   // How each input image was decoded (LoadedSet::encodings); empty when unknown.
   std::vector<ImageEncodingRecord> images;
