@@ -23,7 +23,7 @@ namespace photomat {
 // LibRaw's auto-brightening (raw:auto_bright 0), maximum adjustment (raw:adjust_maximum_thr 0) or
 // OpenImageIO's scene-linear rescaling (raw:apply_scene_linear_scale left unset: OpenImageIO
 // applies it whenever the key is present), so that values stay proportional to exposure across a
-// bracketed series (core/camera_raw_test.cc: within 0.1 %, measured). README, "Input images and
+// bracketed series (core/camera_raw_test.cc: within 0.06 %, measured). README, "Input images and
 // colour".
 struct CameraRawOptions {
   // LibRaw's demosaic (raw:Demosaic): "linear", "VNG", "PPG", "AHD", "DCB", ...
