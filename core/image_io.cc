@@ -35,16 +35,6 @@ std::string OiioError(const std::string& own) {
   return message.empty() ? "unknown OpenImageIO error" : message;
 }
 
-// 256-entry decoding table: exact for every 8-bit code.
-const std::array<float, 256>& Srgb8ToLinearTable() {
-  static const std::array<float, 256> table = [] {
-    std::array<float, 256> t{};
-    for (int i = 0; i < 256; ++i) t[i] = static_cast<float>(SrgbToLinear(i / 255.0));
-    return t;
-  }();
-  return table;
-}
-
 // Rows decoded per call: files are read band by band into a small interleaved buffer whose
 // channels are then spread over the image's planes (OpenImageIO strides cannot express planar
 // storage of several channels, and reading channel by channel would decode the file once per
@@ -78,23 +68,12 @@ class BandReader {
   const fs::path& path_;
 };
 
-// Linear float of every integer code: the sRGB table for 8-bit codes, the curve otherwise.
-template <typename T>
-float DecodeInteger(T code, ColourSpace space) {
-  constexpr double kScale = 1.0 / static_cast<double>(std::numeric_limits<T>::max());
-  if (space == ColourSpace::kLinear) return static_cast<float>(code * kScale);
-  if constexpr (sizeof(T) == 1) {
-    return Srgb8ToLinearTable()[code];
-  } else {
-    return static_cast<float>(SrgbToLinear(code * kScale));
-  }
-}
-
 // Decodes an 8- or 16-bit file band by band into the planes of `image`, counting the pixels with
 // a kept channel at the largest code.
 template <typename T>
-void ReadIntegerSamples(const BandReader& reader, int file_channels, ColourSpace space,
-                        Image& image, ImageFileInfo& info) {
+void ReadIntegerSamples(const BandReader& reader, int file_channels,
+                        const std::vector<float>& light_of_code, Image& image,
+                        ImageFileInfo& info) {
   constexpr T kMax = std::numeric_limits<T>::max();
   const int width = image.width(), kept = image.channels();
   const int band = reader.band_rows();
@@ -106,7 +85,7 @@ void ReadIntegerSamples(const BandReader& reader, int file_channels, ColourSpace
       const T* row = samples.data() + static_cast<std::size_t>(r) * width * file_channels;
       for (int c = 0; c < kept; ++c) {
         float* out = image.row(c, first + r).data();
-        for (int x = 0; x < width; ++x) out[x] = DecodeInteger(row[x * file_channels + c], space);
+        for (int x = 0; x < width; ++x) out[x] = light_of_code[row[x * file_channels + c]];
       }
       for (int x = 0; x < width; ++x) {
         const T* pixel = row + static_cast<std::size_t>(x) * file_channels;
@@ -118,8 +97,8 @@ void ReadIntegerSamples(const BandReader& reader, int file_channels, ColourSpace
 
 // Float, half and unusual integer widths: OpenImageIO converts to float (integers to [0, 1]).
 // Returns the number of non-finite samples.
-std::size_t ReadFloatSamples(const BandReader& reader, int file_channels, ColourSpace space,
-                             Image& image) {
+std::size_t ReadFloatSamples(const BandReader& reader, int file_channels,
+                             const SampleEncoding& encoding, Image& image) {
   const int width = image.width(), kept = image.channels();
   const int band = reader.band_rows();
   std::vector<float> samples(static_cast<std::size_t>(band) * width * file_channels);
@@ -134,7 +113,7 @@ std::size_t ReadFloatSamples(const BandReader& reader, int file_channels, Colour
         for (int x = 0; x < width; ++x) {
           const float value = row[x * file_channels + c];
           if (!std::isfinite(value)) ++non_finite;
-          out[x] = space == ColourSpace::kSrgb ? static_cast<float>(SrgbToLinear(value)) : value;
+          out[x] = DecodeFloatSample(encoding, value);
         }
       }
     }
@@ -142,12 +121,60 @@ std::size_t ReadFloatSamples(const BandReader& reader, int file_channels, Colour
   return non_finite;
 }
 
+// LibRaw's settings for scene-linear output (CameraRawOptions). Other readers ignore "raw:" keys,
+// so every file is opened with them.
+OIIO::ImageSpec CameraRawConfig(const CameraRawOptions& options) {
+  OIIO::ImageSpec config;
+  config.attribute("raw:ColorSpace", "sRGB-linear");
+  config.attribute("raw:auto_bright", 0);
+  config.attribute("raw:adjust_maximum_thr", 0.0f);
+  config.attribute("raw:Demosaic", options.demosaic);
+  config.attribute("raw:HighlightMode", 0);  // clip: saturated pixels stay at full scale
+  if (options.white_balance) {
+    config.attribute("raw:use_camera_wb", 0);
+    config.attribute("raw:user_mul", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 4),
+                     options.white_balance->data());
+  } else {
+    config.attribute("raw:use_camera_wb", 1);
+  }
+  return config;
+}
+
+// What the file says about its encoding: OpenImageIO's metadata and, for PNG, the chunks.
+EncodingEvidence GatherEvidence(OIIO::ImageInput& input, const fs::path& path) {
+  const OIIO::ImageSpec& spec = input.spec();
+  EncodingEvidence evidence;
+  evidence.format = input.format_name();
+  evidence.bits_per_sample = static_cast<int>(spec.format.size() * 8);
+  evidence.floating_point = spec.format.is_floating_point();
+  evidence.channels = spec.nchannels;
+  if (const OIIO::ParamValue* icc = spec.find_attribute("ICCProfile");
+      icc != nullptr && icc->type().basetype == OIIO::TypeDesc::UINT8) {
+    const auto* bytes = static_cast<const unsigned char*>(icc->data());
+    evidence.icc_profile.assign(bytes, bytes + icc->type().size());
+  }
+  if (const OIIO::ParamValue* exif = spec.find_attribute("Exif:ColorSpace")) {
+    evidence.exif_colour_space = exif->get_int();
+  }
+  evidence.oiio_colour_space = spec.get_string_attribute("oiio:ColorSpace");
+  if (const OIIO::ParamValue* c =
+          spec.find_attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8))) {
+    std::array<float, 8> values{};
+    const auto* floats = static_cast<const float*>(c->data());
+    std::copy(floats, floats + 8, values.begin());
+    evidence.chromaticities = values;
+  }
+  if (evidence.format == "png") AddPngChunkEvidence(path, evidence);
+  return evidence;
+}
+
 }  // namespace
 
 LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path, "image file not found");
-  auto input = OIIO::ImageInput::open(path.string());
+  const OIIO::ImageSpec config = CameraRawConfig(options.camera_raw);
+  auto input = OIIO::ImageInput::open(path.string(), &config);
   if (!input) throw Error(path, fmt::format("cannot read image: {}", OiioError("")));
   const OIIO::ImageSpec spec = input->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
@@ -173,28 +200,37 @@ LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {
     result.image.set_channel_names(spec.channelnames);
   }
 
+  if (options.colour_space) {
+    const bool forced = !info.floating_point;
+    const ColourSpace space = forced ? *options.colour_space : ColourSpace::kLinear;
+    info.encoding.transfer = space == ColourSpace::kSrgb ? Transfer::kSrgb : Transfer::kLinear;
+    info.encoding.decided_by = forced ? "caller" : "default";
+    info.encoding.evidence =
+        forced ? "the reader asked for these codes" : "float samples are linear";
+  } else {
+    info.encoding =
+        DecideSampleEncoding(GatherEvidence(*input, path), options.untagged_colour_space);
+  }
+  info.colour_space = info.encoding.Summary();
+
   const BandReader reader(*input, path);
   if (!info.floating_point &&
       (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::UINT16)) {
     const bool eight_bit = format.basetype == OIIO::TypeDesc::UINT8;
-    info.colour_space =
-        options.colour_space.value_or(eight_bit ? ColourSpace::kSrgb : ColourSpace::kLinear);
+    const std::vector<float> light_of_code = CodeToLightTable(info.encoding, eight_bit ? 8 : 16);
     if (eight_bit) {
-      ReadIntegerSamples<std::uint8_t>(reader, spec.nchannels, info.colour_space, result.image,
-                                       info);
+      ReadIntegerSamples<std::uint8_t>(reader, spec.nchannels, light_of_code, result.image, info);
     } else {
-      ReadIntegerSamples<std::uint16_t>(reader, spec.nchannels, info.colour_space, result.image,
-                                        info);
+      ReadIntegerSamples<std::uint16_t>(reader, spec.nchannels, light_of_code, result.image, info);
     }
   } else {
-    info.colour_space = info.floating_point ? ColourSpace::kLinear
-                                            : options.colour_space.value_or(ColourSpace::kLinear);
     const std::size_t non_finite =
-        ReadFloatSamples(reader, spec.nchannels, info.colour_space, result.image);
+        ReadFloatSamples(reader, spec.nchannels, info.encoding, result.image);
     if (non_finite > 0) {
       throw Error(path, fmt::format("{} sample(s) are NaN or infinite", non_finite));
     }
   }
+  ApplyColourTransform(info.encoding, result.image, path);
   input->close();
   return result;
 }

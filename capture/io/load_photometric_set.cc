@@ -157,10 +157,13 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
   }
 
   ImageReadOptions read;
-  read.colour_space = options.colour_space ? options.colour_space : description.colour_space;
+  read.colour_space = options.colour_space;
+  read.untagged_colour_space =
+      options.untagged_colour_space ? options.untagged_colour_space : description.colour_space;
   const std::size_t count = description.image_files.size();
   std::vector<Image> images(count);
   std::vector<std::size_t> saturated(count);
+  std::vector<ImageEncodingRecord> encodings(count);
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   progress.Start("load", count);
@@ -168,9 +171,13 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
     LoadedImage loaded = ReadImage(description.image_files[i], read);
     images[i] = std::move(loaded.image);
     saturated[i] = loaded.info.saturated_pixels;
+    const SampleEncoding& encoding = loaded.info.encoding;
+    encodings[i] = {description.image_files[i].filename().string(), encoding.Name(),
+                    encoding.decided_by, encoding.evidence};
     progress.Advance();
   });
   progress.Finish();
+  WarnIfEncodingsDisagree(encodings);
 
   std::vector<std::string> names;
   for (const auto& file : description.image_files) names.push_back(file.string());
@@ -179,7 +186,7 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
       input.kind == InputKind::kDiligent ? input.file / "light_directions.txt" : input.file;
   LoadedSet loaded{
       PhotometricSet(std::move(images), std::move(description.lights), std::move(names), source),
-      input.kind, std::move(saturated), description.ground_truth_normals};
+      input.kind, std::move(saturated), description.ground_truth_normals, std::move(encodings)};
   if (description.mask) {
     try {
       loaded.set.set_mask(ReadMask(*description.mask));
