@@ -13,6 +13,7 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "relight/web/evaluation_report.h"
+#include "relight/web/published_name.h"
 #include "represent/evaluation/evaluation.h"
 
 namespace photomat::app {
@@ -145,7 +146,7 @@ void AddEvaluateCommand(CLI::App& app) {
     if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
     if (!options->report.empty()) {
       EvaluationReportOptions report;
-      report.title = fmt::format("photomat evaluation of {}", options->input.string());
+      report.title = fmt::format("photomat evaluation of {}", PublishedName(options->input));
       report.images = report_images;
       report.robust = evaluation.robust;
       report.progress = &bar;
