@@ -68,9 +68,12 @@ TEST(RbfInterpolationTest, RejectsBadParameters) {
               ThrowsMessage<Error>(HasSubstr("outside (0, 180]")));
   EXPECT_THAT([&] { RbfInterpolation(lights, 20.0, -1.0); },
               ThrowsMessage<Error>(HasSubstr("regularisation")));
-  // A kernel far wider than the spacing of 24 lights makes the Gaussian matrix singular.
-  EXPECT_THAT([&] { RbfInterpolation(lights, 180.0, 0.0); },
+  // A light captured twice makes the unregularised system singular; regularisation solves it.
+  auto twice = lights;
+  twice.push_back(lights.front());
+  EXPECT_THAT([&] { RbfInterpolation(twice, 20.0, 0.0); },
               ThrowsMessage<Error>(HasSubstr("singular")));
+  EXPECT_NO_THROW(RbfInterpolation(twice, 20.0, 1e-3));
 }
 
 TEST(BilinearLightBasisTest, GridWeightsInterpolateBilinearly) {
