@@ -167,16 +167,33 @@ Representation FitBilinear(const Observations& observations, const Eigen::Matrix
     throw Error(source, fmt::format("bilinear: grid size {} is outside 2..32", g));
   }
   const Eigen::MatrixXd resampling = BilinearResampling(lights, g);  // G^2 x n
-  const Eigen::MatrixXd grid_gram = resampling * gram * resampling.transpose();
-  const int rank_limit = std::min(static_cast<int>(lights.size()), g * g);
-  PrincipalAxes axes = FindPrincipalAxes(grid_gram, options.planes, rank_limit, "bilinear", source);
-  Image maps =
-      ProjectedMaps(observations, matrix, columns, resampling.transpose(), axes.basis, "bilinear.");
+  const auto n = static_cast<Eigen::Index>(lights.size());
+  Image maps;
+  Eigen::MatrixXd grid_basis;  // G^2 x k: the grid values of each plane's profile
+  if (options.planes == 0) {
+    // Uncompressed: every grid node is a plane, the maps are the grid profiles R p.
+    PrincipalAxes axes = FindPrincipalAxes(gram, 0, static_cast<int>(n), "bilinear", source);
+    Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(g * g, g * g);
+    maps =
+        ProjectedMaps(observations, matrix, columns, resampling.transpose(), identity, "bilinear.");
+    grid_basis = identity;
+    details["pca"] = PlanesJson(0, axes);
+  } else {
+    // IMPLEMENTER CHOICE: the PCA runs over the captured profiles (p ~ V V^T p, as rbf), and the
+    // grid holds the resampled axes R V, so value(l) = b(l) . R V (V^T p). A PCA over the grid
+    // profiles R p instead weighs every node alike, and spends its planes on the extrapolated
+    // corners no light reaches (DiLiGenT cat, 10 held-out lights: 27.1 dB against 33+).
+    PrincipalAxes axes =
+        FindPrincipalAxes(gram, options.planes, static_cast<int>(n), "bilinear", source);
+    maps = ProjectedMaps(observations, matrix, columns, Eigen::MatrixXd::Identity(n, n), axes.basis,
+                         "bilinear.");
+    grid_basis = resampling * axes.basis;
+    details["pca"] = PlanesJson(options.planes, axes);
+  }
   details["bilinear"] = {{"grid_size", g}, {"smoothness", kBilinearSmoothness}};
-  details["pca"] = PlanesJson(options.planes, axes);
   const int k = maps.channels() / observations.channels();
   return Representation("bilinear", std::move(maps), {k, true, false, observations.channels()},
-                        std::make_shared<BilinearLightBasis>(g, axes.basis), std::move(details));
+                        std::make_shared<BilinearLightBasis>(g, grid_basis), std::move(details));
 }
 
 }  // namespace

@@ -135,7 +135,7 @@ TEST(LightProfileFitTest, PcaAtFullRankEqualsTheUncompressedBasis) {
     const Representation full = Fit(synthetic.set, ProfileMethod(name, 36, std::nullopt));
     const Representation uncompressed = Fit(synthetic.set, ProfileMethod(name, 0, std::nullopt));
     EXPECT_EQ(full.layout().basis_size, 36) << name;
-    EXPECT_EQ(uncompressed.layout().basis_size, name == "rbf" ? 36 : 16 * 16) << name;
+    EXPECT_EQ(uncompressed.layout().basis_size, name == "rbf" ? 36 : 24 * 24) << name;
     EXPECT_EQ(full.details()["pca"]["planes"], 36);
     EXPECT_EQ(uncompressed.details()["pca"]["planes"], "uncompressed");
     for (const auto& light :

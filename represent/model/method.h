@@ -19,7 +19,7 @@ struct LightProfileOptions {
   static constexpr int kDefaultPlanes = 9;
   int planes = kDefaultPlanes;
   // Nodes per side of the bilinear light grid.
-  static constexpr int kDefaultGridSize = 16;
+  static constexpr int kDefaultGridSize = 24;
   int grid_size = kDefaultGridSize;
 
   bool operator==(const LightProfileOptions&) const = default;
