@@ -6,12 +6,14 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/light_profile_cli.h"
 #include "apps/robust_support.h"
 #include "apps/synthesis_cli.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "relight/web/evaluation_report.h"
+#include "relight/web/published_name.h"
 #include "represent/evaluation/evaluation.h"
 
 namespace photomat::app {
@@ -51,6 +53,7 @@ void AddEvaluateCommand(CLI::App& app) {
     bool robust = false;
     std::string loss = "cauchy";
     SynthesisEvaluationOptions synthesis;
+    LightProfileCli profile;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "evaluate");
@@ -90,6 +93,7 @@ void AddEvaluateCommand(CLI::App& app) {
                    "With --synthesised: side of the compared patches")
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
+  AddLightProfileOptions(*command, options->profile);
   command->callback([options] {
     if (!options->synthesis.synthesised.empty()) {
       options->synthesis.sample = options->input;
@@ -97,7 +101,8 @@ void AddEvaluateCommand(CLI::App& app) {
       EvaluateSynthesis(options->synthesis);
       return;
     }
-    const std::vector<Method> methods = ParseMethodList(options->methods);
+    std::vector<Method> methods = ParseMethodList(options->methods);
+    ApplyLightProfileOptions(options->profile, methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
     const RobustInput input = options->robust
@@ -141,7 +146,7 @@ void AddEvaluateCommand(CLI::App& app) {
     if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
     if (!options->report.empty()) {
       EvaluationReportOptions report;
-      report.title = fmt::format("photomat evaluation of {}", options->input.string());
+      report.title = fmt::format("photomat evaluation of {}", PublishedName(options->input));
       report.images = report_images;
       report.robust = evaluation.robust;
       report.progress = &bar;

@@ -14,6 +14,7 @@
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/rti_file.h"
 #include "relight/formats/stack_file.h"
+#include "relight/web/published_name.h"
 #include "relight/web/viewer_export.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
@@ -91,7 +92,7 @@ void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
 void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedStack>& stacks) {
   std::vector<Representation> representations;
   ViewerExportOptions viewer;
-  viewer.title = options.input.string();
+  viewer.title = PublishedName(options.input);
   for (const LoadedStack& stack : stacks) {
     representations.push_back(stack.representation);
     viewer.value_encodings[stack.representation.method()] = StackValueEncoding(stack.provenance);

@@ -8,6 +8,7 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/light_profile_cli.h"
 #include "apps/robust_support.h"
 #include "core/colour.h"
 #include "core/error.h"
@@ -28,6 +29,7 @@ void AddFitCommand(CLI::App& app) {
     std::string loss = "cauchy";
     std::string exr_compression{ToString(kDefaultExrCompression)};
     PbrFitOptions pbr;
+    LightProfileCli profile;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "fit");
@@ -38,7 +40,8 @@ void AddFitCommand(CLI::App& app) {
   command
       ->add_option("--method", options->methods,
                    "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), hsh4, "
-                   "hsh9, hsh16, pbr (microfacet maps; implies --robust), a comma-separated list, "
+                   "hsh9, hsh16, pbr (microfacet maps; implies --robust), rbf, bilinear, a "
+                   "comma-separated list, "
                    "or all (the first six)")
       ->capture_default_str();
   command->add_option("--out", options->out, "Output folder")->required();
@@ -54,9 +57,11 @@ void AddFitCommand(CLI::App& app) {
   command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
       ->capture_default_str();
   AddPbrOptions(*command, options->pbr);
+  AddLightProfileOptions(*command, options->profile);
   AddExrCompressionOption(*command, options->exr_compression);
   command->callback([options] {
-    const std::vector<Method> methods = ParseMethodList(options->methods);
+    std::vector<Method> methods = ParseMethodList(options->methods);
+    ApplyLightProfileOptions(options->profile, methods);
     // pbr starts from the robust photometric stereo, and shares its measured masks.
     if (std::any_of(methods.begin(), methods.end(),
                     [](const Method& m) { return m.kind == Method::Kind::kPbr; })) {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,7 @@ using testing::RunPhotomat;
 using testing::RunResult;
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 using testing::TempDir;
 
 TEST(PhotomatCliTest, GenerateFitRelightEvaluate) {
@@ -160,6 +163,11 @@ TEST(PhotomatCliTest, EveryListedCommandRunsOrSaysWhatThisBuildLacks) {
   }
 }
 
+std::string FileText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 TEST(PhotomatCliTest, DemoRunsTheWholePipeline) {
   TempDir dir;
   const RunResult demo = RunPhotomat("demo --size 32 --sweep 4 --out " + dir.path().string());
@@ -196,6 +204,10 @@ TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
   EXPECT_EQ(v1["methods"][2]["name"], "eigen3");
   EXPECT_EQ(v1["methods"][1]["values"], "linear");
   EXPECT_EQ(v1["capture_lights"].size(), 36u);
+  // Published: the title is the input's name, and no file names the machine's folders.
+  EXPECT_EQ(v1["title"], "stacks");
+  EXPECT_THAT(FileText(dir / "v1" / "viewer.json"), Not(HasSubstr(dir.path().string())));
+  EXPECT_THAT(FileText(dir / "v1" / "index.html"), Not(HasSubstr(dir.path().string())));
 
   // A .ptm file holds display codes: the viewer is told so, as `relight` decodes them.
   const std::string ptm = (dir / "x.ptm").string();
@@ -212,6 +224,36 @@ TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
   EXPECT_EQ(ReadJsonFile(dir / "v3" / "viewer.json")["methods"].size(), 1u);
 }
 
+TEST(PhotomatCliTest, RbfAndBilinearFitRelightAndExportLikeEveryMethod) {
+  TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  const std::string stacks = (dir / "stacks").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 4").exit_code, 0);
+  const RunResult fit = RunPhotomat("fit " + capture + " --method rbf,bilinear --planes 5 " +
+                                    "--rbf-width 20 --grid-size 8 --out " + stacks);
+  ASSERT_EQ(fit.exit_code, 0) << fit.output;
+  const LoadedStack rbf = LoadRepresentation(dir / "stacks" / "rbf.exr");
+  EXPECT_EQ(rbf.representation.layout().basis_size, 5);
+  EXPECT_EQ(rbf.representation.details()["rbf"]["width_deg"], 20.0);
+  EXPECT_EQ(rbf.representation.details()["rbf"]["width_from"], "option");
+  EXPECT_EQ(rbf.representation.details()["rbf"]["regularisation_from"], "leave-one-out");
+  const LoadedStack bilinear = LoadRepresentation(dir / "stacks" / "bilinear.exr");
+  EXPECT_EQ(bilinear.representation.basis().ToJson()["grid_size"], 8);
+  const RunResult relit = RunPhotomat("relight " + stacks + " --method bilinear --sweep 3 --out " +
+                                      (dir / "relit").string());
+  ASSERT_EQ(relit.exit_code, 0) << relit.output;
+  EXPECT_EQ(LoadPhotometricSet(dir / "relit").set.size(), 3);
+  // The viewer has no formula for these bases: they go through its coefficient table.
+  const RunResult viewer = RunPhotomat("export " + stacks + " --viewer " + (dir / "v").string());
+  ASSERT_EQ(viewer.exit_code, 0) << viewer.output;
+  const nlohmann::json v = ReadJsonFile(dir / "v" / "viewer.json");
+  ASSERT_EQ(v["methods"].size(), 2u);
+  for (const auto& method : v["methods"]) EXPECT_EQ(method["basis"]["kind"], "table");
+  const RunResult bad =
+      RunPhotomat("fit " + capture + " --method rbf --rbf-width 0 --out " + (dir / "bad").string());
+  EXPECT_NE(bad.exit_code, 0);
+}
+
 TEST(PhotomatCliTest, EvaluateWritesAReportOfTheChosenImages) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
@@ -224,6 +266,10 @@ TEST(PhotomatCliTest, EvaluateWritesAReportOfTheChosenImages) {
   const nlohmann::json report = ReadJsonFile(dir / "report" / "report.json");
   EXPECT_EQ(report["images_shown"], nlohmann::json({1, 35}));
   EXPECT_TRUE(std::filesystem::exists(dir / "report" / "images" / "relit-ptm-35.png"));
+  EXPECT_EQ(report["source"], "capture");
+  EXPECT_EQ(report["title"], "photomat evaluation of capture");
+  EXPECT_THAT(FileText(dir / "report" / "report.json"), Not(HasSubstr(dir.path().string())));
+  EXPECT_THAT(FileText(dir / "report" / "index.html"), Not(HasSubstr(dir.path().string())));
 
   const RunResult bad = RunPhotomat("evaluate " + capture + " --methods gradient --no-prediction " +
                                     "--report " + (dir / "r2").string() + " --report-images 1,x");

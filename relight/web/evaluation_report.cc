@@ -14,6 +14,7 @@
 #include "core/markup.h"
 #include "relight/render/display_image.h"
 #include "relight/render/output_folder.h"
+#include "relight/web/published_name.h"
 #include "represent/fitting/fit.h"
 
 namespace photomat {
@@ -342,7 +343,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
         "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
         "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
-        EscapeMarkup(options.title), kStyle, EscapeMarkup(set.source().string()), set.size(),
+        EscapeMarkup(options.title), kStyle, EscapeMarkup(PublishedName(set.source())), set.size(),
         set.width(), set.height(), set.channels(), mask.CountSet(),
         options.robust ? "robust" : "least-squares");
 
@@ -503,7 +504,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
     WriteJsonFile(temp / kReportManifest, {{"format", kReportFormat},
                                            {"version", 1},
                                            {"title", options.title},
-                                           {"source", set.source().string()},
+                                           {"source", PublishedName(set.source())},
                                            {"images_shown", chosen},
                                            {"evaluation", EvaluationsToJson(evaluations)}});
   });

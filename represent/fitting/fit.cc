@@ -11,6 +11,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "represent/fitting/light_profile_fit.h"
 #include "represent/fitting/robust_fit.h"
 #include "represent/model/hsh.h"
 
@@ -57,18 +58,8 @@ struct FitContext {
   std::size_t PixelIndex(Eigen::Index k) const { return observations.pixel_indices()[k]; }
 };
 
-// Copies a (C*m) x k coefficient matrix, channel-major rows, into the maps j * C + c: each map
-// plane takes m consecutive values of one column.
 void StorePerChannelTerms(const FitContext& fit, const Eigen::MatrixXf& terms, Image& maps) {
-  const int channels = fit.channels();
-  const Eigen::Index m = fit.m();
-  const auto planes = static_cast<int>(terms.cols()) * channels;
-  tbb::parallel_for(0, planes, [&](int map) {
-    const Eigen::Index j = map / channels, c = map % channels;
-    const float* values = terms.col(j).data() + c * m;
-    float* plane = maps.plane(map).data();
-    for (Eigen::Index k = 0; k < m; ++k) plane[fit.PixelIndex(k)] = values[k];
-  });
+  photomat::StorePerChannelTerms(fit.observations, terms, maps);
 }
 
 Eigen::JacobiSVD<Eigen::MatrixXd> CheckedSvd(const Eigen::MatrixXd& matrix) {
@@ -332,6 +323,17 @@ Representation FitObservations(const Observations& observations,
     case Method::Kind::kPbr:
       // A nonlinear fit needs a start: always the robust photometric stereo's (default options).
       return RobustFit(observations, lights, selected, RobustFitOptions{}, source).Fit(method);
+    case Method::Kind::kRbf:
+    case Method::Kind::kBilinear: {
+      const auto n = static_cast<Eigen::Index>(selected.size());
+      const Eigen::MatrixXd& gram = observations.Gram();
+      Eigen::MatrixXd sub(n, n);
+      for (Eigen::Index a = 0; a < n; ++a) {
+        for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(selected[a], selected[b]);
+      }
+      return FitLightProfiles(observations, observations.matrix(), selected, sub,
+                              fit.SelectedLights(), method, source);
+    }
     case Method::Kind::kEigen:
       break;
   }

@@ -84,4 +84,17 @@ Eigen::MatrixXf ParallelProduct(const Eigen::MatrixXf& left, const Eigen::Matrix
   return result;
 }
 
+void StorePerChannelTerms(const Observations& observations, const Eigen::MatrixXf& terms,
+                          Image& maps) {
+  const int channels = observations.channels();
+  const Eigen::Index m = observations.pixels();
+  const auto planes = static_cast<int>(terms.cols()) * channels;
+  tbb::parallel_for(0, planes, [&](int map) {
+    const Eigen::Index j = map / channels, c = map % channels;
+    const float* values = terms.col(j).data() + c * m;
+    float* plane = maps.plane(map).data();
+    for (Eigen::Index k = 0; k < m; ++k) plane[observations.pixel_indices()[k]] = values[k];
+  });
+}
+
 }  // namespace photomat

@@ -6,6 +6,7 @@
 #include <span>
 #include <vector>
 
+#include "core/image.h"
 #include "core/photometric_set.h"
 
 namespace photomat {
@@ -52,6 +53,12 @@ class Observations {
 // A^T A over the rows of a tall float matrix, in double: float products of blocks of 4096 rows
 // (accurate at that length), summed in double.
 Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix);
+
+// Copies a (C*m) x k matrix in the observations' row order into the maps j * C + c of `maps`
+// (term-major, as CoefficientMapNames names them): each map plane takes the m values of one
+// column and channel at the observed pixels; other pixels keep their value.
+void StorePerChannelTerms(const Observations& observations, const Eigen::MatrixXf& terms,
+                          Image& maps);
 
 // rows x cols product computed in parallel row blocks (Eigen's own products are single-threaded
 // without OpenMP). `left` is the large tall matrix.

@@ -19,6 +19,7 @@
 #include "core/error.h"
 #include "core/text_parsing.h"
 #include "represent/fitting/fit.h"
+#include "represent/fitting/light_profile_fit.h"
 #include "represent/fitting/observations.h"
 #include "represent/model/hsh.h"
 #include "represent/model/light_basis.h"
@@ -364,6 +365,9 @@ Representation RobustFit::Fit(const Method& method) const {
       return FitEigen(method.eigen_k);
     case Method::Kind::kHsh:
       return FitHsh(method.hsh_terms);
+    case Method::Kind::kRbf:
+    case Method::Kind::kBilinear:
+      return FitLightProfileMethod(method);
     case Method::Kind::kPbr:
       return FitPbr(observations_, lights_, selected_, normals_, albedo_, options_.measured,
                     options_.pbr,
@@ -492,21 +496,8 @@ Representation RobustFit::FitEigen(int k) const {
     throw Error(source_, fmt::format("eigen{} needs at least {} images; {} given", k, k, n));
   }
   const Eigen::MatrixXf& matrix = observations_.matrix();
-  const Eigen::Index rows = matrix.rows();
   // The start imputes the robust Lambertian model where the weights distrust the data.
-  Eigen::MatrixXf filled(rows, n);
-  tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index p) {
-    const Eigen::Vector3f normal = normals_.col(p);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const float w = weights_(p, selected_[i]);
-      const float shading =
-          std::max(0.0f, normal.dot(lights_[selected_[i]].vector().cast<float>()));
-      for (int c = 0; c < channels; ++c) {
-        filled(c * m + p, i) =
-            w * matrix(c * m + p, selected_[i]) + (1.0f - w) * albedo_(c, p) * shading;
-      }
-    }
-  });
+  Eigen::MatrixXf filled = ImputedObservations();
   Eigen::MatrixXd v(n, k);
   Eigen::VectorXd singular(n);
   Eigen::MatrixXf bases;
@@ -565,6 +556,37 @@ Representation RobustFit::FitEigen(int k) const {
                          {"cumulative_information", cumulative},
                          {"interpolation", scheme},
                          {"robust", options_.ToJson()}});
+}
+
+Eigen::MatrixXf RobustFit::ImputedObservations() const {
+  const Eigen::Index m = observations_.pixels();
+  const auto n = static_cast<Eigen::Index>(selected_.size());
+  const int channels = observations_.channels();
+  const Eigen::MatrixXf& matrix = observations_.matrix();
+  Eigen::MatrixXf filled(matrix.rows(), n);
+  tbb::parallel_for(Eigen::Index{0}, m, [&](Eigen::Index p) {
+    const Eigen::Vector3f normal = normals_.col(p);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const float w = weights_(p, selected_[i]);
+      const float shading =
+          std::max(0.0f, normal.dot(lights_[selected_[i]].vector().cast<float>()));
+      for (int c = 0; c < channels; ++c) {
+        filled(c * m + p, i) =
+            w * matrix(c * m + p, selected_[i]) + (1.0f - w) * albedo_(c, p) * shading;
+      }
+    }
+  });
+  return filled;
+}
+
+Representation RobustFit::FitLightProfileMethod(const Method& method) const {
+  const Eigen::MatrixXf filled = ImputedObservations();
+  std::vector<int> columns(filled.cols());
+  std::iota(columns.begin(), columns.end(), 0);
+  std::vector<LightDirection> selected_lights;
+  for (int i : selected_) selected_lights.push_back(lights_[i]);
+  return FitLightProfiles(observations_, filled, columns, ParallelGram(filled), selected_lights,
+                          method, source_, {{"robust", options_.ToJson()}});
 }
 
 Representation FitRobust(const PhotometricSet& set, const Method& method,

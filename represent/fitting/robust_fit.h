@@ -120,7 +120,9 @@ class RobustFit {
 
   // `method` fitted by weighted least squares with the shared weights: gradient (the robust
   // normals, albedo per channel along them), ptm and ptm-lrgb (weighted per-pixel polynomials),
-  // eigenK (weighted low-rank approximation by EM imputation). 3i has no robust form (it uses
+  // eigenK (weighted low-rank approximation by EM imputation), rbf and bilinear (their fit on the
+  // observations with the robust Lambertian model imputed where the weights distrust the data,
+  // the first step of Eigen-k's EM). 3i has no robust form (it uses
   // three images whole) and is fitted as usual; pbr: the Ceres microfacet fit (pbr_fit.h) from the
   // robust normals and albedo. The representation's details record "robust".
   Representation Fit(const Method& method) const;
@@ -134,6 +136,10 @@ class RobustFit {
   Representation FitBasisTerms(std::shared_ptr<const LightBasis> basis, const std::string& method,
                                const std::string& prefix, bool lrgb) const;
   Representation FitEigen(int k) const;
+  Representation FitLightProfileMethod(const Method& method) const;
+  // The selected images' observations (one column each) with the robust Lambertian model
+  // imputed: w * observed + (1 - w) * albedo max(0, n.l).
+  Eigen::MatrixXf ImputedObservations() const;
 
   const Observations& observations_;
   const std::vector<LightDirection>& lights_;

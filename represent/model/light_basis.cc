@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/json_file.h"
 #include "represent/model/hsh.h"
+#include "represent/model/light_profile_basis.h"
 
 namespace photomat {
 
@@ -67,6 +68,23 @@ std::shared_ptr<const LightBasis> LightBasisFromJson(const JsonReader& json) {
     if (kind == "ptm") return std::make_shared<PtmLightBasis>();
     if (kind == "direction") return std::make_shared<DirectionLightBasis>();
     if (kind == "hsh") return std::make_shared<HshLightBasis>(json["terms"].Integer());
+    if (kind == "rbf" || kind == "bilinear") {
+      const JsonReader pca_json = json["pca"];
+      if (pca_json.ArraySize() == 0) pca_json.Fail("empty matrix");
+      const Eigen::MatrixXd pca =
+          MatrixFromJson(pca_json, static_cast<Eigen::Index>(pca_json[0].ArraySize()));
+      if (kind == "bilinear") {
+        return std::make_shared<BilinearLightBasis>(json["grid_size"].Integer(), pca);
+      }
+      const Eigen::MatrixXd lights = MatrixFromJson(json["lights"], 3);
+      std::vector<LightDirection> nodes;
+      for (Eigen::Index i = 0; i < lights.rows(); ++i) {
+        nodes.push_back(LightDirection::FromVector(lights.row(i).transpose()));
+      }
+      return std::make_shared<RbfLightBasis>(
+          RbfInterpolation(nodes, json["width_deg"].Number(), json["regularisation"].Number()),
+          pca);
+    }
     if (kind == "interpolated") {
       const Eigen::MatrixXd lights = MatrixFromJson(json["lights"], 3);
       std::vector<LightDirection> nodes;

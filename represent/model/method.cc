@@ -22,6 +22,10 @@ std::string Method::Name() const {
       return fmt::format("hsh{}", hsh_terms);
     case Kind::kPbr:
       return "pbr";
+    case Kind::kRbf:
+      return "rbf";
+    case Kind::kBilinear:
+      return "bilinear";
     case Kind::kEigen:
       break;
   }
@@ -42,6 +46,10 @@ int Method::MinimumImages() const {
       // Eight parameters per pixel (base colour 3, roughness, F0, normal 2) from 3 channels
       // per image; the robust start needs a few more than its 3.
       return 6;
+    case Kind::kRbf:
+    case Kind::kBilinear:
+      // The affine tail of the interpolation and a leave-one-out choice need a few lights.
+      return 4;
     case Kind::kEigen:
       break;
   }
@@ -49,7 +57,8 @@ int Method::MinimumImages() const {
 }
 
 Method Method::Parse(std::string_view name) {
-  for (Kind kind : {Kind::kThreeImage, Kind::kGradient, Kind::kPtm, Kind::kPtmLrgb, Kind::kPbr}) {
+  for (Kind kind : {Kind::kThreeImage, Kind::kGradient, Kind::kPtm, Kind::kPtmLrgb, Kind::kPbr,
+                    Kind::kRbf, Kind::kBilinear}) {
     if (name == Method{kind}.Name()) return {kind};
   }
   if (name.starts_with("eigen")) {
@@ -67,7 +76,7 @@ Method Method::Parse(std::string_view name) {
   }
   throw Error(fmt::format(
       "unknown method \"{}\": expected 3i, gradient, ptm, ptm-lrgb, eigenK (K = 1..64, e.g. "
-      "eigen3, eigen6), hsh4, hsh9, hsh16 or pbr, or all",
+      "eigen3, eigen6), hsh4, hsh9, hsh16, pbr, rbf or bilinear, or all",
       name));
 }
 

@@ -1,10 +1,29 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace photomat {
+
+// Options of the light-profile methods, `rbf` and `bilinear`
+// (represent/model/light_profile_basis.h, README "RBF and bilinear"): not part of the name.
+struct LightProfileOptions {
+  // Gaussian kernel width (degrees) and regularisation of the RBF (the bilinear grid's resampling
+  // uses neither); unset: chosen by leave-one-out on the capture.
+  std::optional<double> rbf_width_degrees;
+  std::optional<double> rbf_regularisation;
+  // PCA planes per output channel (capped at the rank available); 0: no PCA, every captured light
+  // (rbf) or grid node (bilinear) is a plane.
+  static constexpr int kDefaultPlanes = 9;
+  int planes = kDefaultPlanes;
+  // Nodes per side of the bilinear light grid.
+  static constexpr int kDefaultGridSize = 24;
+  int grid_size = kDefaultGridSize;
+
+  bool operator==(const LightProfileOptions&) const = default;
+};
 
 // A representation method by name, as the command line and the JSON outputs spell it.
 struct Method {
@@ -16,10 +35,13 @@ struct Method {
     kEigen,       // "eigenK": the first K SVD basis images, "eigen3" and "eigen6" (4.4.5)
     kHsh,         // "hsh4", "hsh9", "hsh16": hemispherical harmonics per colour channel (.rti)
     kPbr,         // "pbr": diffuse + GGX microfacet maps per pixel (represent/model/shading.h)
+    kRbf,         // "rbf": Gaussian RBF interpolation of each pixel's light profile, PCA planes
+    kBilinear,    // "bilinear": the light profile resampled on an (lx, ly) grid, PCA planes
   };
   Kind kind = Kind::kGradient;
-  int eigen_k = 0;    // for kEigen
-  int hsh_terms = 0;  // for kHsh: 4, 9 or 16
+  int eigen_k = 0;                   // for kEigen
+  int hsh_terms = 0;                 // for kHsh: 4, 9 or 16
+  LightProfileOptions profile = {};  // for kRbf and kBilinear
 
   std::string Name() const;
   // Fewest images a fit needs.

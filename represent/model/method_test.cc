@@ -20,6 +20,12 @@ TEST(MethodTest, NamesRoundTrip) {
   EXPECT_THROW(Method::Parse("hsh"), Error);
   EXPECT_EQ(Method::Parse("pbr").kind, Method::Kind::kPbr);
   EXPECT_EQ(Method::Parse("pbr").Name(), "pbr");
+  EXPECT_EQ(Method::Parse("rbf").kind, Method::Kind::kRbf);
+  EXPECT_EQ(Method::Parse("bilinear").Name(), "bilinear");
+  // The light-profile options are not part of the name, and default to unset / the defaults.
+  const Method rbf = Method::Parse("rbf");
+  EXPECT_FALSE(rbf.profile.rbf_width_degrees);
+  EXPECT_EQ(rbf.profile.planes, LightProfileOptions::kDefaultPlanes);
 }
 
 TEST(MethodTest, AllIsTheThesisFiveAndLrgb) {
