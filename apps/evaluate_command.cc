@@ -48,6 +48,7 @@ void AddEvaluateCommand(CLI::App& app) {
     std::filesystem::path report;
     std::string report_images;
     bool no_prediction = false;
+    int hold_out_every = 0;
     bool literal_rms = false;
     bool raw_intensities = false;
     bool robust = false;
@@ -73,6 +74,11 @@ void AddEvaluateCommand(CLI::App& app) {
                       "their relighting (default: three spread-out lights)");
   command->add_flag("--no-prediction", options->no_prediction,
                     "Skip leave-one-out prediction (one fit per image)");
+  command
+      ->add_option("--hold-out-every", options->hold_out_every,
+                   "Prediction from one fit without every K-th image (0, K, 2K, ...) instead of "
+                   "leave-one-out")
+      ->check(CLI::PositiveNumber);
   command->add_flag("--literal-rms", options->literal_rms,
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
@@ -119,6 +125,11 @@ void AddEvaluateCommand(CLI::App& app) {
                               truth->height(), loaded.set.width(), loaded.set.height()));
     }
     // Checked before the evaluation, which can take minutes.
+    if (options->hold_out_every > 0 && (options->no_prediction || !options->report.empty())) {
+      throw Error(
+          "--hold-out-every predicts the held-out images only: it goes with neither "
+          "--no-prediction nor --report (whose per-image views need every image's prediction)");
+    }
     const std::vector<int> report_images = ParseIndexList(options->report_images);
     for (int index : report_images) {
       if (index >= loaded.set.size()) {
@@ -131,6 +142,7 @@ void AddEvaluateCommand(CLI::App& app) {
     EvaluationOptions evaluation;
     evaluation.prediction = !options->no_prediction;
     evaluation.literal_thesis_rms = options->literal_rms;
+    evaluation.hold_out_every = options->hold_out_every;
     evaluation.progress = &bar;
     if (options->robust) {
       evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);

@@ -31,6 +31,15 @@ double NormalisedRmsError(const Observations& observations, int image, const Eig
   return error / sigma;
 }
 
+double PeakSignalToNoiseRatio(const Observations& observations, int image,
+                              const Eigen::VectorXf& relit) {
+  const auto captured = observations.matrix().col(image).cast<double>();
+  const double peak = captured.maxCoeff();
+  const double mse = (relit.cast<double>() - captured).squaredNorm() / captured.size();
+  if (mse == 0.0) return INFINITY;
+  return 10.0 * std::log10(peak * peak / mse);
+}
+
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,
                                       const Observations& observations,
                                       const LightDirection& light) {
@@ -82,21 +91,52 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
   }
   if (!options.prediction) return result;
 
-  progress.Start(fmt::format("leave-one-out {}", method.Name()), n);
-  result.prediction_per_image.resize(n);
-  tbb::parallel_for(0, n, [&](int k) {
-    std::vector<int> others;
+  if (options.hold_out_every > 0) {
+    std::vector<int> kept;
     for (int i = 0; i < n; ++i) {
-      if (i != k) others.push_back(i);
+      (i % options.hold_out_every == 0 ? result.prediction_images : kept).push_back(i);
     }
-    const Representation fold = fit(others, nullptr);
-    result.prediction_per_image[k] =
-        NormalisedRmsError(observations, k, RelightObservedPixels(fold, observations, set.light(k)),
-                           options.literal_thesis_rms);
+    if (static_cast<int>(kept.size()) < method.MinimumImages()) {
+      throw Error(set.source(), fmt::format("holding out every {} image(s) leaves {} for {}, which "
+                                            "needs {}",
+                                            options.hold_out_every, kept.size(), method.Name(),
+                                            method.MinimumImages()));
+    }
+    progress.Start(fmt::format("held-out {}", method.Name()), 1);
+    const Representation held_out_fit = fit(kept, nullptr);
     progress.Advance();
-  });
-  progress.Finish();
+    progress.Finish();
+    const auto count = result.prediction_images.size();
+    result.prediction_per_image.resize(count);
+    result.psnr_prediction_per_image.resize(count);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t j) {
+      const int k = result.prediction_images[j];
+      const Eigen::VectorXf relit = RelightObservedPixels(held_out_fit, observations, set.light(k));
+      result.prediction_per_image[j] =
+          NormalisedRmsError(observations, k, relit, options.literal_thesis_rms);
+      result.psnr_prediction_per_image[j] = PeakSignalToNoiseRatio(observations, k, relit);
+    });
+  } else {
+    progress.Start(fmt::format("leave-one-out {}", method.Name()), n);
+    result.prediction_images = all;
+    result.prediction_per_image.resize(n);
+    result.psnr_prediction_per_image.resize(n);
+    tbb::parallel_for(0, n, [&](int k) {
+      std::vector<int> others;
+      for (int i = 0; i < n; ++i) {
+        if (i != k) others.push_back(i);
+      }
+      const Representation fold = fit(others, nullptr);
+      const Eigen::VectorXf relit = RelightObservedPixels(fold, observations, set.light(k));
+      result.prediction_per_image[k] =
+          NormalisedRmsError(observations, k, relit, options.literal_thesis_rms);
+      result.psnr_prediction_per_image[k] = PeakSignalToNoiseRatio(observations, k, relit);
+      progress.Advance();
+    });
+    progress.Finish();
+  }
   result.eta_prediction = Mean(result.prediction_per_image);
+  result.psnr_prediction = Mean(result.psnr_prediction_per_image);
   return result;
 }
 
@@ -106,6 +146,11 @@ nlohmann::json MethodEvaluation::ToJson() const {
   if (eta_prediction) {
     json["eta_prediction"] = *eta_prediction;
     json["eta_prediction_per_image"] = prediction_per_image;
+    json["prediction_images"] = prediction_images;
+    if (psnr_prediction) {
+      json["psnr_prediction"] = *psnr_prediction;
+      json["psnr_prediction_per_image"] = psnr_prediction_per_image;
+    }
   }
   if (normals) json["normals"] = normals->ToJson();
   return json;

@@ -19,6 +19,10 @@ namespace photomat {
 struct EvaluationOptions {
   // Leave-one-out ability-of-prediction (one fit per image); off: reconstruction only.
   bool prediction = true;
+  // > 0: instead of leave-one-out, one fit without the held-out images i % hold_out_every == 0
+  // (every k-th light from the first), which predicts each held-out image: one fit per method
+  // instead of one per image, for slow fits (pbr) and for a test set of unseen lights.
+  int hold_out_every = 0;
   // The thesis's eq. 4.5.1 as printed, e_k = (1/NM) sqrt(sum (r - i)^2), instead of the RMS
   // sqrt((1/NM) sum (r - i)^2) that the reading in the spec reconstructs.
   bool literal_thesis_rms = false;
@@ -35,8 +39,16 @@ struct MethodEvaluation {
   // of captured image k over the same values.
   double eta_reconstruction = 0.0;       // fitted from all images, relit at each of them
   std::optional<double> eta_prediction;  // image k relit from a fit without image k
+  // The peak signal-to-noise ratio of the predicted images, 10 log10(peak^2 / MSE) in dB, peak
+  // the largest captured value of image k over the mask's pixels and channels (the images are
+  // linear and not scaled to a fixed range); the mean over the predicted images.
+  std::optional<double> psnr_prediction;
   std::vector<double> reconstruction_per_image;
+  // Per predicted image, in the order of prediction_images (every image for leave-one-out, the
+  // held-out ones for EvaluationOptions::hold_out_every).
+  std::vector<int> prediction_images;
   std::vector<double> prediction_per_image;
+  std::vector<double> psnr_prediction_per_image;
   std::optional<NormalErrorStats> normals;  // methods that give normals, when truth is given
   nlohmann::json ToJson() const;
 };
@@ -45,6 +57,11 @@ struct MethodEvaluation {
 // (the rows of the selected pixels).
 double NormalisedRmsError(const Observations& observations, int image, const Eigen::VectorXf& relit,
                           bool literal_thesis_rms = false);
+
+// The PSNR in dB of `relit` values against column `image` of `observations` (see
+// MethodEvaluation::psnr_prediction); infinite for an exact prediction.
+double PeakSignalToNoiseRatio(const Observations& observations, int image,
+                              const Eigen::VectorXf& relit);
 
 // Relit values of `representation` under `light` at the observations' pixels, in their row order.
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,

@@ -76,6 +76,63 @@ TEST(EvaluationTest, NormalisedErrorIsRmsOverStandardDeviation) {
               std::sqrt(0.5) / 2.0, 1e-7);
 }
 
+TEST(EvaluationTest, PsnrIsPeakOverRootMeanSquareInDecibels) {
+  std::vector<Image> images;
+  Image image(2, 1, 1);
+  image.values()[0] = 1.0f;
+  image.values()[1] = 4.0f;  // peak 4
+  images.push_back(image);
+  const PhotometricSet set(images, {LightDirection::FromSlantTilt(0, 0)});
+  const Observations observations(set);
+  Eigen::VectorXf relit(2);
+  relit << 1.5f, 3.5f;  // MSE 0.25: PSNR = 10 log10(16 / 0.25) = 18.0618 dB
+  EXPECT_NEAR(PeakSignalToNoiseRatio(observations, 0, relit), 10.0 * std::log10(64.0), 1e-6);
+  relit << 1.0f, 4.0f;
+  EXPECT_TRUE(std::isinf(PeakSignalToNoiseRatio(observations, 0, relit)));
+}
+
+TEST(EvaluationTest, HoldingOutEveryKthImagePredictsThoseFromOneFit) {
+  // The thesis grid's 36 lights, every 4th held out: images 0, 4, ..., 32 are predicted by a fit
+  // of the other 27. A Lambertian sample is an exact 3-term model, so gradient predicts them as
+  // well as leave-one-out does; a glossy, shadowed one is predicted worse than reconstructed.
+  EvaluationOptions options;
+  options.hold_out_every = 4;
+  const auto exact = testing::LambertianSet(SurfacePattern::kGrooves, 32);
+  const Observations exact_observations(exact.set);
+  const MethodEvaluation gradient =
+      EvaluateMethod(exact.set, exact_observations, Method::Parse("gradient"), nullptr, options);
+  ASSERT_EQ(exact.set.size(), 36);
+  EXPECT_EQ(gradient.prediction_images, (std::vector<int>{0, 4, 8, 12, 16, 20, 24, 28, 32}));
+  ASSERT_EQ(gradient.prediction_per_image.size(), 9u);
+  ASSERT_EQ(gradient.psnr_prediction_per_image.size(), 9u);
+  ASSERT_TRUE(gradient.eta_prediction && gradient.psnr_prediction);
+  EXPECT_LT(*gradient.eta_prediction, 1e-3);
+  EXPECT_GT(*gradient.psnr_prediction, 60.0);  // float round-off only
+
+  const auto glossy = testing::ShadowedSpecularSet(32);
+  const Observations observations(glossy.set);
+  const MethodEvaluation ptm =
+      EvaluateMethod(glossy.set, observations, Method::Parse("ptm"), nullptr, options);
+  ASSERT_TRUE(ptm.eta_prediction);
+  EXPECT_GT(*ptm.eta_prediction, ptm.eta_reconstruction);
+  // The held-out errors are the image's error from a fit that did not see it: each equals the
+  // error of relighting the one held-out fit there.
+  std::vector<int> kept;
+  for (int i = 0; i < glossy.set.size(); ++i) {
+    if (i % 4 != 0) kept.push_back(i);
+  }
+  const Representation fit =
+      FitObservations(observations, glossy.set.lights(), Method::Parse("ptm"), kept);
+  for (std::size_t j = 0; j < ptm.prediction_images.size(); ++j) {
+    const int k = ptm.prediction_images[j];
+    EXPECT_NEAR(ptm.prediction_per_image[j],
+                NormalisedRmsError(observations, k,
+                                   RelightObservedPixels(fit, observations, glossy.set.light(k))),
+                1e-9)
+        << k;
+  }
+}
+
 TEST(HshTest, EvaluateScoresEveryOrder) {
   // A shadowed, glossy sample under the five-ring dome: more terms fit the captured images better,
   // and leave-one-out prediction works for every order.
