@@ -17,6 +17,12 @@ namespace photomat {
 namespace {
 
 namespace fs = std::filesystem;
+
+ImageWriteOptions Uint16() {
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  return options;
+}
 using ::testing::HasSubstr;
 using testing::RunPhotomat;
 using testing::RunResult;
@@ -92,8 +98,7 @@ TEST(FitStreamCliTest, ImageOfAnotherSizeFailsNamingItAndLeavesNoOutput) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
   ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x32 --seed 5").exit_code, 0);
-  WriteImage(dir / "capture" / "img_007.png", Image(40, 31, 3),
-             {.sample_type = SampleType::kUint16});
+  WriteImage(dir / "capture" / "img_007.png", Image(40, 31, 3), Uint16());
   const RunResult fit =
       RunPhotomat("fit " + capture + " --method all --out " + (dir / "out").string());
   EXPECT_NE(fit.exit_code, 0);

@@ -23,6 +23,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
+ImageWriteOptions Uint16() {
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  return options;
+}
+
 // The methods that stream (pbr too, but its Ceres fit is slow: it shares the robust path and is
 // covered by the robust forms' per-band fit).
 std::vector<Method> StreamedMethods() {
@@ -151,7 +157,7 @@ void ExpectNoOutput(const fs::path& out) {
 TEST(StreamedFitTest, ImageOfAnotherSizeIsNamedBeforeAnythingIsWritten) {
   const testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
-  WriteImage(input / "img_005.png", Image(48, 39, 3), {.sample_type = SampleType::kUint16});
+  WriteImage(input / "img_005.png", Image(48, 39, 3), Uint16());
   try {
     OpenStreamedSet(input);
     FAIL() << "a set with one image of another size opened";
