@@ -101,7 +101,7 @@ SphereCapture ReadSphereCapture(const fs::path& input, const std::optional<Colou
   if (plain_folder) {
     const ImageFolder folder = ListImageFolder(input);
     ImageReadOptions read;
-    read.colour_space = space;
+    read.untagged_colour_space = space;
     TerminalProgressBar bar;
     bar.Start("load", folder.images.size());
     for (const fs::path& file : folder.images) {
@@ -115,7 +115,7 @@ SphereCapture ReadSphereCapture(const fs::path& input, const std::optional<Colou
     return capture;
   }
   LoadOptions load;
-  load.colour_space = space;
+  load.untagged_colour_space = space;
   const LoadedSet loaded = LoadSetForCommand(input, load);
   const fs::path base = DetectInput(input).file;
   const fs::path folder = fs::is_directory(base) ? base : base.parent_path();
@@ -194,7 +194,8 @@ void AddLightsCommand(CLI::App& calibrate) {
                       "Name the lights after the images of this folder (natural order, same "
                       "count): the sample captured under the same lights");
   command->add_option("--colour-space", options->colour_space,
-                      "How integer images encode light: linear or srgb (default: 8-bit sRGB)");
+                      "How untagged integer images encode light: linear or srgb (a file's own "
+                      "colour tags come first; default: 8-bit sRGB, 16-bit linear)");
   CLI::Option* refine = command->add_flag(
       "--refine", options->refine,
       "Refine the sphere jointly with the lights (Ceres; the default when this build has Ceres, "

@@ -57,7 +57,7 @@ void AddDemoCommand(CLI::App& app) {
       fitted.push_back(Fit(loaded.set, method));
       files[method.Name()] = method.Name() + ".exr";
       SaveRepresentation(stacks / files[method.Name()], fitted.back(),
-                         {loaded.set.lights(), "linear", capture.string()});
+                         {loaded.set.lights(), "linear", capture.string(), loaded.encodings});
     }
     WriteFitManifest(stacks, capture.string(), files);
     fmt::print("2/4 fit: {} map stacks -> {}\n", files.size(), stacks.string());

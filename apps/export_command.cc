@@ -147,13 +147,14 @@ void RunExport(const ExportCommandOptions& options) {
   LoadOptions load;
   load.apply_intensities = !options.raw_intensities;
   if (!options.colour_space.empty()) {
-    load.colour_space = ParseColourSpace(options.colour_space);
-    if (!load.colour_space) throw Error("--colour-space: expected linear or srgb");
+    load.untagged_colour_space = ParseColourSpace(options.colour_space);
+    if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
   }
   const LoadedSet loaded = LoadSetForCommand(options.input, load);
   if (!options.viewer.empty()) {
     // A photometric set: the viewer shows the --method fit, or every method.
-    const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string()};
+    const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
+                                     loaded.encodings};
     std::vector<LoadedStack> fits;
     for (const Method& m : method ? std::vector{Method::Parse(*method)} : AllMethods()) {
       fits.push_back({Fit(loaded.set, m), provenance});
@@ -163,7 +164,8 @@ void RunExport(const ExportCommandOptions& options) {
   WriteInterchangeFiles(options, "", loaded.set.channels(),
                         [&](const Method& target) { return FitEncoded(loaded.set, target); });
   if (options.out.empty()) return;
-  const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string()};
+  const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
+                                   loaded.encodings};
   WriteMaps(options, {Fit(loaded.set, Method::Parse(method.value_or("gradient"))), provenance});
 }
 
@@ -197,7 +199,8 @@ void AddExportCommand(CLI::App& app) {
   command->add_option("--rti", options->rti, "Also write an HSH .rti file");
   command->add_option("--hsh-terms", options->hsh_terms, "4, 9 or 16 (default 9)");
   command->add_option("--colour-space", options->colour_space,
-                      "For a photometric set: how integer images encode light (linear or srgb)");
+                      "For a photometric set: how untagged integer images encode light (linear "
+                      "or srgb; a file's own colour tags come first)");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "For a photometric set: do not divide by the light intensities it gives");
   command->add_option("--viewer", options->viewer,

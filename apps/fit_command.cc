@@ -48,8 +48,9 @@ void AddFitCommand(CLI::App& app) {
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "Do not divide the images by the light intensities the input gives");
   command->add_option("--colour-space", options->colour_space,
-                      "How integer images encode light: linear or srgb (default: 8-bit sRGB, "
-                      "16-bit linear, or what the manifest says)");
+                      "How untagged integer images encode light: linear or srgb (a file's own "
+                      "colour tags come first; default: what the manifest says, else 8-bit "
+                      "sRGB, 16-bit linear)");
   command->add_flag("--robust", options->robust,
                     "Robust fits: clipped samples, shadows and highlights get low or zero weight "
                     "(robust photometric stereo; PTM and Eigen-k share its outlier weights)");
@@ -72,8 +73,8 @@ void AddFitCommand(CLI::App& app) {
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
     if (!options->colour_space.empty()) {
-      load.colour_space = ParseColourSpace(options->colour_space);
-      if (!load.colour_space) throw Error("--colour-space: expected linear or srgb");
+      load.untagged_colour_space = ParseColourSpace(options->colour_space);
+      if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
     }
     // Streamed (README, "Streamed fitting"): the images are read band by band and every stack
     // is written band by band, then all renamed into place.
@@ -87,7 +88,7 @@ void AddFitCommand(CLI::App& app) {
       fit.robust_options.pbr = options->pbr;
     }
     fit.compression = compression;
-    fit.provenance = {set.lights(), "linear", options->input.string()};
+    fit.provenance = {set.lights(), "linear", options->input.string(), set.encodings()};
     TerminalProgressBar bar;
     fit.progress = &bar;
     CreateFolder(options->out);

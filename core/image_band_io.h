@@ -33,7 +33,9 @@ class ImageBandReader {
   int height() const { return height_; }
   // Channels kept (alpha dropped unless ImageReadOptions::keep_alpha).
   int channels() const { return kept_; }
-  // The file's format and attributes; saturated_pixels counts the rows read so far.
+  // The file's format, attributes and encoding (decided once, when the file is opened, by
+  // core/sample_encoding; every band is converted by it); saturated_pixels counts the rows read
+  // so far.
   const ImageFileInfo& info() const { return info_; }
   int next_row() const { return next_row_; }
   // The file's channel names when every channel is kept; empty otherwise.

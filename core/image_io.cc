@@ -36,16 +36,6 @@ std::string OiioError(const std::string& own) {
   return message.empty() ? "unknown OpenImageIO error" : message;
 }
 
-// 256-entry decoding table: exact for every 8-bit code.
-const std::array<float, 256>& Srgb8ToLinearTable() {
-  static const std::array<float, 256> table = [] {
-    std::array<float, 256> t{};
-    for (int i = 0; i < 256; ++i) t[i] = static_cast<float>(SrgbToLinear(i / 255.0));
-    return t;
-  }();
-  return table;
-}
-
 // Rows decoded per call for scanline files: a small interleaved buffer whose channels are then
 // spread over the image's planes (OpenImageIO strides cannot express planar storage of several
 // channels, and reading channel by channel would decode the file once per channel). Tiled files
@@ -54,28 +44,16 @@ constexpr int kChunkRows = 16;
 // Rows per band of the writer for formats other than EXR.
 constexpr int kBandRows = 64;
 
-// Linear float of every integer code: the sRGB table for 8-bit codes, the curve otherwise.
+// Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes through
+// the encoding's code -> light table; returns the pixels with a kept channel at the largest code.
 template <typename T>
-float DecodeInteger(T code, ColourSpace space) {
-  constexpr double kScale = 1.0 / static_cast<double>(std::numeric_limits<T>::max());
-  if (space == ColourSpace::kLinear) return static_cast<float>(code * kScale);
-  if constexpr (sizeof(T) == 1) {
-    return Srgb8ToLinearTable()[code];
-  } else {
-    return static_cast<float>(SrgbToLinear(code * kScale));
-  }
-}
-
-// Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes; returns
-// the pixels with a kept channel at the largest code.
-template <typename T>
-std::size_t DecodeIntegerRow(const T* row, int file_channels, ColourSpace space, ImageView band,
-                             int y) {
+std::size_t DecodeIntegerRow(const T* row, int file_channels,
+                             const std::vector<float>& light_of_code, ImageView band, int y) {
   constexpr T kMax = std::numeric_limits<T>::max();
   const int width = band.width(), kept = band.channels();
   for (int c = 0; c < kept; ++c) {
     float* out = band.row(c, y).data();
-    for (int x = 0; x < width; ++x) out[x] = DecodeInteger(row[x * file_channels + c], space);
+    for (int x = 0; x < width; ++x) out[x] = light_of_code[row[x * file_channels + c]];
   }
   std::size_t saturated = 0;
   for (int x = 0; x < width; ++x) {
@@ -86,9 +64,9 @@ std::size_t DecodeIntegerRow(const T* row, int file_channels, ColourSpace space,
 }
 
 // Float, half and unusual integer widths, converted to float by OpenImageIO (integers to
-// [0, 1]); returns the number of non-finite samples.
-std::size_t DecodeFloatRow(const float* row, int file_channels, ColourSpace space, ImageView band,
-                           int y) {
+// [0, 1]), then through the encoding's transfer curve; returns the number of non-finite samples.
+std::size_t DecodeFloatRow(const float* row, int file_channels, const SampleEncoding& encoding,
+                           ImageView band, int y) {
   const int width = band.width(), kept = band.channels();
   std::size_t non_finite = 0;
   for (int c = 0; c < kept; ++c) {
@@ -96,19 +74,84 @@ std::size_t DecodeFloatRow(const float* row, int file_channels, ColourSpace spac
     for (int x = 0; x < width; ++x) {
       const float value = row[x * file_channels + c];
       if (!std::isfinite(value)) ++non_finite;
-      out[x] = space == ColourSpace::kSrgb ? static_cast<float>(SrgbToLinear(value)) : value;
+      out[x] = DecodeFloatSample(encoding, value);
     }
   }
   return non_finite;
 }
 
+// LibRaw's settings for scene-linear output (CameraRawOptions). Other readers ignore "raw:" keys,
+// so every file is opened with them.
+OIIO::ImageSpec CameraRawConfig(const CameraRawOptions& options) {
+  OIIO::ImageSpec config;
+  config.attribute("raw:ColorSpace", "sRGB-linear");
+  config.attribute("raw:auto_bright", 0);
+  config.attribute("raw:adjust_maximum_thr", 0.0f);
+  config.attribute("raw:Demosaic", options.demosaic);
+  config.attribute("raw:HighlightMode", 0);  // clip: saturated pixels stay at full scale
+  if (options.white_balance) {
+    config.attribute("raw:use_camera_wb", 0);
+    config.attribute("raw:user_mul", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 4),
+                     options.white_balance->data());
+  } else {
+    config.attribute("raw:use_camera_wb", 1);
+  }
+  return config;
+}
+
+// What the file says about its encoding: OpenImageIO's metadata and, for PNG, the chunks.
+EncodingEvidence GatherEvidence(OIIO::ImageInput& input, const fs::path& path) {
+  const OIIO::ImageSpec& spec = input.spec();
+  EncodingEvidence evidence;
+  evidence.format = input.format_name();
+  evidence.bits_per_sample = static_cast<int>(spec.format.size() * 8);
+  evidence.floating_point = spec.format.is_floating_point();
+  evidence.channels = spec.nchannels;
+  if (const OIIO::ParamValue* icc = spec.find_attribute("ICCProfile");
+      icc != nullptr && icc->type().basetype == OIIO::TypeDesc::UINT8) {
+    const auto* bytes = static_cast<const unsigned char*>(icc->data());
+    evidence.icc_profile.assign(bytes, bytes + icc->type().size());
+  }
+  if (const OIIO::ParamValue* exif = spec.find_attribute("Exif:ColorSpace")) {
+    evidence.exif_colour_space = exif->get_int();
+  }
+  evidence.oiio_colour_space = spec.get_string_attribute("oiio:ColorSpace");
+  if (const OIIO::ParamValue* c =
+          spec.find_attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8))) {
+    std::array<float, 8> values{};
+    const auto* floats = static_cast<const float*>(c->data());
+    std::copy(floats, floats + 8, values.begin());
+    evidence.chromaticities = values;
+  }
+  if (evidence.format == "png") AddPngChunkEvidence(path, evidence);
+  return evidence;
+}
+
+// The file's encoding: the caller's override of integer codes, else decided from the file's
+// metadata (core/sample_encoding, the one place of that decision).
+SampleEncoding DecideEncoding(OIIO::ImageInput& input, const fs::path& path,
+                              const ImageReadOptions& options) {
+  if (!options.colour_space) {
+    return DecideSampleEncoding(GatherEvidence(input, path), options.untagged_colour_space);
+  }
+  SampleEncoding encoding;
+  const bool forced = !input.spec().format.is_floating_point();
+  const ColourSpace space = forced ? *options.colour_space : ColourSpace::kLinear;
+  encoding.transfer = space == ColourSpace::kSrgb ? Transfer::kSrgb : Transfer::kLinear;
+  encoding.decided_by = forced ? "caller" : "default";
+  encoding.evidence = forced ? "the reader asked for these codes" : "float samples are linear";
+  return encoding;
+}
+
 }  // namespace
 
-// The open file and one chunk of its interleaved samples, as 8-bit, 16-bit or float.
+// The open file, its code -> light table (integer files) and one chunk of its interleaved
+// samples, as 8-bit, 16-bit or float.
 struct ImageBandReader::Decoder {
   std::unique_ptr<OIIO::ImageInput> input;
   OIIO::ImageSpec spec;
   OIIO::TypeDesc type;
+  std::vector<float> light_of_code;
   int chunk_rows = kChunkRows;
   int chunk_first = 0;
   int chunk_count = 0;
@@ -141,7 +184,8 @@ ImageBandReader::ImageBandReader(const fs::path& path, const ImageReadOptions& o
     : path_(path), decoder_(std::make_unique<Decoder>()) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path, "image file not found");
-  decoder_->input = OIIO::ImageInput::open(path.string());
+  const OIIO::ImageSpec config = CameraRawConfig(options.camera_raw);
+  decoder_->input = OIIO::ImageInput::open(path.string(), &config);
   if (!decoder_->input) throw Error(path, fmt::format("cannot read image: {}", OiioError("")));
   const OIIO::ImageSpec& spec = decoder_->spec = decoder_->input->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
@@ -162,17 +206,17 @@ ImageBandReader::ImageBandReader(const fs::path& path, const ImageReadOptions& o
       info_.attributes[attribute.name().string()] = attribute.get_string();
     }
   }
+  // Decided once, when the file is opened; every band is converted by the same decision.
+  info_.encoding = DecideEncoding(*decoder_->input, path, options);
+  info_.colour_space = info_.encoding.Summary();
   const bool integer = !info_.floating_point && (format.basetype == OIIO::TypeDesc::UINT8 ||
                                                  format.basetype == OIIO::TypeDesc::UINT16);
   if (integer) {
     const bool eight_bit = format.basetype == OIIO::TypeDesc::UINT8;
     decoder_->type = eight_bit ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
-    info_.colour_space =
-        options.colour_space.value_or(eight_bit ? ColourSpace::kSrgb : ColourSpace::kLinear);
+    decoder_->light_of_code = CodeToLightTable(info_.encoding, eight_bit ? 8 : 16);
   } else {
     decoder_->type = OIIO::TypeDesc::FLOAT;
-    info_.colour_space = info_.floating_point ? ColourSpace::kLinear
-                                              : options.colour_space.value_or(ColourSpace::kLinear);
   }
   const int tile = spec.tile_height;
   decoder_->chunk_rows = tile > 0 ? std::max(1, kChunkRows / tile) * tile : kChunkRows;
@@ -191,6 +235,7 @@ void ImageBandReader::ReadNext(ImageView band) {
                                    band.width(), band.height(), band.channels()));
   }
   const int file_channels = decoder_->spec.nchannels;
+  const std::vector<float>& table = decoder_->light_of_code;
   std::size_t non_finite = 0;
   for (int r = 0; r < band.height(); ++r) {
     const int y = next_row_ + r;
@@ -198,19 +243,21 @@ void ImageBandReader::ReadNext(ImageView band) {
     const std::byte* row = decoder_->Row(y);
     if (decoder_->type == OIIO::TypeDesc::UINT8) {
       info_.saturated_pixels += DecodeIntegerRow(reinterpret_cast<const std::uint8_t*>(row),
-                                                 file_channels, info_.colour_space, band, r);
+                                                 file_channels, table, band, r);
     } else if (decoder_->type == OIIO::TypeDesc::UINT16) {
       info_.saturated_pixels += DecodeIntegerRow(reinterpret_cast<const std::uint16_t*>(row),
-                                                 file_channels, info_.colour_space, band, r);
+                                                 file_channels, table, band, r);
     } else {
       non_finite += DecodeFloatRow(reinterpret_cast<const float*>(row), file_channels,
-                                   info_.colour_space, band, r);
+                                   info_.encoding, band, r);
     }
   }
   next_row_ += band.height();
   if (non_finite > 0) {
     throw Error(path_, fmt::format("{} sample(s) are NaN or infinite", non_finite));
   }
+  // The ICC transform and the chromaticities matrix act on each pixel alone: band-local.
+  ApplyColourTransform(info_.encoding, band, path_);
 }
 
 LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {

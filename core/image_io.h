@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <map>
@@ -10,26 +11,55 @@
 
 #include "core/colour.h"
 #include "core/image.h"
+#include "core/sample_encoding.h"
 
 namespace photomat {
 
 // All image files go through OpenImageIO: 8/16-bit PNG and TIFF, JPEG, OpenEXR (float and half,
 // many channels), camera RAW and whatever else the installed OpenImageIO reads.
 
+// How camera RAW files (.dng, .cr2, .nef, ...; OpenImageIO's LibRaw plugin) are developed:
+// always scene-linear (raw:ColorSpace "sRGB-linear": sRGB primaries, no transfer curve), without
+// LibRaw's auto-brightening (raw:auto_bright 0), maximum adjustment (raw:adjust_maximum_thr 0) or
+// OpenImageIO's scene-linear rescaling (raw:apply_scene_linear_scale left unset: OpenImageIO
+// applies it whenever the key is present), so that values stay proportional to exposure across a
+// bracketed series (core/camera_raw_test.cc: within 0.06 %, measured). README, "Input images and
+// colour".
+struct CameraRawOptions {
+  // LibRaw's demosaic (raw:Demosaic): "linear", "VNG", "PPG", "AHD", "DCB", ...
+  // IMPLEMENTER CHOICE: "linear" (bilinear interpolation), the one demosaic that is a fixed
+  // linear operator: the adaptive ones (AHD, LibRaw's default) choose per pixel by comparing
+  // neighbours, and may choose differently under different lights, which photometric fits then
+  // read as shading. Pass "AHD" for sharper colour edges.
+  std::string demosaic = "linear";
+  // White-balance multipliers R, G, B, G2 (raw:user_mul with raw:use_camera_wb 0); unset: the
+  // camera's own (raw:use_camera_wb 1; a DNG's AsShotNeutral).
+  std::optional<std::array<float, 4>> white_balance;
+};
+
 struct ImageReadOptions {
-  // How integer samples encode light. Unset: 8-bit files are sRGB (what cameras and editors write),
-  // 16-bit and wider integer files are linear (what lab cameras and DiLiGenT write); float files
-  // are always linear.
+  // How integer samples encode light when the file says nothing about it (no ICC profile, PNG
+  // sRGB/gAMA chunk, EXIF ColorSpace or oiio:ColorSpace: DecideSampleEncoding): the manifest's
+  // "colour_space" or --colour-space. Unset: untagged 8-bit files are sRGB (what cameras and
+  // editors write), 16-bit and wider integer files linear (what lab cameras and DiLiGenT write).
+  std::optional<ColourSpace> untagged_colour_space;
+  // Overrides the file's tags: integer samples read as this whatever the file says (kLinear: the
+  // stored codes / max, for masks, response-curve calibration and tests of stored codes). Float
+  // files stay linear.
   std::optional<ColourSpace> colour_space;
   // Photometric data have no use for alpha; map stacks keep every channel.
   bool keep_alpha = false;
+  CameraRawOptions camera_raw;
 };
 
 // What the file held, before conversion to linear float.
 struct ImageFileInfo {
   int bits_per_sample = 0;
   bool floating_point = false;
+  // kSrgb when the samples were display-encoded (any non-linear transfer), else kLinear.
   ColourSpace colour_space = ColourSpace::kLinear;
+  // What was decided for this file, and why (recorded in stacks' provenance).
+  SampleEncoding encoding;
   // Pixels with a channel at the largest code of an integer format: clipped, not measured.
   std::size_t saturated_pixels = 0;
   // String metadata of the file (e.g. photomat's map-stack description in an EXR header).

@@ -169,7 +169,9 @@ StreamedSet OpenStreamedSet(const fs::path& path, const LoadOptions& options) {
                 fmt::format("{} images but {} light directions", description.image_files.size(),
                             description.lights.size()));
   }
-  set.read_.colour_space = options.colour_space ? options.colour_space : description.colour_space;
+  set.read_.colour_space = options.colour_space;
+  set.read_.untagged_colour_space =
+      options.untagged_colour_space ? options.untagged_colour_space : description.colour_space;
   set.files_ = description.image_files;
   for (const auto& file : set.files_) set.names_.push_back(file.string());
   set.readers_.resize(set.files_.size());
@@ -191,6 +193,9 @@ StreamedSet OpenStreamedSet(const fs::path& path, const LoadOptions& options) {
     }
   }
   set.lights_ = std::move(description.lights);
+  // Each image's encoding was decided as its reader opened it (core/sample_encoding); a set
+  // decoded in several ways is warned about once here, for the in-memory and streamed paths alike.
+  WarnIfEncodingsDisagree(set.encodings());
   if (description.mask) {
     try {
       Mask mask = ReadMask(*description.mask);
@@ -249,6 +254,16 @@ void StreamedSet::Rewind() {
                     [&](std::size_t i) { readers_[i] = ImageBandReader(files_[i], read_); });
 }
 
+std::vector<ImageEncodingRecord> StreamedSet::encodings() const {
+  std::vector<ImageEncodingRecord> records;
+  for (const ImageBandReader& reader : readers_) {
+    const SampleEncoding& encoding = reader.info().encoding;
+    records.push_back({reader.path().filename().string(), encoding.Name(), encoding.decided_by,
+                       encoding.evidence});
+  }
+  return records;
+}
+
 std::vector<std::size_t> StreamedSet::SaturatedPixels() const {
   std::vector<std::size_t> counts;
   for (const ImageBandReader& reader : readers_) counts.push_back(reader.info().saturated_pixels);
@@ -263,7 +278,7 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
   PhotometricSet set = streamed.ReadBand(streamed.height(), true, &progress);
   progress.Finish();
   LoadedSet loaded{std::move(set), streamed.kind(), streamed.SaturatedPixels(),
-                   streamed.ground_truth_normals()};
+                   streamed.ground_truth_normals(), streamed.encodings()};
   if (streamed.apply_intensities() && !streamed.intensities().empty()) {
     loaded.set.ApplyIntensities();
   }

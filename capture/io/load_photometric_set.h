@@ -9,6 +9,7 @@
 #include "core/colour.h"
 #include "core/photometric_set.h"
 #include "core/progress.h"
+#include "core/sample_encoding.h"
 
 namespace photomat {
 
@@ -35,8 +36,12 @@ struct LoadOptions {
   // Divide each channel of each image by its light's intensity (DiLiGenT's light_intensities.txt,
   // manifest "intensity"). Off keeps the raw images and the intensities beside them.
   bool apply_intensities = true;
-  // Overrides how integer images encode light (default: 8-bit sRGB, 16-bit linear; a manifest's
-  // "colour_space" comes next).
+  // How integer images that say nothing about their encoding encode light (--colour-space);
+  // before a manifest's "colour_space", after the files' own tags (ImageReadOptions). Default:
+  // 8-bit sRGB, 16-bit linear.
+  std::optional<ColourSpace> untagged_colour_space;
+  // Ignores the files' tags: every integer image read as this (kLinear: the stored codes / max,
+  // for response-curve calibration and tests of stored codes).
   std::optional<ColourSpace> colour_space;
   Progress* progress = nullptr;
 };
@@ -50,6 +55,8 @@ struct LoadedSet {
   // Ground-truth unit normals shipped with the set (synthetic manifests, DiLiGenT's
   // gt_normals.exr), if any.
   std::optional<std::filesystem::path> ground_truth_normals;
+  // Per image, how its samples were decoded and why (for the stack's provenance).
+  std::vector<ImageEncodingRecord> encodings;
 };
 
 // The light directions of any light file photomat reads (a .lp file, a manifest, DiLiGenT's
@@ -57,7 +64,8 @@ struct LoadedSet {
 // lights or another capture's.
 std::vector<LightDirection> ReadLightDirections(const std::filesystem::path& path);
 
-// Reads images in parallel. Every fault (missing or corrupt image, mixed sizes, malformed light
+// Reads images in parallel and warns (WarnIfEncodingsDisagree) when they were decoded
+// differently. Every fault (missing or corrupt image, mixed sizes, malformed light
 // data) is an Error naming the file and the fault.
 LoadedSet LoadPhotometricSet(const std::filesystem::path& path, const LoadOptions& options = {});
 

@@ -159,5 +159,35 @@ TEST(LoadLpTest, PtmFitterFixtureDecodesSrgbJpegs) {
   EXPECT_EQ(loaded.set.channels(), 3);
 }
 
+// Each image is decoded as its own file says (the value for untagged images does not override a
+// tag), and the decisions are recorded for the stack's provenance.
+TEST(LoadEncodingTest, EachImageIsDecodedAsItsFileSaysAndRecorded) {
+  TempDir dir;
+  Image image(4, 3, 3);
+  for (float& v : image.values()) v = 0.25f;
+  ImageWriteOptions srgb, linear;
+  srgb.sample_type = linear.sample_type = SampleType::kUint8;
+  srgb.encoding = ColourSpace::kSrgb;      // PNG sRGB chunk
+  linear.encoding = ColourSpace::kLinear;  // PNG gAMA 1.0
+  WriteImage(dir / "a.png", image, srgb);
+  WriteImage(dir / "b.png", image, linear);
+  WriteImage(dir / "c.png", image, linear);
+  testing::WriteFile(dir / "lights.lp",
+                     "3\na.png 0.5 0 0.866\nb.png 0 0.5 0.866\nc.png -0.5 0 0.866\n");
+  LoadOptions options;
+  options.untagged_colour_space = ColourSpace::kSrgb;
+  const LoadedSet loaded = LoadPhotometricSet(dir / "lights.lp", options);
+  ASSERT_EQ(loaded.encodings.size(), 3u);
+  EXPECT_EQ(loaded.encodings[0].file, "a.png");
+  EXPECT_EQ(loaded.encodings[0].encoding, "srgb");
+  EXPECT_EQ(loaded.encodings[0].decided_by, "png-srgb");
+  EXPECT_EQ(loaded.encodings[1].encoding, "linear");
+  EXPECT_EQ(loaded.encodings[1].decided_by, "png-gama");
+  // Both decode to the light written, to 8-bit quantisation (half a linear code: 2.0e-3;
+  // measured 9.8e-4 linear, 2.0e-4 sRGB). Read with the untagged value (sRGB), b would be 0.05.
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(loaded.set.image(i).at(1, 1, 0), 0.25, 2e-3) << i;
+  EXPECT_TRUE(WarnIfEncodingsDisagree(loaded.encodings));
+}
+
 }  // namespace
 }  // namespace photomat

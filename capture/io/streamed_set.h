@@ -35,6 +35,9 @@ class StreamedSet {
   const std::vector<std::vector<float>>& intensities() const { return intensities_; }
   bool apply_intensities() const { return apply_intensities_; }
   int next_row() const { return readers_.front().next_row(); }
+  // Per image, how its samples are decoded, decided when its file was opened (the same records
+  // LoadPhotometricSet gives in LoadedSet::encodings).
+  std::vector<ImageEncodingRecord> encodings() const;
 
   // The next `rows` rows of every image, decoded in parallel: a set of band images with the
   // lights, names, the band of the mask and the intensities (applied if the options said so,

@@ -52,6 +52,16 @@ nlohmann::json StackDescription(const Representation& representation,
   }
   description["capture"] = {
       {"lights", lights}, {"colour_space", provenance.colour_space}, {"source", provenance.source}};
+  if (!provenance.images.empty()) {
+    nlohmann::json images = nlohmann::json::array();
+    for (const ImageEncodingRecord& image : provenance.images) {
+      images.push_back({{"file", image.file},
+                        {"encoding", image.encoding},
+                        {"decided_by", image.decided_by},
+                        {"evidence", image.evidence}});
+    }
+    description["capture"]["images"] = std::move(images);
+  }
   return description;
 }
 
@@ -183,6 +193,14 @@ LoadedStack StackFromDescription(const std::string& text, const Image& stored,
     }
     if (capture.Has("colour_space")) provenance.colour_space = capture["colour_space"].String();
     if (capture.Has("source")) provenance.source = capture["source"].String();
+    if (capture.Has("images")) {
+      const JsonReader images = capture["images"];
+      for (std::size_t i = 0; i < images.ArraySize(); ++i) {
+        const JsonReader image = images[i];
+        provenance.images.push_back({image["file"].String(), image["encoding"].String(),
+                                     image["decided_by"].String(), image["evidence"].String()});
+      }
+    }
   }
   try {
     nlohmann::json details = description.value("details", nlohmann::json::object());

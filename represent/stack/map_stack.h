@@ -4,10 +4,12 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/image_io.h"
 #include "core/light_direction.h"
+#include "core/sample_encoding.h"
 #include "represent/model/representation.h"
 
 namespace photomat {
@@ -20,15 +22,29 @@ namespace photomat {
 //    "basis": {...LightBasis, everything needed to turn a light into coefficients},
 //    "details": {...}, ["shading": {"kind": "microfacet"} for pbr, with layout.shading_maps],
 //    "capture": {"lights": [[x, y, z], ...], "colour_space": "linear",
-//    "source": "..."}}
+//    "source": "...", "images": [{"file": "img_000.png", "encoding": "srgb",
+//    "decided_by": "png-srgb", "evidence": "PNG sRGB chunk"}, ...]}}
+// ("images": how each input image was decoded to linear light, DecideSampleEncoding; omitted
+// when unknown.)
 inline constexpr const char* kStackAttribute = "photomat:stack";
 inline constexpr const char* kStackFormat = "photomat-map-stack";
 
 // Where the maps came from.
 struct StackProvenance {
+  // A constructor rather than aggregate initialisation, so that {lights, space, source} leaves
+  // `images` empty without a missing-initializer warning.
+  StackProvenance(std::vector<LightDirection> lights = {}, std::string space = "linear",
+                  std::string from = {}, std::vector<ImageEncodingRecord> decoded = {})
+      : capture_lights(std::move(lights)),
+        colour_space(std::move(space)),
+        source(std::move(from)),
+        images(std::move(decoded)) {}
+
   std::vector<LightDirection> capture_lights;
-  std::string colour_space = "linear";
+  std::string colour_space;
   std::string source;
+  // How each input image was decoded (LoadedSet::encodings); empty when unknown.
+  std::vector<ImageEncodingRecord> images;
 };
 
 // Atomic write; throws Error naming `path`. Every `compression` is lossless: the maps read back

@@ -37,6 +37,21 @@ TEST(MapStackTest, EveryMethodRoundTripsExactly) {
   }
 }
 
+TEST(MapStackTest, ProvenanceKeepsHowEachImageWasDecoded) {
+  testing::TempDir dir;
+  const auto synthetic = testing::ShadowedSpecularSet(24);
+  StackProvenance provenance{synthetic.set.lights(), "linear", "synthetic"};
+  provenance.images = {{"img_000.png", "srgb", "png-srgb", "PNG sRGB chunk"},
+                       {"img_001.png", "gamma 2.2", "png-gama", "PNG gAMA 0.45455"}};
+  SaveRepresentation(dir / "s.exr", Fit(synthetic.set, Method::Parse("gradient")), provenance);
+  const StackProvenance loaded = LoadRepresentation(dir / "s.exr").provenance;
+  ASSERT_EQ(loaded.images.size(), 2u);
+  EXPECT_EQ(loaded.images[1].file, "img_001.png");
+  EXPECT_EQ(loaded.images[1].encoding, "gamma 2.2");
+  EXPECT_EQ(loaded.images[1].decided_by, "png-gama");
+  EXPECT_EQ(loaded.images[1].evidence, "PNG gAMA 0.45455");
+}
+
 TEST(MapStackTest, PbrStackRoundTripsWithItsShading) {
   testing::TempDir dir;
   Image maps(3, 2, MicrofacetShading().MapNames());

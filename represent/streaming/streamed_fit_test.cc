@@ -148,6 +148,41 @@ TEST(StreamedFitTest, RobustBandsOfThreeRowsEqualTheInMemoryFit) {
   ExpectStreamedEqualsInMemory(true, 1e-6);
 }
 
+// The streamed stack records how each image was decoded, as the in-memory load decides it
+// (photomat fit passes StreamedSet::encodings() into the provenance).
+TEST(StreamedFitTest, StackRecordsEachImagesEncodingAsTheInMemoryLoad) {
+  const testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  const LoadedSet memory = LoadPhotometricSet(input);
+  StreamedSet set = OpenStreamedSet(input);
+  const std::vector<ImageEncodingRecord> streamed = set.encodings();
+  ASSERT_EQ(streamed.size(), memory.encodings.size());
+  ASSERT_EQ(streamed.size(), static_cast<std::size_t>(memory.set.size()));
+  for (std::size_t i = 0; i < streamed.size(); ++i) {
+    EXPECT_EQ(streamed[i].file, memory.encodings[i].file);
+    EXPECT_EQ(streamed[i].encoding, memory.encodings[i].encoding);
+    EXPECT_EQ(streamed[i].decided_by, memory.encodings[i].decided_by);
+    EXPECT_EQ(streamed[i].evidence, memory.encodings[i].evidence);
+  }
+  // Untagged 16-bit PNGs: linear by default.
+  EXPECT_EQ(streamed.front().encoding, "linear");
+  EXPECT_EQ(streamed.front().decided_by, "default");
+  fs::create_directories(dir / "out");
+  StreamedFitOptions options;
+  options.band_rows = 3;
+  options.provenance = {set.lights(), "linear", input.string(), streamed};
+  const std::vector<Method> methods = {Method::Parse("3i")};
+  const std::vector<fs::path> paths = {dir / "out" / "3i.exr"};
+  FitStreamed(set, methods, paths, options);
+  const LoadedStack stack = LoadRepresentation(paths.front());
+  ASSERT_EQ(stack.provenance.images.size(), streamed.size());
+  for (std::size_t i = 0; i < streamed.size(); ++i) {
+    EXPECT_EQ(stack.provenance.images[i].file, streamed[i].file);
+    EXPECT_EQ(stack.provenance.images[i].encoding, streamed[i].encoding);
+    EXPECT_EQ(stack.provenance.images[i].decided_by, streamed[i].decided_by);
+  }
+}
+
 // No file is left behind, temporary or final, when a fault stops the fit.
 void ExpectNoOutput(const fs::path& out) {
   for (const auto& entry : fs::directory_iterator(out)) {

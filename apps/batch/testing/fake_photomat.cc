@@ -19,6 +19,22 @@
 
 namespace {
 
+// One field of /proc/self/status in kB (VmRSS, VmHWM, RssAnon): the kernel's own account of this
+// process, so the test can compare RunChild's measurement with what the child had.
+long StatusKilobytes(const std::string& field) {
+  std::ifstream status("/proc/self/status");
+  std::string name;
+  long value = 0;
+  while (status >> name) {
+    if (name == field + ":") {
+      status >> value;
+      return value;
+    }
+    status.ignore(1 << 20, '\n');
+  }
+  return -1;
+}
+
 int Run(const std::vector<std::string>& a) {
   using namespace photomat::batch;
   if (a.size() == 3 && a[0] == "write") {  // write FILE TEXT (relative to the working directory)
@@ -34,8 +50,14 @@ int Run(const std::vector<std::string>& a) {
     std::raise(SIGSEGV);
   }
   if (a.size() == 2 && a[0] == "allocate") {  // allocate MB: touch that much memory
+    const long anon_before = StatusKilobytes("RssAnon");
     std::vector<char> block(std::stoul(a[1]) << 20);
     for (std::size_t i = 0; i < block.size(); i += 4096) block[i] = 1;
+    // Anonymous pages stay resident (no swap in the test), file-backed ones may not: the anon
+    // growth is exactly what was touched, the high-water mark is what RunChild must report.
+    fmt::print("anon_growth_kb {}\nrss_kb {}\nhwm_kb {}\n",
+               StatusKilobytes("RssAnon") - anon_before, StatusKilobytes("VmRSS"),
+               StatusKilobytes("VmHWM"));
     return block[block.size() / 2] == 1 ? 0 : 2;
   }
   if (a.size() == 2 && a[0] == "sleep") {  // sleep SECONDS
