@@ -164,9 +164,9 @@ TEST(StreamedFitTest, StackRecordsEachImagesEncodingAsTheInMemoryLoad) {
     EXPECT_EQ(streamed[i].decided_by, memory.encodings[i].decided_by);
     EXPECT_EQ(streamed[i].evidence, memory.encodings[i].evidence);
   }
-  // Untagged 16-bit PNGs: linear by default.
+  // 16-bit PNGs written linear: OpenImageIO stores a gAMA chunk of 1.0, which decides.
   EXPECT_EQ(streamed.front().encoding, "linear");
-  EXPECT_EQ(streamed.front().decided_by, "default");
+  EXPECT_EQ(streamed.front().decided_by, "png-gama");
   fs::create_directories(dir / "out");
   StreamedFitOptions options;
   options.band_rows = 3;
