@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <exception>
+#include <new>
 #include <string>
 
 #include "core/error.h"
@@ -20,6 +21,14 @@ int RunCommands(int argc, char** argv, std::initializer_list<AddCommandFunction>
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     return app.exit(error);
+  } catch (const std::bad_alloc&) {
+    // Reached under a memory or address-space limit (ulimit -v, a batch system's) as well as
+    // on a full machine; streamed commands can be told to hold less.
+    fmt::print(stderr,
+               "photomat: error: out of memory (an allocation failed; a limit on memory or "
+               "address space, or too little memory for this work). `photomat fit` holds less "
+               "with a smaller --memory budget\n");
+    return 1;
   } catch (const std::exception& error) {
     fmt::print(stderr, "photomat: error: {}\n", error.what());
     return 1;

@@ -54,24 +54,29 @@ std::pair<double, double> ParseRange(std::string_view option, const std::string&
   return {*low, *high};
 }
 
-LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options) {
-  TerminalProgressBar bar;
-  LoadOptions with_progress = options;
-  with_progress.progress = &bar;
-  LoadedSet loaded = LoadPhotometricSet(input, with_progress);
+void WarnAboutClippedPixels(const std::vector<std::size_t>& saturated,
+                            const std::vector<std::string>& names) {
   std::size_t images = 0, worst = 0;
-  int worst_index = 0;
-  for (std::size_t i = 0; i < loaded.saturated_pixels.size(); ++i) {
-    if (loaded.saturated_pixels[i] == 0) continue;
+  std::size_t worst_index = 0;
+  for (std::size_t i = 0; i < saturated.size(); ++i) {
+    if (saturated[i] == 0) continue;
     ++images;
-    if (loaded.saturated_pixels[i] > worst) worst = loaded.saturated_pixels[i], worst_index = i;
+    if (saturated[i] > worst) worst = saturated[i], worst_index = i;
   }
   if (images > 0) {
     spdlog::warn(
         "{} of {} images have clipped pixels (most: {} in {}); clipped values are not "
         "measurements and bias least-squares fits",
-        images, loaded.set.size(), worst, loaded.set.image_name(worst_index));
+        images, saturated.size(), worst, names[worst_index]);
   }
+}
+
+LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options) {
+  TerminalProgressBar bar;
+  LoadOptions with_progress = options;
+  with_progress.progress = &bar;
+  LoadedSet loaded = LoadPhotometricSet(input, with_progress);
+  WarnAboutClippedPixels(loaded.saturated_pixels, loaded.set.image_names());
   return loaded;
 }
 

@@ -27,6 +27,10 @@ std::pair<int, int> ParseSize(const std::string& text);
 // "MIN,MAX" or one value (MIN = MAX) of the option `option`; throws Error naming it.
 std::pair<double, double> ParseRange(std::string_view option, const std::string& text);
 
+// Warns (stderr) about clipped pixels: `saturated` per image, `names` the images'.
+void WarnAboutClippedPixels(const std::vector<std::size_t>& saturated,
+                            const std::vector<std::string>& names);
+
 // Loads a set with a progress bar and warns (stderr) about clipped pixels.
 LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options);
 

@@ -10,11 +10,13 @@
 #include "apps/cli_support.h"
 #include "apps/light_profile_cli.h"
 #include "apps/robust_support.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/io/streamed_set.h"
 #include "core/colour.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
+#include "represent/streaming/streamed_fit.h"
 
 namespace photomat::app {
 
@@ -30,6 +32,7 @@ void AddFitCommand(CLI::App& app) {
     std::string exr_compression{ToString(kDefaultExrCompression)};
     PbrFitOptions pbr;
     LightProfileCli profile;
+    std::size_t memory_mb = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "fit");
@@ -59,6 +62,11 @@ void AddFitCommand(CLI::App& app) {
   AddPbrOptions(*command, options->pbr);
   AddLightProfileOptions(*command, options->profile);
   AddExrCompressionOption(*command, options->exr_compression);
+  command->add_option("--memory", options->memory_mb,
+                      fmt::format("Memory budget in MB for the bands of rows fitted at a time "
+                                  "(default: half the physical memory or of this process's memory "
+                                  "limits, here {} MB)",
+                                  DefaultFitMemory() >> 20));
   command->callback([options] {
     std::vector<Method> methods = ParseMethodList(options->methods);
     ApplyLightProfileOptions(options->profile, methods);
@@ -74,34 +82,34 @@ void AddFitCommand(CLI::App& app) {
       load.untagged_colour_space = ParseColourSpace(options->colour_space);
       if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
     }
-    RobustInput input = options->robust ? LoadSetForRobustFit(options->input, load)
-                                        : RobustInput{LoadSetForCommand(options->input, load), {}};
-    const LoadedSet& loaded = input.loaded;
-    // Robust: one robust fit, whose weights every method shares.
-    std::optional<Observations> observations;
-    std::optional<RobustFit> robust;
-    TerminalProgressBar bar;  // the robust fit's, and the pbr fit's later: outlives both
+    // Streamed (README, "Streamed fitting"): the images are read band by band and every stack
+    // is written band by band, then all renamed into place.
+    StreamedSet set = OpenStreamedSet(options->input, load);
+    StreamedFitOptions fit;
+    fit.memory_bytes = options->memory_mb << 20;
+    fit.robust = options->robust;
     if (options->robust) {
-      observations.emplace(loaded.set);
-      std::vector<int> all(loaded.set.size());
-      std::iota(all.begin(), all.end(), 0);
-      RobustFitOptions robust_options = RobustOptionsFromCommandLine(options->loss, input.measured);
-      robust_options.pbr = options->pbr;
-      robust_options.progress = &bar;
-      robust.emplace(*observations, loaded.set.lights(), all, robust_options, loaded.set.source());
-      fmt::print("{}\n", DescribeRobustFit(robust->summary()));
+      fit.robust_options = RobustOptionsFromCommandLine(options->loss, {});
+      fit.robust_options.measured = {};  // measured per band (StreamedFitOptions)
+      fit.robust_options.pbr = options->pbr;
     }
+    fit.compression = compression;
+    fit.provenance = {set.lights(), "linear", options->input.string(), set.encodings()};
+    TerminalProgressBar bar;
+    fit.progress = &bar;
     CreateFolder(options->out);
+    std::vector<std::filesystem::path> paths;
+    for (const Method& method : methods) paths.push_back(options->out / (method.Name() + ".exr"));
+    const StreamedFitReport report = FitStreamed(set, methods, paths, fit);
+    WarnAboutClippedPixels(report.saturated_pixels, set.image_names());
+    fmt::print("streamed in bands of {} of {} rows, {} pass(es) over the images\n",
+               report.band_rows, set.height(), report.passes);
+    if (report.robust_summary) fmt::print("{}\n", DescribeRobustFit(*report.robust_summary));
     std::map<std::string, std::string> stacks;
-    const StackProvenance provenance{loaded.set.lights(), "linear", options->input.string(),
-                                     loaded.encodings};
-    for (const Method& method : methods) {
-      const Representation representation = robust ? robust->Fit(method) : Fit(loaded.set, method);
-      const std::string file = method.Name() + ".exr";
-      SaveRepresentation(options->out / file, representation, provenance, compression);
-      stacks[method.Name()] = file;
-      fmt::print("{:<10} {} maps -> {}\n", method.Name(), representation.maps().channels(),
-                 (options->out / file).string());
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+      stacks[methods[i].Name()] = paths[i].filename().string();
+      fmt::print("{:<10} {} maps -> {}\n", methods[i].Name(), report.map_counts[i],
+                 paths[i].string());
     }
     WriteFitManifest(options->out, options->input.string(), stacks);
   });

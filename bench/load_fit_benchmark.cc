@@ -4,11 +4,13 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 
 #include "capture/io/load_photometric_set.h"
+#include "capture/io/streamed_set.h"
 #include "represent/fitting/fit.h"
 
 namespace photomat {
@@ -34,6 +36,22 @@ void BM_Load(benchmark::State& state) {
   ReportPeakMemory(state);
 }
 
+// Decoding only, band by band as `photomat fit` streams: the load that bench/stream_fit_table
+// divides by, PHOTOMAT_BENCH_BAND_ROWS rows at a time (default 64; the table passes the band
+// height `photomat fit` reports).
+void BM_StreamedLoad(benchmark::State& state) {
+  const char* rows_variable = std::getenv("PHOTOMAT_BENCH_BAND_ROWS");
+  const int rows = std::max(1, rows_variable ? std::atoi(rows_variable) : 64);
+  for (auto _ : state) {
+    StreamedSet set = OpenStreamedSet(CaptureFolder());
+    while (set.next_row() < set.height()) {
+      const PhotometricSet band = set.ReadBand(std::min(rows, set.height() - set.next_row()));
+      benchmark::DoNotOptimize(band.image(0).values().data());
+    }
+  }
+  ReportPeakMemory(state);
+}
+
 void BM_LoadAndFit(benchmark::State& state, const std::string& method) {
   for (auto _ : state) {
     const LoadedSet loaded = LoadPhotometricSet(CaptureFolder());
@@ -44,6 +62,7 @@ void BM_LoadAndFit(benchmark::State& state, const std::string& method) {
 }
 
 BENCHMARK(BM_Load)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_StreamedLoad)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK_CAPTURE(BM_LoadAndFit, gradient, std::string("gradient"))
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()

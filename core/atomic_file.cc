@@ -38,29 +38,55 @@ int SyncPath(const fs::path& path, bool directory) {
 
 }  // namespace
 
-void WriteFileAtomically(const fs::path& path,
-                         const std::function<void(const fs::path& temp)>& write) {
-  const fs::path parent = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+PendingFile::PendingFile(fs::path path) : path_(std::move(path)) {
+  const fs::path parent = path_.parent_path().empty() ? fs::path(".") : path_.parent_path();
   std::error_code ec;
   if (!fs::is_directory(parent, ec)) {
-    throw Error(path, fmt::format("cannot write: folder {} does not exist", parent.string()));
+    throw Error(path_, fmt::format("cannot write: folder {} does not exist", parent.string()));
   }
-  const fs::path temp = TemporarySibling(path);
+  temp_ = TemporarySibling(path_);
+}
+
+PendingFile::PendingFile(PendingFile&& other) noexcept
+    : path_(std::move(other.path_)), temp_(std::move(other.temp_)), pending_(other.pending_) {
+  other.pending_ = false;
+}
+
+PendingFile::~PendingFile() {
+  if (!pending_) return;
+  std::error_code ec;
+  fs::remove(temp_, ec);
+}
+
+void PendingFile::Commit() {
+  std::error_code ec;
+  if (int err = SyncPath(temp_, false); err != 0) {
+    fs::remove(temp_, ec);
+    pending_ = false;
+    throw Error(path_, fmt::format("cannot write: {}", std::strerror(err)));
+  }
+  fs::rename(temp_, path_, ec);
+  pending_ = false;
+  if (ec) {
+    std::error_code ignored;
+    fs::remove(temp_, ignored);
+    throw Error(path_, fmt::format("cannot write: {}", ec.message()));
+  }
+  // Best effort: the rename is done; a failed folder sync loses nothing.
+  SyncPath(path_.parent_path().empty() ? fs::path(".") : path_.parent_path(), true);
+}
+
+void WriteFileAtomically(const fs::path& path,
+                         const std::function<void(const fs::path& temp)>& write) {
+  PendingFile file(path);
   try {
-    write(temp);
-    if (int err = SyncPath(temp, false); err != 0) {
-      throw Error(path, fmt::format("cannot write: {}", std::strerror(err)));
-    }
-    fs::rename(temp, path, ec);
-    if (ec) throw Error(path, fmt::format("cannot write: {}", ec.message()));
+    write(file.temp());
+    file.Commit();
   } catch (const Error& error) {
-    fs::remove(temp, ec);
     throw error.InFile(path);
   } catch (const std::exception& error) {
-    fs::remove(temp, ec);
     throw Error(path, fmt::format("cannot write: {}", error.what()));
   }
-  SyncPath(parent, true);  // Best effort: the rename is done; a failed folder sync loses nothing.
 }
 
 void WriteSerializedAtomically(const fs::path& path,

@@ -14,6 +14,31 @@ namespace photomat {
 void WriteFileAtomically(const std::filesystem::path& path,
                          const std::function<void(const std::filesystem::path& temp)>& write);
 
+// A file written over a longer time than one call (a map stack written band by band while the
+// other stacks of a fit are written too): the temporary sibling `temp()` is what the writer opens;
+// Commit() flushes it to disk and renames it over `path()`. Destroyed without Commit() (an error
+// mid-way), the temporary is removed, so a failed run leaves no partial output. Move-only.
+class PendingFile {
+ public:
+  // Throws Error naming `path` when its folder does not exist.
+  explicit PendingFile(std::filesystem::path path);
+  ~PendingFile();
+  PendingFile(PendingFile&& other) noexcept;
+  PendingFile& operator=(PendingFile&&) = delete;
+  PendingFile(const PendingFile&) = delete;
+  PendingFile& operator=(const PendingFile&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  const std::filesystem::path& temp() const { return temp_; }
+  // Throws Error naming path() when flushing or renaming fails (the temporary is then removed).
+  void Commit();
+
+ private:
+  std::filesystem::path path_;
+  std::filesystem::path temp_;
+  bool pending_ = true;
+};
+
 // WriteFileAtomically for a text or binary blob.
 void WriteTextFileAtomically(const std::filesystem::path& path, std::string_view contents);
 

@@ -20,6 +20,7 @@
 #include "core/atomic_file.h"
 #include "core/enum_names.h"
 #include "core/error.h"
+#include "core/image_band_io.h"
 #include "core/text_parsing.h"
 
 namespace photomat {
@@ -35,87 +36,45 @@ std::string OiioError(const std::string& own) {
   return message.empty() ? "unknown OpenImageIO error" : message;
 }
 
-// Rows decoded per call: files are read band by band into a small interleaved buffer whose
-// channels are then spread over the image's planes (OpenImageIO strides cannot express planar
-// storage of several channels, and reading channel by channel would decode the file once per
-// channel). Tiled files are read a row of tiles at a time.
+// Rows decoded per call for scanline files: a small interleaved buffer whose channels are then
+// spread over the image's planes (OpenImageIO strides cannot express planar storage of several
+// channels, and reading channel by channel would decode the file once per channel). Tiled files
+// are read a row of tiles at a time.
+constexpr int kChunkRows = 16;
+// Rows per band of the writer for formats other than EXR.
 constexpr int kBandRows = 64;
 
-// Reads rows [first, first + count) of the file's first subimage, every channel, as `type`.
-class BandReader {
- public:
-  BandReader(OIIO::ImageInput& input, const fs::path& path) : input_(input), path_(path) {}
-
-  int band_rows() const {
-    const int tile = input_.spec().tile_height;
-    return tile > 0 ? std::max(1, kBandRows / tile) * tile : kBandRows;
-  }
-  void Read(int first, int count, OIIO::TypeDesc type, void* data) const {
-    const OIIO::ImageSpec& spec = input_.spec();
-    const int y0 = spec.y + first, y1 = spec.y + first + count;
-    const bool ok =
-        spec.tile_width > 0
-            ? input_.read_tiles(0, 0, spec.x, spec.x + spec.width, y0, y1, spec.z, spec.z + 1, 0,
-                                spec.nchannels, type, data)
-            : input_.read_scanlines(0, 0, y0, y1, spec.z, 0, spec.nchannels, type, data);
-    if (!ok) {
-      throw Error(path_, fmt::format("cannot decode image: {}", OiioError(input_.geterror())));
-    }
-  }
-
- private:
-  OIIO::ImageInput& input_;
-  const fs::path& path_;
-};
-
-// Decodes an 8- or 16-bit file band by band into the planes of `image`, counting the pixels with
-// a kept channel at the largest code.
+// Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes through
+// the encoding's code -> light table; returns the pixels with a kept channel at the largest code.
 template <typename T>
-void ReadIntegerSamples(const BandReader& reader, int file_channels,
-                        const std::vector<float>& light_of_code, Image& image,
-                        ImageFileInfo& info) {
+std::size_t DecodeIntegerRow(const T* row, int file_channels,
+                             const std::vector<float>& light_of_code, ImageView band, int y) {
   constexpr T kMax = std::numeric_limits<T>::max();
-  const int width = image.width(), kept = image.channels();
-  const int band = reader.band_rows();
-  std::vector<T> samples(static_cast<std::size_t>(band) * width * file_channels);
-  for (int first = 0; first < image.height(); first += band) {
-    const int count = std::min(band, image.height() - first);
-    reader.Read(first, count, OIIO::BaseTypeFromC<T>::value, samples.data());
-    for (int r = 0; r < count; ++r) {
-      const T* row = samples.data() + static_cast<std::size_t>(r) * width * file_channels;
-      for (int c = 0; c < kept; ++c) {
-        float* out = image.row(c, first + r).data();
-        for (int x = 0; x < width; ++x) out[x] = light_of_code[row[x * file_channels + c]];
-      }
-      for (int x = 0; x < width; ++x) {
-        const T* pixel = row + static_cast<std::size_t>(x) * file_channels;
-        if (std::find(pixel, pixel + kept, kMax) != pixel + kept) ++info.saturated_pixels;
-      }
-    }
+  const int width = band.width(), kept = band.channels();
+  for (int c = 0; c < kept; ++c) {
+    float* out = band.row(c, y).data();
+    for (int x = 0; x < width; ++x) out[x] = light_of_code[row[x * file_channels + c]];
   }
+  std::size_t saturated = 0;
+  for (int x = 0; x < width; ++x) {
+    const T* pixel = row + static_cast<std::size_t>(x) * file_channels;
+    if (std::find(pixel, pixel + kept, kMax) != pixel + kept) ++saturated;
+  }
+  return saturated;
 }
 
-// Float, half and unusual integer widths: OpenImageIO converts to float (integers to [0, 1]).
-// Returns the number of non-finite samples.
-std::size_t ReadFloatSamples(const BandReader& reader, int file_channels,
-                             const SampleEncoding& encoding, Image& image) {
-  const int width = image.width(), kept = image.channels();
-  const int band = reader.band_rows();
-  std::vector<float> samples(static_cast<std::size_t>(band) * width * file_channels);
+// Float, half and unusual integer widths, converted to float by OpenImageIO (integers to
+// [0, 1]), then through the encoding's transfer curve; returns the number of non-finite samples.
+std::size_t DecodeFloatRow(const float* row, int file_channels, const SampleEncoding& encoding,
+                           ImageView band, int y) {
+  const int width = band.width(), kept = band.channels();
   std::size_t non_finite = 0;
-  for (int first = 0; first < image.height(); first += band) {
-    const int count = std::min(band, image.height() - first);
-    reader.Read(first, count, OIIO::TypeDesc::FLOAT, samples.data());
-    for (int r = 0; r < count; ++r) {
-      const float* row = samples.data() + static_cast<std::size_t>(r) * width * file_channels;
-      for (int c = 0; c < kept; ++c) {
-        float* out = image.row(c, first + r).data();
-        for (int x = 0; x < width; ++x) {
-          const float value = row[x * file_channels + c];
-          if (!std::isfinite(value)) ++non_finite;
-          out[x] = DecodeFloatSample(encoding, value);
-        }
-      }
+  for (int c = 0; c < kept; ++c) {
+    float* out = band.row(c, y).data();
+    for (int x = 0; x < width; ++x) {
+      const float value = row[x * file_channels + c];
+      if (!std::isfinite(value)) ++non_finite;
+      out[x] = DecodeFloatSample(encoding, value);
     }
   }
   return non_finite;
@@ -168,70 +127,146 @@ EncodingEvidence GatherEvidence(OIIO::ImageInput& input, const fs::path& path) {
   return evidence;
 }
 
+// The file's encoding: the caller's override of integer codes, else decided from the file's
+// metadata (core/sample_encoding, the one place of that decision).
+SampleEncoding DecideEncoding(OIIO::ImageInput& input, const fs::path& path,
+                              const ImageReadOptions& options) {
+  if (!options.colour_space) {
+    return DecideSampleEncoding(GatherEvidence(input, path), options.untagged_colour_space);
+  }
+  SampleEncoding encoding;
+  const bool forced = !input.spec().format.is_floating_point();
+  const ColourSpace space = forced ? *options.colour_space : ColourSpace::kLinear;
+  encoding.transfer = space == ColourSpace::kSrgb ? Transfer::kSrgb : Transfer::kLinear;
+  encoding.decided_by = forced ? "caller" : "default";
+  encoding.evidence = forced ? "the reader asked for these codes" : "float samples are linear";
+  return encoding;
+}
+
 }  // namespace
 
-LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {
+// The open file, its code -> light table (integer files) and one chunk of its interleaved
+// samples, as 8-bit, 16-bit or float.
+struct ImageBandReader::Decoder {
+  std::unique_ptr<OIIO::ImageInput> input;
+  OIIO::ImageSpec spec;
+  OIIO::TypeDesc type;
+  std::vector<float> light_of_code;
+  int chunk_rows = kChunkRows;
+  int chunk_first = 0;
+  int chunk_count = 0;
+  std::vector<std::byte> samples;
+
+  std::size_t RowBytes() const {
+    return static_cast<std::size_t>(spec.width) * spec.nchannels * type.size();
+  }
+  // Makes the chunk holding row `y` current.
+  void Load(int y, const fs::path& path) {
+    if (y >= chunk_first && y < chunk_first + chunk_count) return;
+    chunk_first = y / chunk_rows * chunk_rows;
+    chunk_count = std::min(chunk_rows, spec.height - chunk_first);
+    samples.resize(RowBytes() * chunk_rows);
+    const int y0 = spec.y + chunk_first, y1 = y0 + chunk_count;
+    const bool ok =
+        spec.tile_width > 0
+            ? input->read_tiles(0, 0, spec.x, spec.x + spec.width, y0, y1, spec.z, spec.z + 1, 0,
+                                spec.nchannels, type, samples.data())
+            : input->read_scanlines(0, 0, y0, y1, spec.z, 0, spec.nchannels, type, samples.data());
+    if (!ok) {
+      chunk_count = 0;
+      throw Error(path, fmt::format("cannot decode image: {}", OiioError(input->geterror())));
+    }
+  }
+  const std::byte* Row(int y) const { return samples.data() + RowBytes() * (y - chunk_first); }
+};
+
+ImageBandReader::ImageBandReader(const fs::path& path, const ImageReadOptions& options)
+    : path_(path), decoder_(std::make_unique<Decoder>()) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path, "image file not found");
   const OIIO::ImageSpec config = CameraRawConfig(options.camera_raw);
-  auto input = OIIO::ImageInput::open(path.string(), &config);
-  if (!input) throw Error(path, fmt::format("cannot read image: {}", OiioError("")));
-  const OIIO::ImageSpec spec = input->spec();
+  decoder_->input = OIIO::ImageInput::open(path.string(), &config);
+  if (!decoder_->input) throw Error(path, fmt::format("cannot read image: {}", OiioError("")));
+  const OIIO::ImageSpec& spec = decoder_->spec = decoder_->input->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
     throw Error(path, "image has no pixels");
   }
-  int kept = spec.nchannels;
+  width_ = spec.width;
+  height_ = spec.height;
+  kept_ = spec.nchannels;
   if (!options.keep_alpha && spec.alpha_channel == spec.nchannels - 1 && spec.nchannels > 1) {
-    kept = spec.nchannels - 1;
+    kept_ = spec.nchannels - 1;
   }
-
-  LoadedImage result;
-  ImageFileInfo& info = result.info;
+  if (kept_ == spec.nchannels && !spec.channelnames.empty()) channel_names_ = spec.channelnames;
   const OIIO::TypeDesc format = spec.format;
-  info.floating_point = format.is_floating_point();
-  info.bits_per_sample = static_cast<int>(format.size() * 8);
+  info_.floating_point = format.is_floating_point();
+  info_.bits_per_sample = static_cast<int>(format.size() * 8);
   for (const auto& attribute : spec.extra_attribs) {
     if (attribute.type() == OIIO::TypeString) {
-      info.attributes[attribute.name().string()] = attribute.get_string();
+      info_.attributes[attribute.name().string()] = attribute.get_string();
     }
   }
-  result.image = Image(spec.width, spec.height, kept);
-  if (kept == spec.nchannels && !spec.channelnames.empty()) {
-    result.image.set_channel_names(spec.channelnames);
-  }
-
-  if (options.colour_space) {
-    const bool forced = !info.floating_point;
-    const ColourSpace space = forced ? *options.colour_space : ColourSpace::kLinear;
-    info.encoding.transfer = space == ColourSpace::kSrgb ? Transfer::kSrgb : Transfer::kLinear;
-    info.encoding.decided_by = forced ? "caller" : "default";
-    info.encoding.evidence =
-        forced ? "the reader asked for these codes" : "float samples are linear";
-  } else {
-    info.encoding =
-        DecideSampleEncoding(GatherEvidence(*input, path), options.untagged_colour_space);
-  }
-  info.colour_space = info.encoding.Summary();
-
-  const BandReader reader(*input, path);
-  if (!info.floating_point &&
-      (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::UINT16)) {
+  // Decided once, when the file is opened; every band is converted by the same decision.
+  info_.encoding = DecideEncoding(*decoder_->input, path, options);
+  info_.colour_space = info_.encoding.Summary();
+  const bool integer = !info_.floating_point && (format.basetype == OIIO::TypeDesc::UINT8 ||
+                                                 format.basetype == OIIO::TypeDesc::UINT16);
+  if (integer) {
     const bool eight_bit = format.basetype == OIIO::TypeDesc::UINT8;
-    const std::vector<float> light_of_code = CodeToLightTable(info.encoding, eight_bit ? 8 : 16);
-    if (eight_bit) {
-      ReadIntegerSamples<std::uint8_t>(reader, spec.nchannels, light_of_code, result.image, info);
-    } else {
-      ReadIntegerSamples<std::uint16_t>(reader, spec.nchannels, light_of_code, result.image, info);
-    }
+    decoder_->type = eight_bit ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16;
+    decoder_->light_of_code = CodeToLightTable(info_.encoding, eight_bit ? 8 : 16);
   } else {
-    const std::size_t non_finite =
-        ReadFloatSamples(reader, spec.nchannels, info.encoding, result.image);
-    if (non_finite > 0) {
-      throw Error(path, fmt::format("{} sample(s) are NaN or infinite", non_finite));
+    decoder_->type = OIIO::TypeDesc::FLOAT;
+  }
+  const int tile = spec.tile_height;
+  decoder_->chunk_rows = tile > 0 ? std::max(1, kChunkRows / tile) * tile : kChunkRows;
+}
+
+ImageBandReader::ImageBandReader() = default;
+ImageBandReader::~ImageBandReader() = default;
+ImageBandReader::ImageBandReader(ImageBandReader&&) noexcept = default;
+ImageBandReader& ImageBandReader::operator=(ImageBandReader&&) noexcept = default;
+
+void ImageBandReader::ReadNext(ImageView band) {
+  if (band.width() != width_ || band.channels() != kept_ || band.height() > height_ - next_row_) {
+    throw Error(path_, fmt::format("cannot read rows {}..{} of a {}x{} image with {} channels "
+                                   "into a {}x{} band of {}",
+                                   next_row_, next_row_ + band.height(), width_, height_, kept_,
+                                   band.width(), band.height(), band.channels()));
+  }
+  const int file_channels = decoder_->spec.nchannels;
+  const std::vector<float>& table = decoder_->light_of_code;
+  std::size_t non_finite = 0;
+  for (int r = 0; r < band.height(); ++r) {
+    const int y = next_row_ + r;
+    decoder_->Load(y, path_);
+    const std::byte* row = decoder_->Row(y);
+    if (decoder_->type == OIIO::TypeDesc::UINT8) {
+      info_.saturated_pixels += DecodeIntegerRow(reinterpret_cast<const std::uint8_t*>(row),
+                                                 file_channels, table, band, r);
+    } else if (decoder_->type == OIIO::TypeDesc::UINT16) {
+      info_.saturated_pixels += DecodeIntegerRow(reinterpret_cast<const std::uint16_t*>(row),
+                                                 file_channels, table, band, r);
+    } else {
+      non_finite += DecodeFloatRow(reinterpret_cast<const float*>(row), file_channels,
+                                   info_.encoding, band, r);
     }
   }
-  ApplyColourTransform(info.encoding, result.image, path);
-  input->close();
+  next_row_ += band.height();
+  if (non_finite > 0) {
+    throw Error(path_, fmt::format("{} sample(s) are NaN or infinite", non_finite));
+  }
+  // The ICC transform and the chromaticities matrix act on each pixel alone: band-local.
+  ApplyColourTransform(info_.encoding, band, path_);
+}
+
+LoadedImage ReadImage(const fs::path& path, const ImageReadOptions& options) {
+  ImageBandReader reader(path, options);
+  LoadedImage result;
+  result.image = Image(reader.width(), reader.height(), reader.channels());
+  reader.ReadNext(result.image.View());
+  if (!reader.channel_names().empty()) result.image.set_channel_names(reader.channel_names());
+  result.info = reader.info();
   return result;
 }
 
@@ -350,6 +385,115 @@ float PrepareForQuantising(float value, ColourSpace encoding) {
 
 }  // namespace
 
+// The open output and the interleaved buffer of one write call.
+struct ImageBandWriter::Encoder {
+  std::unique_ptr<OIIO::ImageOutput> output;
+  bool integer = false;
+  int band_rows = kBandRows;
+  std::vector<float> band;
+};
+
+ImageBandWriter::ImageBandWriter(const fs::path& path, int width, int height,
+                                 std::vector<std::string> channel_names,
+                                 const ImageWriteOptions& options)
+    : file_(path),
+      encoder_(std::make_unique<Encoder>()),
+      width_(width),
+      height_(height),
+      channels_(static_cast<int>(channel_names.size())),
+      options_(options) {
+  if (width <= 0 || height <= 0 || channels_ <= 0) {
+    throw Error(path, "cannot write an empty image");
+  }
+  encoder_->integer =
+      options.sample_type == SampleType::kUint8 || options.sample_type == SampleType::kUint16;
+  const bool exr = LowerExtension(path) == ".exr";
+  const int threads = AllowedThreads();
+  if (exr) LimitOpenImageIoThreads(threads);
+  encoder_->output = OIIO::ImageOutput::create(path.string());
+  if (!encoder_->output) {
+    throw Error(path, fmt::format("no image writer for this extension: {}", OiioError("")));
+  }
+  OIIO::ImageSpec spec(width, height, channels_, ToOiio(options.sample_type));
+  spec.channelnames = std::move(channel_names);
+  spec.alpha_channel = -1;
+  if (encoder_->integer) {
+    spec.attribute("oiio:ColorSpace", options.encoding == ColourSpace::kSrgb ? "sRGB" : "Linear");
+  }
+  for (const auto& [name, value] : options.attributes) spec.attribute(name, value);
+  // After the attributes: a "compression" copied from a file read earlier does not override.
+  spec.attribute("compression",
+                 exr ? std::string(ToString(options.exr_compression)) : std::string("zip"));
+  if (!encoder_->output->open(file_.temp().string(), spec)) {
+    throw Error(path, fmt::format("cannot write: {}", OiioError(encoder_->output->geterror())));
+  }
+  const std::size_t row_values = static_cast<std::size_t>(width) * channels_;
+  encoder_->band_rows = std::min(
+      height, WriteBandRows(exr, options.exr_compression, threads, row_values * sizeof(float)));
+}
+
+ImageBandWriter::~ImageBandWriter() = default;
+
+void ImageBandWriter::WriteNext(ConstImageView image) {
+  const fs::path& path = file_.path();
+  if (!encoder_->output || image.width() != width_ || image.channels() != channels_ ||
+      image.height() > height_ - next_row_) {
+    throw Error(path, fmt::format("cannot write {} rows of {}x{} with {} channels after row {} "
+                                  "of a {}x{} image with {}",
+                                  image.height(), image.width(), image.height(), image.channels(),
+                                  next_row_, width_, height_, channels_));
+  }
+  if (encoder_->integer) {
+    for (int c = 0; c < channels_; ++c) {
+      for (int y = 0; y < image.height(); ++y) {
+        const auto row = image.row(c, y);
+        if (std::any_of(row.begin(), row.end(), [](float v) { return !std::isfinite(v); })) {
+          throw Error(path, "cannot store NaN or infinite values in an integer image");
+        }
+      }
+    }
+  }
+  // Band by band: the planes of a band interleaved (and, for integer files, encoded) into a
+  // bounded buffer, which OpenImageIO converts to the file's sample type (WriteBandRows).
+  const int width = width_, channels = channels_;
+  const std::size_t row_values = static_cast<std::size_t>(width) * channels;
+  std::vector<float>& band = encoder_->band;
+  band.resize(static_cast<std::size_t>(std::min(encoder_->band_rows, image.height())) * row_values);
+  for (int first = 0; first < image.height(); first += encoder_->band_rows) {
+    const int count = std::min(encoder_->band_rows, image.height() - first);
+    for (int r = 0; r < count; ++r) {
+      float* row = band.data() + static_cast<std::size_t>(r) * row_values;
+      for (int c = 0; c < channels; ++c) {
+        const float* in = image.row(c, first + r).data();
+        if (encoder_->integer) {
+          for (int x = 0; x < width; ++x) {
+            row[x * channels + c] = PrepareForQuantising(in[x], options_.encoding);
+          }
+        } else {
+          for (int x = 0; x < width; ++x) row[x * channels + c] = in[x];
+        }
+      }
+    }
+    const int y = next_row_ + first;
+    if (!encoder_->output->write_scanlines(y, y + count, 0, OIIO::TypeDesc::FLOAT, band.data())) {
+      throw Error(path, fmt::format("cannot write: {}", OiioError(encoder_->output->geterror())));
+    }
+  }
+  next_row_ += image.height();
+}
+
+void ImageBandWriter::Commit() {
+  const fs::path& path = file_.path();
+  if (next_row_ != height_) {
+    throw Error(path, fmt::format("cannot finish: {} of {} rows written", next_row_, height_));
+  }
+  const bool closed = encoder_->output->close();
+  const std::string error = closed ? std::string() : OiioError(encoder_->output->geterror());
+  encoder_->output.reset();
+  if (!closed) throw Error(path, fmt::format("cannot write: {}", error));
+  file_.Commit();
+}
+
 void WriteImage(const fs::path& path, const Image& image, const ImageWriteOptions& options) {
   if (image.empty()) throw Error(path, "cannot write an empty image");
   if (image.depth() != 1) {
@@ -357,69 +501,18 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
                                   "written as a volume)",
                                   ToString(image.extent())));
   }
-  const bool integer =
-      options.sample_type == SampleType::kUint8 || options.sample_type == SampleType::kUint16;
-  if (integer) {
-    const auto values = image.values();
-    if (std::any_of(values.begin(), values.end(), [](float v) { return !std::isfinite(v); })) {
-      throw Error(path, "cannot store NaN or infinite values in an integer image");
-    }
+  try {
+    ImageBandWriter writer(path, image.width(), image.height(),
+                           image.channel_names().empty() ? DefaultChannelNames(image.channels())
+                                                         : image.channel_names(),
+                           options);
+    writer.WriteNext(image.View());
+    writer.Commit();
+  } catch (const Error& error) {
+    throw error.InFile(path);
+  } catch (const std::exception& error) {
+    throw Error(path, fmt::format("cannot write: {}", error.what()));
   }
-
-  const bool exr = LowerExtension(path) == ".exr";
-  const int threads = AllowedThreads();
-  if (exr) LimitOpenImageIoThreads(threads);
-  WriteFileAtomically(path, [&](const fs::path& temp) {
-    auto output = OIIO::ImageOutput::create(path.string());
-    if (!output) {
-      throw Error(path, fmt::format("no image writer for this extension: {}", OiioError("")));
-    }
-    OIIO::ImageSpec spec(image.width(), image.height(), image.channels(),
-                         ToOiio(options.sample_type));
-    spec.channelnames = image.channel_names().empty() ? DefaultChannelNames(image.channels())
-                                                      : image.channel_names();
-    spec.alpha_channel = -1;
-    if (integer) {
-      spec.attribute("oiio:ColorSpace", options.encoding == ColourSpace::kSrgb ? "sRGB" : "Linear");
-    }
-    for (const auto& [name, value] : options.attributes) spec.attribute(name, value);
-    // After the attributes: a "compression" copied from a file read earlier does not override.
-    spec.attribute("compression",
-                   exr ? std::string(ToString(options.exr_compression)) : std::string("zip"));
-    if (!output->open(temp.string(), spec)) {
-      throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
-    }
-    // Band by band: the planes of a band interleaved (and, for integer files, encoded) into a
-    // bounded buffer, which OpenImageIO converts to the file's sample type (WriteBandRows).
-    const int width = image.width(), channels = image.channels();
-    const std::size_t row_values = static_cast<std::size_t>(width) * channels;
-    const int band_rows =
-        std::min(image.height(),
-                 WriteBandRows(exr, options.exr_compression, threads, row_values * sizeof(float)));
-    std::vector<float> band(static_cast<std::size_t>(band_rows) * row_values);
-    for (int first = 0; first < image.height(); first += band_rows) {
-      const int count = std::min(band_rows, image.height() - first);
-      for (int r = 0; r < count; ++r) {
-        float* row = band.data() + static_cast<std::size_t>(r) * width * channels;
-        for (int c = 0; c < channels; ++c) {
-          const float* in = image.row(c, first + r).data();
-          if (integer) {
-            for (int x = 0; x < width; ++x) {
-              row[x * channels + c] = PrepareForQuantising(in[x], options.encoding);
-            }
-          } else {
-            for (int x = 0; x < width; ++x) row[x * channels + c] = in[x];
-          }
-        }
-      }
-      if (!output->write_scanlines(first, first + count, 0, OIIO::TypeDesc::FLOAT, band.data())) {
-        throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
-      }
-    }
-    if (!output->close()) {
-      throw Error(path, fmt::format("cannot write: {}", OiioError(output->geterror())));
-    }
-  });
 }
 
 std::string_view ToString(ExrCompression compression) {

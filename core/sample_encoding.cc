@@ -379,7 +379,7 @@ float DecodeFloatSample(const SampleEncoding& encoding, float value) {
   return value;
 }
 
-void ApplyColourTransform(const SampleEncoding& encoding, Image& image, const fs::path& file) {
+void ApplyColourTransform(const SampleEncoding& encoding, ImageView image, const fs::path& file) {
   const int width = image.width();
   if (encoding.transfer == Transfer::kIccProfile) {
     const Profile in = OpenProfile(encoding.icc_profile);

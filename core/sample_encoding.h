@@ -79,8 +79,9 @@ float DecodeFloatSample(const SampleEncoding& encoding, float value);
 
 // Whatever mixes channels, after the curves: the ICC profile's transform (channels 0-2 of an RGB
 // profile, channel 0 of a grey one) and the chromaticities matrix (channels 0-2). Does nothing for
-// other encodings. Throws Error naming `file` when Little CMS cannot build the transform.
-void ApplyColourTransform(const SampleEncoding& encoding, Image& image,
+// other encodings. Each pixel is transformed alone, so a band of rows converts as the whole image
+// would. Throws Error naming `file` when Little CMS cannot build the transform.
+void ApplyColourTransform(const SampleEncoding& encoding, ImageView image,
                           const std::filesystem::path& file);
 
 // One image's decision, as recorded in a stack's provenance ("capture": {"images": [...]}).

@@ -7,12 +7,14 @@
 #include <png.h>
 
 #include <Eigen/Dense>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <vector>
 
+#include "core/image_band_io.h"
 #include "core/image_io.h"
 #include "tests/support/test_support.h"
 
@@ -374,6 +376,80 @@ TEST(SampleEncodingTest, ExrWithDisplayP3ChromaticitiesIsConvertedToRec709Primar
   const LoadedImage plain = ReadImage(dir / "rec709.exr");
   EXPECT_EQ(plain.info.encoding.Name(), "linear");
   EXPECT_EQ(plain.image.at(5, 0, 1), image.at(5, 0, 1));
+}
+
+// The band reader (streamed fitting) decides once, when the file is opened, and converts each
+// band by that decision: an Adobe RGB TIFF of 5 rows read in bands of 2, 2 and 1 rows goes
+// through the profile as the whole image does, and an OpenEXR with Display P3 chromaticities
+// through the same matrix.
+TEST(SampleEncodingTest, BandReaderDecodesEachBandAsTheWholeImage) {
+  TempDir dir;
+  constexpr int kWidth = 40, kHeight = 5;
+  const auto codes = NearGreyCodes(kWidth * kHeight, 16);
+  {
+    auto out = OIIO::ImageOutput::create("tif");
+    OIIO::ImageSpec spec(kWidth, kHeight, 3, OIIO::TypeDesc::UINT16);
+    const std::vector<unsigned char> profile = AdobeRgbProfile();
+    spec.attribute("ICCProfile", OIIO::TypeDesc(OIIO::TypeDesc::UINT8, profile.size()),
+                   profile.data());
+    ASSERT_TRUE(out->open((dir / "adobe.tif").string(), spec));
+    std::vector<std::uint16_t> samples(codes.begin(), codes.end());
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, samples.data()));
+    ASSERT_TRUE(out->close());
+  }
+  Image p3_values(kWidth, kHeight, 3);
+  for (int y = 0; y < kHeight; ++y) {
+    for (int k = 0; k < kWidth; ++k) {
+      for (int c = 0; c < 3; ++c) {
+        p3_values.at(k, y, c) = 0.2f + 0.01f * static_cast<float>((k * (c + 3) + y) % 50);
+      }
+    }
+  }
+  {
+    auto out = OIIO::ImageOutput::create("exr");
+    OIIO::ImageSpec spec(kWidth, kHeight, 3, OIIO::TypeDesc::FLOAT);
+    const std::array<float, 8> p3 = {0.680f, 0.320f, 0.265f,  0.690f,
+                                     0.150f, 0.060f, 0.3127f, 0.3290f};
+    spec.attribute("chromaticities", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 8), p3.data());
+    ASSERT_TRUE(out->open((dir / "p3.exr").string(), spec));
+    std::vector<float> samples;
+    for (int y = 0; y < kHeight; ++y) {
+      for (int k = 0; k < kWidth; ++k) {
+        for (int c = 0; c < 3; ++c) samples.push_back(p3_values.at(k, y, c));
+      }
+    }
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, samples.data()));
+    ASSERT_TRUE(out->close());
+  }
+  for (const char* name : {"adobe.tif", "p3.exr"}) {
+    SCOPED_TRACE(name);
+    const LoadedImage whole = ReadImage(dir / name);
+    ImageBandReader reader(dir / name);
+    EXPECT_EQ(reader.info().encoding.Name(), whole.info.encoding.Name());
+    EXPECT_EQ(reader.info().encoding.decided_by, whole.info.encoding.decided_by);
+    Image banded(kWidth, kHeight, 3);
+    for (const int rows : {2, 2, 1}) reader.ReadNext(banded.Rows(reader.next_row(), rows));
+    // Each pixel is converted alone: the bands are the whole image bit for bit (measured 0).
+    for (int y = 0; y < kHeight; ++y) {
+      for (int k = 0; k < kWidth; ++k) {
+        for (int c = 0; c < 3; ++c) {
+          ASSERT_EQ(banded.at(k, y, c), whole.image.at(k, y, c)) << k << "," << y << "," << c;
+        }
+      }
+    }
+  }
+  // And the banded Adobe RGB read is the hand decoding (the whole image's bound above, 5e-5).
+  ImageBandReader reader(dir / "adobe.tif");
+  EXPECT_EQ(reader.info().encoding.decided_by, "icc-profile");
+  Image banded(kWidth, kHeight, 3);
+  for (const int rows : {3, 2}) reader.ReadNext(banded.Rows(reader.next_row(), rows));
+  Image as_row(kWidth * kHeight, 1, 3);
+  for (int y = 0; y < kHeight; ++y) {
+    for (int k = 0; k < kWidth; ++k) {
+      for (int c = 0; c < 3; ++c) as_row.at(y * kWidth + k, 0, c) = banded.at(k, y, c);
+    }
+  }
+  EXPECT_LT(MaxAdobeError(as_row, codes, 65535.0), 5e-5);
 }
 
 TEST(SampleEncodingTest, DisagreeingImagesOfASetAreReported) {

@@ -55,7 +55,11 @@ PhotometricSet SampleSet(const PhotometricSet& set, const std::vector<std::size_
   images.reserve(set.size());
   const int m = static_cast<int>(pixels.size());
   for (int i = 0; i < set.size(); ++i) {
-    Image strip(m, 1, set.image(i).channel_names());
+    // By count, not by names: an image may have none.
+    Image strip(m, 1, set.channels());
+    if (!set.image(i).channel_names().empty()) {
+      strip.set_channel_names(set.image(i).channel_names());
+    }
     for (int k = 0; k < m; ++k) {
       const auto from = set.image(i).pixel(pixels[k]);
       std::copy(from.begin(), from.end(), strip.pixel(k, 0).begin());

@@ -8,6 +8,7 @@
 #include "capture/io/capture_manifest.h"
 #include "capture/io/diligent.h"
 #include "capture/io/lp_file.h"
+#include "capture/io/streamed_set.h"
 #include "core/enum_names.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -141,7 +142,7 @@ std::vector<LightDirection> ReadLightDirections(const fs::path& path) {
   return lights;
 }
 
-LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
+StreamedSet OpenStreamedSet(const fs::path& path, const LoadOptions& options) {
   const InputLocation input = DetectInput(path);
   SetDescription description;
   switch (input.kind) {
@@ -155,48 +156,135 @@ LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
       description = DescribeManifestSet(input.file);
       break;
   }
-
-  ImageReadOptions read;
-  read.colour_space = options.colour_space;
-  read.untagged_colour_space =
-      options.untagged_colour_space ? options.untagged_colour_space : description.colour_space;
-  const std::size_t count = description.image_files.size();
-  std::vector<Image> images(count);
-  std::vector<std::size_t> saturated(count);
-  std::vector<ImageEncodingRecord> encodings(count);
-  NullProgress no_progress;
-  Progress& progress = OrNull(options.progress, no_progress);
-  progress.Start("load", count);
-  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
-    LoadedImage loaded = ReadImage(description.image_files[i], read);
-    images[i] = std::move(loaded.image);
-    saturated[i] = loaded.info.saturated_pixels;
-    const SampleEncoding& encoding = loaded.info.encoding;
-    encodings[i] = {description.image_files[i].filename().string(), encoding.Name(),
-                    encoding.decided_by, encoding.evidence};
-    progress.Advance();
-  });
-  progress.Finish();
-  WarnIfEncodingsDisagree(encodings);
-
-  std::vector<std::string> names;
-  for (const auto& file : description.image_files) names.push_back(file.string());
+  StreamedSet set;
+  set.kind_ = input.kind;
   // The set's source is the file its lights came from: messages about the lights point there.
-  const fs::path source =
+  set.source_ =
       input.kind == InputKind::kDiligent ? input.file / "light_directions.txt" : input.file;
-  LoadedSet loaded{
-      PhotometricSet(std::move(images), std::move(description.lights), std::move(names), source),
-      input.kind, std::move(saturated), description.ground_truth_normals, std::move(encodings)};
+  if (description.image_files.empty()) {
+    throw Error(set.source_, "a photometric set needs at least one image");
+  }
+  if (description.image_files.size() != description.lights.size()) {
+    throw Error(set.source_,
+                fmt::format("{} images but {} light directions", description.image_files.size(),
+                            description.lights.size()));
+  }
+  set.read_.colour_space = options.colour_space;
+  set.read_.untagged_colour_space =
+      options.untagged_colour_space ? options.untagged_colour_space : description.colour_space;
+  set.files_ = description.image_files;
+  for (const auto& file : set.files_) set.names_.push_back(file.string());
+  set.readers_.resize(set.files_.size());
+  tbb::parallel_for(std::size_t{0}, set.files_.size(), [&](std::size_t i) {
+    set.readers_[i] = ImageBandReader(set.files_[i], set.read_);
+  });
+  const ImageBandReader& first = set.readers_.front();
+  for (std::size_t i = 1; i < set.readers_.size(); ++i) {
+    const ImageBandReader& image = set.readers_[i];
+    if (image.width() != first.width() || image.height() != first.height()) {
+      throw Error(set.source_,
+                  fmt::format("{} is {}x{} but {} is {}x{}: all images of a set must have one size",
+                              set.names_[i], image.width(), image.height(), set.names_[0],
+                              first.width(), first.height()));
+    }
+    if (image.channels() != first.channels()) {
+      throw Error(set.source_, fmt::format("{} has {} channels but {} has {}", set.names_[i],
+                                           image.channels(), set.names_[0], first.channels()));
+    }
+  }
+  set.lights_ = std::move(description.lights);
+  // Each image's encoding was decided as its reader opened it (core/sample_encoding); a set
+  // decoded in several ways is warned about once here, for the in-memory and streamed paths alike.
+  WarnIfEncodingsDisagree(set.encodings());
   if (description.mask) {
     try {
-      loaded.set.set_mask(ReadMask(*description.mask));
+      Mask mask = ReadMask(*description.mask);
+      if (mask.width() != first.width() || mask.height() != first.height()) {
+        throw Error(set.source_,
+                    fmt::format("the mask is {}x{} but the images are {}x{}", mask.width(),
+                                mask.height(), first.width(), first.height()));
+      }
+      if (mask.CountSet() == 0) throw Error(set.source_, "the mask selects no pixel");
+      set.mask_ = std::move(mask);
     } catch (const Error& error) {
       throw Error(*description.mask, error.fault());
     }
   }
-  if (!description.intensities.empty()) {
-    loaded.set.set_intensities(std::move(description.intensities));
-    if (options.apply_intensities) loaded.set.ApplyIntensities();
+  set.intensities_ = std::move(description.intensities);
+  set.apply_intensities_ = options.apply_intensities;
+  set.ground_truth_normals_ = description.ground_truth_normals;
+  return set;
+}
+
+std::size_t StreamedSet::SelectedPixels(int first, int rows) const {
+  if (!mask_) return static_cast<std::size_t>(rows) * width();
+  std::size_t count = 0;
+  const std::size_t offset = static_cast<std::size_t>(first) * width();
+  for (std::size_t p = 0; p < static_cast<std::size_t>(rows) * width(); ++p) {
+    count += (*mask_)[offset + p] ? 1 : 0;
+  }
+  return count;
+}
+
+PhotometricSet StreamedSet::ReadBand(int rows, bool raw, Progress* progress) {
+  const int first = next_row();
+  std::vector<Image> images(readers_.size());
+  tbb::parallel_for(std::size_t{0}, readers_.size(), [&](std::size_t i) {
+    images[i] = Image(width(), rows, channels());
+    // The file's channel names, as ReadImage gives them (stacks and samples keep them).
+    if (!readers_[i].channel_names().empty()) {
+      images[i].set_channel_names(readers_[i].channel_names());
+    }
+    readers_[i].ReadNext(images[i].View());
+    if (progress) progress->Advance();
+  });
+  PhotometricSet band(std::move(images), lights_, names_, source_);
+  if (mask_) {
+    Mask mask(width(), rows, false);
+    const std::size_t offset = static_cast<std::size_t>(first) * width();
+    for (std::size_t p = 0; p < mask.pixel_count(); ++p) mask.Set(p, (*mask_)[offset + p]);
+    // A band outside the mask selects no pixel (SelectedPixels: callers skip its fit).
+    if (mask.CountSet() > 0) band.set_mask(std::move(mask));
+  }
+  if (!intensities_.empty()) {
+    band.set_intensities(intensities_);
+    if (apply_intensities_ && !raw) band.ApplyIntensities();
+  }
+  return band;
+}
+
+void StreamedSet::Rewind() {
+  tbb::parallel_for(std::size_t{0}, readers_.size(),
+                    [&](std::size_t i) { readers_[i] = ImageBandReader(files_[i], read_); });
+}
+
+std::vector<ImageEncodingRecord> StreamedSet::encodings() const {
+  std::vector<ImageEncodingRecord> records;
+  for (const ImageBandReader& reader : readers_) {
+    const SampleEncoding& encoding = reader.info().encoding;
+    records.push_back({reader.path().filename().string(), encoding.Name(), encoding.decided_by,
+                       encoding.evidence});
+  }
+  return records;
+}
+
+std::vector<std::size_t> StreamedSet::SaturatedPixels() const {
+  std::vector<std::size_t> counts;
+  for (const ImageBandReader& reader : readers_) counts.push_back(reader.info().saturated_pixels);
+  return counts;
+}
+
+LoadedSet LoadPhotometricSet(const fs::path& path, const LoadOptions& options) {
+  StreamedSet streamed = OpenStreamedSet(path, options);
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  progress.Start("load", static_cast<std::size_t>(streamed.size()));
+  PhotometricSet set = streamed.ReadBand(streamed.height(), true, &progress);
+  progress.Finish();
+  LoadedSet loaded{std::move(set), streamed.kind(), streamed.SaturatedPixels(),
+                   streamed.ground_truth_normals(), streamed.encodings()};
+  if (streamed.apply_intensities() && !streamed.intensities().empty()) {
+    loaded.set.ApplyIntensities();
   }
   return loaded;
 }

@@ -56,6 +56,12 @@ TEST_P(LoaderTest, LoadsAValidSet) {
   EXPECT_EQ(loaded.set.width(), 6);
   EXPECT_EQ(loaded.set.channels(), 3);
   EXPECT_NEAR(loaded.set.light(1).y(), 0.5 / std::hypot(0.5, 0.866), 1e-12);
+  // Each image keeps its file's channel names, as ReadImage gives them.
+  for (int i = 0; i < loaded.set.size(); ++i) {
+    EXPECT_EQ(loaded.set.image(i).channel_names(),
+              ReadImage(dir_.path() / names_[i]).image.channel_names());
+    EXPECT_EQ(loaded.set.image(i).channel_names().size(), 3u);
+  }
 }
 
 TEST_P(LoaderTest, MissingImage) {

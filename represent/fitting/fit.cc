@@ -207,51 +207,11 @@ Representation FitThreeImage(const FitContext& fit) {
                         std::make_shared<LinearLightBasis>(inverse), {{"images", used}});
 }
 
-// Eigen-k (thesis 4.4.5): I = U W V^T without mean subtraction; M1 = U_k W_k = I V_k are the basis
-// images, M2 = V_k^T the coefficients of the fitted lights. V comes from the eigenvectors of the
-// Gram matrix I^T I (IMPLEMENTER CHOICE: n x n instead of an m x n SVD; same M1, M2 up to sign).
+// Eigen-k (thesis 4.4.5) from the Gram matrix and column sums of the whole set's image matrix.
 Representation FitEigen(const FitContext& fit, int k) {
-  const auto n = static_cast<Eigen::Index>(fit.selected.size());
-  const Eigen::MatrixXd& gram = fit.observations.Gram();
-  Eigen::MatrixXd sub(n, n);
-  for (Eigen::Index a = 0; a < n; ++a) {
-    for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(fit.selected[a], fit.selected[b]);
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(sub);
-  if (solver.info() != Eigen::Success) fit.Fail(fmt::format("eigen{}: SVD did not converge", k));
-  // Eigenvalues ascend; the k largest are the last k, reversed.
-  Eigen::MatrixXd v(n, k);
-  Eigen::VectorXd singular(n);
-  for (Eigen::Index j = 0; j < n; ++j) {
-    singular[j] = std::sqrt(std::max(0.0, solver.eigenvalues()[n - 1 - j]));
-  }
-  for (int j = 0; j < k; ++j) v.col(j) = solver.eigenvectors().col(n - 1 - j);
-  Eigen::MatrixXf bases = ParallelProduct(fit.observations.matrix(), fit.Scatter(v));
-  // Each component's sign is arbitrary; make the basis images sum positive so that maps are
-  // readable and fits reproducible. The sign cancels in M1 M2.
-  for (int j = 0; j < k; ++j) {
-    if (bases.col(j).sum() < 0.0f) {
-      bases.col(j) *= -1.0f;
-      v.col(j) *= -1.0;
-    }
-  }
-  Image maps = fit.NewMaps(CoefficientMapNames("eigen.", k, OutputChannelNames(fit.channels())));
-  StorePerChannelTerms(fit, bases, maps);
-  const double total = singular.squaredNorm();
-  nlohmann::json cumulative = nlohmann::json::array();
-  double sum = 0.0;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    sum += singular[j] * singular[j];
-    cumulative.push_back(total > 0 ? std::sqrt(sum / total) : 0.0);  // f_cumu, eq. 4.4.13
-  }
-  const std::vector<double> singular_values(singular.data(), singular.data() + n);
-  auto basis = std::make_shared<InterpolatedLightBasis>(fit.SelectedLights(), v.transpose());
-  const std::string scheme(ToString(basis->interpolator().scheme()));
-  return Representation(fmt::format("eigen{}", k), std::move(maps),
-                        {k, true, false, fit.channels()}, std::move(basis),
-                        {{"singular_values", singular_values},
-                         {"cumulative_information", cumulative},
-                         {"interpolation", scheme}});
+  const EigenBasis basis = EigenBasisFromGram(
+      fit.observations.Gram(), fit.observations.ColumnSums(), fit.selected, k, fit.source);
+  return FitEigenWithBasis(fit.observations, fit.lights, fit.selected, basis);
 }
 
 }  // namespace
@@ -301,6 +261,88 @@ std::array<int, 3> SelectThreeImageLights(const std::vector<LightDirection>& lig
   return chosen;
 }
 
+EigenBasis EigenBasisFromGram(const Eigen::MatrixXd& gram, const Eigen::VectorXd& column_sums,
+                              std::span<const int> selected, int k, const fs::path& source) {
+  const auto n = static_cast<Eigen::Index>(selected.size());
+  if (k < 1 || k > n) {
+    throw Error(source, fmt::format("eigen{} needs at least {} images; {} given", k, k, n));
+  }
+  Eigen::MatrixXd sub(n, n);
+  Eigen::VectorXd sums(n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    sums[a] = column_sums[selected[a]];
+    for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(selected[a], selected[b]);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(sub);
+  if (solver.info() != Eigen::Success) {
+    throw Error(source, fmt::format("eigen{}: SVD did not converge", k));
+  }
+  // Eigenvalues ascend; the k largest are the last k, reversed.
+  EigenBasis basis{Eigen::MatrixXd(n, k), Eigen::VectorXd(n)};
+  for (Eigen::Index j = 0; j < n; ++j) {
+    basis.singular[j] = std::sqrt(std::max(0.0, solver.eigenvalues()[n - 1 - j]));
+  }
+  for (int j = 0; j < k; ++j) {
+    basis.v.col(j) = solver.eigenvectors().col(n - 1 - j);
+    // Each component's sign is arbitrary; make the basis images sum positive (the sum of basis
+    // image j is column_sums . v_j) so that maps are readable and fits reproducible. The sign
+    // cancels in M1 M2.
+    if (sums.dot(basis.v.col(j)) < 0.0) basis.v.col(j) *= -1.0;
+  }
+  return basis;
+}
+
+Representation EigenRepresentation(const Observations& observations, const Eigen::MatrixXf& bases,
+                                   const std::vector<LightDirection>& lights,
+                                   std::span<const int> selected, const EigenBasis& basis,
+                                   nlohmann::json details) {
+  const auto k = static_cast<int>(basis.v.cols());
+  const int channels = observations.channels();
+  Image maps(observations.width(), observations.height(),
+             CoefficientMapNames("eigen.", k, OutputChannelNames(channels)));
+  const Eigen::Index m = observations.pixels();
+  const auto& pixel_indices = observations.pixel_indices();
+  tbb::parallel_for(0, k * channels, [&](int map) {
+    const Eigen::Index j = map / channels, c = map % channels;
+    const float* values = bases.col(j).data() + c * m;
+    float* plane = maps.plane(map).data();
+    for (Eigen::Index p = 0; p < m; ++p) plane[pixel_indices[p]] = values[p];
+  });
+  const Eigen::VectorXd& singular = basis.singular;
+  const Eigen::Index n = singular.size();
+  const double total = singular.squaredNorm();
+  nlohmann::json cumulative = nlohmann::json::array();
+  double sum = 0.0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    sum += singular[j] * singular[j];
+    cumulative.push_back(total > 0 ? std::sqrt(sum / total) : 0.0);  // f_cumu, eq. 4.4.13
+  }
+  std::vector<LightDirection> selected_lights;
+  for (int i : selected) selected_lights.push_back(lights[i]);
+  auto light_basis = std::make_shared<InterpolatedLightBasis>(selected_lights, basis.v.transpose());
+  const std::string scheme(ToString(light_basis->interpolator().scheme()));
+  const std::vector<double> singular_values(singular.data(), singular.data() + n);
+  if (!details.is_object()) details = nlohmann::json::object();
+  nlohmann::json all = {{"singular_values", singular_values},
+                        {"cumulative_information", cumulative},
+                        {"interpolation", scheme}};
+  all.update(details);
+  return Representation(fmt::format("eigen{}", k), std::move(maps), {k, true, false, channels},
+                        std::move(light_basis), std::move(all));
+}
+
+Representation FitEigenWithBasis(const Observations& observations,
+                                 const std::vector<LightDirection>& lights,
+                                 std::span<const int> selected, const EigenBasis& basis) {
+  // M1 = I V_k: the basis images, from the selected images only.
+  Eigen::MatrixXf v = Eigen::MatrixXf::Zero(observations.images(), basis.v.cols());
+  for (std::size_t i = 0; i < selected.size(); ++i) {
+    v.row(selected[i]) = basis.v.row(static_cast<Eigen::Index>(i)).cast<float>();
+  }
+  const Eigen::MatrixXf bases = ParallelProduct(observations.matrix(), v);
+  return EigenRepresentation(observations, bases, lights, selected, basis);
+}
+
 Representation FitObservations(const Observations& observations,
                                const std::vector<LightDirection>& lights, const Method& method,
                                std::span<const int> selected, const fs::path& source) {
@@ -328,11 +370,14 @@ Representation FitObservations(const Observations& observations,
       const auto n = static_cast<Eigen::Index>(selected.size());
       const Eigen::MatrixXd& gram = observations.Gram();
       Eigen::MatrixXd sub(n, n);
+      Eigen::VectorXd sums(n);
       for (Eigen::Index a = 0; a < n; ++a) {
         for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(selected[a], selected[b]);
+        sums[a] = observations.ColumnSums()[selected[a]];
       }
-      return FitLightProfiles(observations, observations.matrix(), selected, sub,
-                              fit.SelectedLights(), method, source);
+      return ProjectLightProfiles(
+          FitLightProfileModel(sub, sums, fit.SelectedLights(), method, source), observations,
+          observations.matrix(), selected);
     }
     case Method::Kind::kEigen:
       break;

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <span>
 #include <vector>
 
@@ -25,6 +27,32 @@ Representation FitObservations(const Observations& observations,
                                const std::vector<LightDirection>& lights, const Method& method,
                                std::span<const int> selected,
                                const std::filesystem::path& source = {});
+
+// Eigen-k's light basis (thesis 4.4.5): I = U W V^T without mean subtraction; M1 = U_k W_k = I V_k
+// are the basis images, M2 = V_k^T the coefficients of the fitted lights. V comes from the
+// eigenvectors of the Gram matrix I^T I (IMPLEMENTER CHOICE: n x n instead of an m x n SVD; same
+// M1, M2 up to sign), so a streamed fit accumulates I^T I band by band (RowGram) and then writes
+// M1 band by band.
+struct EigenBasis {
+  Eigen::MatrixXd v;         // |S| x k, each column's sign making its basis image sum positive
+  Eigen::VectorXd singular;  // all |S| singular values, descending
+};
+// From the Gram matrix and the column sums of the whole image matrix (all images; `selected`
+// picks the rows and columns used). Throws Error naming `source` if k is not in 1..|S| or the
+// eigen-decomposition fails.
+EigenBasis EigenBasisFromGram(const Eigen::MatrixXd& gram, const Eigen::VectorXd& column_sums,
+                              std::span<const int> selected, int k,
+                              const std::filesystem::path& source = {});
+// The Eigen-k representation of `observations` (a set, or a band of it) in `basis`.
+Representation FitEigenWithBasis(const Observations& observations,
+                                 const std::vector<LightDirection>& lights,
+                                 std::span<const int> selected, const EigenBasis& basis);
+// The same from basis images already computed (C*m x k, Observations' rows: the robust fit's
+// imputed matrix times V); `details` are added to the representation's.
+Representation EigenRepresentation(const Observations& observations, const Eigen::MatrixXf& bases,
+                                   const std::vector<LightDirection>& lights,
+                                   std::span<const int> selected, const EigenBasis& basis,
+                                   nlohmann::json details = nlohmann::json::object());
 
 // The three lights 3I uses among `selected` (thesis 4.4.2, IMPLEMENTER CHOICE for other sets):
 // slant 45 with tilts t, t + 90, t + 180 for the smallest tilt t where all three exist (the

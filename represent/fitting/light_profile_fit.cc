@@ -93,28 +93,20 @@ nlohmann::json CumulativeInformation(const Eigen::VectorXd& singular) {
   return cumulative;
 }
 
-// The maps P E V (E: profile -> coordinates, n x d; V: d x k), with each plane's sign made to sum
-// positive (V's column signs are arbitrary; flipping both keeps P E V V^T).
-Image ProjectedMaps(const Observations& observations, const Eigen::MatrixXf& matrix,
-                    std::span<const int> columns, const Eigen::MatrixXd& to_coordinates,
-                    Eigen::MatrixXd& axes, const std::string& prefix) {
-  const Eigen::MatrixXd projection = to_coordinates * axes;  // n x k
-  Eigen::MatrixXf scattered = Eigen::MatrixXf::Zero(matrix.cols(), projection.cols());
-  for (std::size_t i = 0; i < columns.size(); ++i) {
-    scattered.row(columns[i]) = projection.row(static_cast<Eigen::Index>(i)).cast<float>();
-  }
-  Eigen::MatrixXf planes = ParallelProduct(matrix, scattered);
-  for (Eigen::Index j = 0; j < planes.cols(); ++j) {
-    if (planes.col(j).sum() < 0.0f) {
-      planes.col(j) *= -1.0f;
+// The projection E V (E: profile -> coordinates, n x d; V: d x k) with each plane's sign made to
+// sum positive over the fitted rows, whose column sums are `column_sums` (the sum of plane j is
+// column_sums . (E V)_j). V's column signs are arbitrary and flipping both keeps E V V^T; taking
+// the sign from the sums, not from one band's maps, makes every band of a streamed fit agree.
+Eigen::MatrixXd SignedProjection(const Eigen::VectorXd& column_sums,
+                                 const Eigen::MatrixXd& to_coordinates, Eigen::MatrixXd& axes) {
+  Eigen::MatrixXd projection = to_coordinates * axes;  // n x k
+  for (Eigen::Index j = 0; j < projection.cols(); ++j) {
+    if (column_sums.dot(projection.col(j)) < 0.0) {
+      projection.col(j) *= -1.0;
       axes.col(j) *= -1.0;
     }
   }
-  const auto k = static_cast<int>(planes.cols());
-  Image maps(observations.width(), observations.height(),
-             CoefficientMapNames(prefix, k, OutputChannelNames(observations.channels())));
-  StorePerChannelTerms(observations, planes, maps);
-  return maps;
+  return projection;
 }
 
 nlohmann::json PlanesJson(int planes, const PrincipalAxes& axes) {
@@ -133,16 +125,17 @@ void CheckPlanes(const LightProfileOptions& options, const std::string& method,
   }
 }
 
-Representation FitRbf(const Observations& observations, const Eigen::MatrixXf& matrix,
-                      std::span<const int> columns, const Eigen::MatrixXd& gram,
-                      const std::vector<LightDirection>& lights, const LightProfileOptions& options,
-                      const fs::path& source, nlohmann::json details) {
+LightProfileModel RbfModel(const Eigen::MatrixXd& gram, const Eigen::VectorXd& column_sums,
+                           const std::vector<LightDirection>& lights,
+                           const LightProfileOptions& options, const fs::path& source,
+                           nlohmann::json details) {
   const RbfParameters chosen = ChooseRbfParameters(lights, gram, options, source);
   PrincipalAxes axes =
       FindPrincipalAxes(gram, options.planes, static_cast<int>(lights.size()), "rbf", source);
   const auto n = static_cast<Eigen::Index>(lights.size());
-  Image maps = ProjectedMaps(observations, matrix, columns, Eigen::MatrixXd::Identity(n, n),
-                             axes.basis, "rbf.");
+  LightProfileModel model;
+  model.method = "rbf";
+  model.projection = SignedProjection(column_sums, Eigen::MatrixXd::Identity(n, n), axes.basis);
   details["rbf"] = {
       {"width_deg", chosen.width_degrees},
       {"regularisation", chosen.regularisation},
@@ -150,50 +143,44 @@ Representation FitRbf(const Observations& observations, const Eigen::MatrixXf& m
       {"regularisation_from", options.rbf_regularisation ? "option" : "leave-one-out"},
       {"leave_one_out", chosen.leave_one_out}};
   details["pca"] = PlanesJson(options.planes, axes);
-  const int k = maps.channels() / observations.channels();
-  auto basis = std::make_shared<RbfLightBasis>(
+  model.basis = std::make_shared<RbfLightBasis>(
       RbfInterpolation(lights, chosen.width_degrees, chosen.regularisation), axes.basis);
-  return Representation("rbf", std::move(maps), {k, true, false, observations.channels()},
-                        std::move(basis), std::move(details));
+  model.details = std::move(details);
+  return model;
 }
 
-Representation FitBilinear(const Observations& observations, const Eigen::MatrixXf& matrix,
-                           std::span<const int> columns, const Eigen::MatrixXd& gram,
-                           const std::vector<LightDirection>& lights,
-                           const LightProfileOptions& options, const fs::path& source,
-                           nlohmann::json details) {
+LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::VectorXd& column_sums,
+                                const std::vector<LightDirection>& lights,
+                                const LightProfileOptions& options, const fs::path& source,
+                                nlohmann::json details) {
   const int g = options.grid_size;
   if (g < 2 || g > 32) {
     throw Error(source, fmt::format("bilinear: grid size {} is outside 2..32", g));
   }
   const Eigen::MatrixXd resampling = BilinearResampling(lights, g);  // G^2 x n
   const auto n = static_cast<Eigen::Index>(lights.size());
-  Image maps;
+  LightProfileModel model;
+  model.method = "bilinear";
   Eigen::MatrixXd grid_basis;  // G^2 x k: the grid values of each plane's profile
+  PrincipalAxes axes =
+      FindPrincipalAxes(gram, options.planes, static_cast<int>(n), "bilinear", source);
   if (options.planes == 0) {
     // Uncompressed: every grid node is a plane, the maps are the grid profiles R p.
-    PrincipalAxes axes = FindPrincipalAxes(gram, 0, static_cast<int>(n), "bilinear", source);
-    Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(g * g, g * g);
-    maps =
-        ProjectedMaps(observations, matrix, columns, resampling.transpose(), identity, "bilinear.");
-    grid_basis = identity;
-    details["pca"] = PlanesJson(0, axes);
+    grid_basis = Eigen::MatrixXd::Identity(g * g, g * g);
+    model.projection = SignedProjection(column_sums, resampling.transpose(), grid_basis);
   } else {
     // IMPLEMENTER CHOICE: the PCA runs over the captured profiles (p ~ V V^T p, as rbf), and the
     // grid holds the resampled axes R V, so value(l) = b(l) . R V (V^T p). A PCA over the grid
     // profiles R p instead weighs every node alike, and spends its planes on the extrapolated
     // corners no light reaches (DiLiGenT cat, 10 held-out lights: 27.1 dB against 33+).
-    PrincipalAxes axes =
-        FindPrincipalAxes(gram, options.planes, static_cast<int>(n), "bilinear", source);
-    maps = ProjectedMaps(observations, matrix, columns, Eigen::MatrixXd::Identity(n, n), axes.basis,
-                         "bilinear.");
+    model.projection = SignedProjection(column_sums, Eigen::MatrixXd::Identity(n, n), axes.basis);
     grid_basis = resampling * axes.basis;
-    details["pca"] = PlanesJson(options.planes, axes);
   }
+  details["pca"] = PlanesJson(options.planes, axes);
   details["bilinear"] = {{"grid_size", g}, {"smoothness", kBilinearSmoothness}};
-  const int k = maps.channels() / observations.channels();
-  return Representation("bilinear", std::move(maps), {k, true, false, observations.channels()},
-                        std::make_shared<BilinearLightBasis>(g, grid_basis), std::move(details));
+  model.basis = std::make_shared<BilinearLightBasis>(g, grid_basis);
+  model.details = std::move(details);
+  return model;
 }
 
 }  // namespace
@@ -276,25 +263,47 @@ Eigen::MatrixXd BilinearResampling(const std::vector<LightDirection>& lights, in
   return ldlt.solve(weights.transpose());
 }
 
-Representation FitLightProfiles(const Observations& observations, const Eigen::MatrixXf& matrix,
-                                std::span<const int> columns, const Eigen::MatrixXd& gram,
-                                const std::vector<LightDirection>& lights, const Method& method,
-                                const fs::path& source, nlohmann::json details) {
+LightProfileModel FitLightProfileModel(const Eigen::MatrixXd& gram,
+                                       const Eigen::VectorXd& column_sums,
+                                       const std::vector<LightDirection>& lights,
+                                       const Method& method, const fs::path& source,
+                                       nlohmann::json details) {
   CheckPlanes(method.profile, method.Name(), source);
-  if (static_cast<std::size_t>(gram.rows()) != columns.size() || lights.size() != columns.size()) {
+  if (gram.rows() != gram.cols() || static_cast<std::size_t>(gram.rows()) != lights.size() ||
+      column_sums.size() != gram.rows()) {
     throw Error(source,
-                fmt::format("{}: {} columns, {} lights and a {}x{} Gram matrix", method.Name(),
-                            columns.size(), lights.size(), gram.rows(), gram.cols()));
+                fmt::format("{}: {} lights, {} column sums and a {}x{} Gram matrix", method.Name(),
+                            lights.size(), column_sums.size(), gram.rows(), gram.cols()));
   }
   if (method.kind == Method::Kind::kBilinear) {
-    return FitBilinear(observations, matrix, columns, gram, lights, method.profile, source,
-                       std::move(details));
+    return BilinearModel(gram, column_sums, lights, method.profile, source, std::move(details));
   }
   if (method.kind != Method::Kind::kRbf) {
     throw Error(source, fmt::format("{} is not a light-profile method", method.Name()));
   }
-  return FitRbf(observations, matrix, columns, gram, lights, method.profile, source,
-                std::move(details));
+  return RbfModel(gram, column_sums, lights, method.profile, source, std::move(details));
+}
+
+Representation ProjectLightProfiles(const LightProfileModel& model,
+                                    const Observations& observations, const Eigen::MatrixXf& matrix,
+                                    std::span<const int> columns) {
+  if (static_cast<std::size_t>(model.projection.rows()) != columns.size()) {
+    throw Error(fmt::format("{}: a model of {} profile entries projects {} columns", model.method,
+                            model.projection.rows(), columns.size()));
+  }
+  const Eigen::Index k = model.projection.cols();
+  Eigen::MatrixXf scattered = Eigen::MatrixXf::Zero(matrix.cols(), k);
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    scattered.row(columns[i]) = model.projection.row(static_cast<Eigen::Index>(i)).cast<float>();
+  }
+  const Eigen::MatrixXf planes = ParallelProduct(matrix, scattered);
+  const int channels = observations.channels();
+  Image maps(
+      observations.width(), observations.height(),
+      CoefficientMapNames(model.method + ".", static_cast<int>(k), OutputChannelNames(channels)));
+  StorePerChannelTerms(observations, planes, maps);
+  return Representation(model.method, std::move(maps), {static_cast<int>(k), true, false, channels},
+                        model.basis, model.details);
 }
 
 }  // namespace photomat

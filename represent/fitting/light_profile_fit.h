@@ -2,12 +2,15 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/light_direction.h"
 #include "represent/fitting/observations.h"
+#include "represent/model/light_basis.h"
 #include "represent/model/method.h"
 #include "represent/model/representation.h"
 
@@ -43,14 +46,32 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
 inline constexpr double kBilinearSmoothness = 1e-4;
 Eigen::MatrixXd BilinearResampling(const std::vector<LightDirection>& lights, int grid_size);
 
-// Fits `method` (rbf or bilinear) to the columns `columns` of `matrix` (rows in `observations`'
-// order; the observations' own matrix or an imputed copy), whose lights are `lights` (one per
-// entry of `columns`) and Gram matrix `gram` (|columns| x |columns|). `details` are kept and the
-// fit's own added. Throws Error naming `source` for degenerate lights or options.
-Representation FitLightProfiles(const Observations& observations, const Eigen::MatrixXf& matrix,
-                                std::span<const int> columns, const Eigen::MatrixXd& gram,
-                                const std::vector<LightDirection>& lights, const Method& method,
-                                const std::filesystem::path& source = {},
-                                nlohmann::json details = nlohmann::json::object());
+// A light-profile fit's model: everything of it but the maps. It follows from the fitted profiles'
+// Gram matrix and column sums alone (the kernel width and regularisation by leave-one-out, the
+// PCA axes, each plane's sign), so a streamed fit finds it in one pass over the bands and then
+// projects every band with it; the in-memory fit is the one-band case.
+struct LightProfileModel {
+  std::string method;                       // "rbf" or "bilinear"
+  Eigen::MatrixXd projection;               // n x k: a profile's k plane coefficients
+  std::shared_ptr<const LightBasis> basis;  // from the k planes to a light's value
+  nlohmann::json details;
+};
+
+// The model of `method` (rbf or bilinear) for profiles over `lights` whose Gram matrix is `gram`
+// (n x n) and column sums `column_sums` (n). `details` are kept and the fit's own added. Throws
+// Error naming `source` for degenerate lights or options.
+LightProfileModel FitLightProfileModel(const Eigen::MatrixXd& gram,
+                                       const Eigen::VectorXd& column_sums,
+                                       const std::vector<LightDirection>& lights,
+                                       const Method& method,
+                                       const std::filesystem::path& source = {},
+                                       nlohmann::json details = nlohmann::json::object());
+
+// The maps of `model` for the columns `columns` of `matrix` (rows in `observations`' order; the
+// observations' own matrix or an imputed copy; entry i of the model's profile is column
+// columns[i]).
+Representation ProjectLightProfiles(const LightProfileModel& model,
+                                    const Observations& observations, const Eigen::MatrixXf& matrix,
+                                    std::span<const int> columns);
 
 }  // namespace photomat

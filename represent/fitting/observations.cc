@@ -2,7 +2,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -42,8 +41,18 @@ Observations::Observations(const PhotometricSet& set)
 }
 
 const Eigen::MatrixXd& Observations::Gram() const {
-  std::call_once(gram_once_, [this] { gram_ = ParallelGram(matrix_); });
+  std::call_once(gram_once_, [this] {
+    RowGram sum(matrix_.cols());
+    sum.Add(matrix_, pixel_indices_, width_, channels_);
+    gram_ = sum.gram();
+    column_sums_ = sum.column_sums();
+  });
   return gram_;
+}
+
+const Eigen::VectorXd& Observations::ColumnSums() const {
+  Gram();
+  return column_sums_;
 }
 
 Eigen::VectorXd Observations::ColumnStandardDeviations() const {
@@ -56,21 +65,56 @@ Eigen::VectorXd Observations::ColumnStandardDeviations() const {
   return deviations;
 }
 
-Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix) {
-  const Eigen::Index rows = matrix.rows(), n = matrix.cols();
-  return tbb::parallel_reduce(
-      tbb::blocked_range<Eigen::Index>(0, rows, kRowBlock), Eigen::MatrixXd::Zero(n, n).eval(),
-      [&](const tbb::blocked_range<Eigen::Index>& range, Eigen::MatrixXd sum) {
-        for (Eigen::Index start = range.begin(); start < range.end(); start += kRowBlock) {
-          const Eigen::Index count = std::min(kRowBlock, range.end() - start);
-          Eigen::MatrixXf partial = Eigen::MatrixXf::Zero(n, n);
-          partial.selfadjointView<Eigen::Lower>().rankUpdate(
-              matrix.middleRows(start, count).transpose());
-          sum += partial.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
+RowGram::RowGram(Eigen::Index columns)
+    : gram_(Eigen::MatrixXd::Zero(columns, columns)),
+      column_sums_(Eigen::VectorXd::Zero(columns)) {}
+
+void RowGram::Add(const Eigen::MatrixXf& matrix, std::span<const std::size_t> pixel_indices,
+                  int width, int channels) {
+  const auto m = static_cast<Eigen::Index>(pixel_indices.size());
+  const Eigen::Index n = gram_.cols();
+  if (m == 0) return;
+  // Image rows present, each with its range of selected pixels [begin, end).
+  struct RowRange {
+    Eigen::Index begin, end;
+  };
+  std::vector<RowRange> rows;
+  for (Eigen::Index k = 0; k < m;) {
+    const std::size_t y = pixel_indices[k] / static_cast<std::size_t>(width);
+    Eigen::Index end = k;
+    while (end < m && pixel_indices[end] / static_cast<std::size_t>(width) == y) ++end;
+    rows.push_back({k, end});
+    k = end;
+  }
+  // Rows in groups whose totals are computed in parallel, then added in row order.
+  constexpr std::size_t kRowsPerGroup = 64;
+  std::vector<Eigen::MatrixXd> totals(std::min(kRowsPerGroup, rows.size()));
+  std::vector<Eigen::VectorXd> sums(totals.size());
+  for (std::size_t group = 0; group < rows.size(); group += kRowsPerGroup) {
+    const std::size_t count = std::min(kRowsPerGroup, rows.size() - group);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t r) {
+      const RowRange range = rows[group + r];
+      Eigen::MatrixXd& total = totals[r];
+      Eigen::VectorXd& sum = sums[r];
+      total.setZero(n, n);
+      sum.setZero(n);
+      Eigen::MatrixXf partial(n, n);
+      for (int c = 0; c < channels; ++c) {
+        for (Eigen::Index start = range.begin; start < range.end; start += kRowBlock) {
+          const Eigen::Index length = std::min(kRowBlock, range.end - start);
+          const auto block = matrix.middleRows(c * m + start, length);
+          partial.setZero();
+          partial.selfadjointView<Eigen::Lower>().rankUpdate(block.transpose());
+          total += partial.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
+          sum += block.cast<double>().colwise().sum().transpose();
         }
-        return sum;
-      },
-      [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) -> Eigen::MatrixXd { return a + b; });
+      }
+    });
+    for (std::size_t r = 0; r < count; ++r) {
+      gram_ += totals[r];
+      column_sums_ += sums[r];
+    }
+  }
 }
 
 Eigen::MatrixXf ParallelProduct(const Eigen::MatrixXf& left, const Eigen::MatrixXf& right) {

@@ -33,8 +33,11 @@ class Observations {
     return matrix_.middleRows(static_cast<Eigen::Index>(c) * pixels(), pixels());
   }
 
-  // I^T I in double precision (summed in blocks of float products), computed once. Thread-safe.
+  // I^T I in double precision (RowGram: the same sum whatever the band), computed once.
+  // Thread-safe.
   const Eigen::MatrixXd& Gram() const;
+  // Per image, the sum of its column (double, in RowGram's order).
+  const Eigen::VectorXd& ColumnSums() const;
 
   // Per image, the standard deviation of its values over all rows (the normaliser of Dong's
   // error).
@@ -48,11 +51,28 @@ class Observations {
   int height_ = 0;
   mutable std::once_flag gram_once_;
   mutable Eigen::MatrixXd gram_;
+  mutable Eigen::VectorXd column_sums_;
 };
 
-// A^T A over the rows of a tall float matrix, in double: float products of blocks of 4096 rows
-// (accurate at that length), summed in double.
-Eigen::MatrixXd ParallelGram(const Eigen::MatrixXf& matrix);
+// A^T A and the column sums of an image data matrix (Observations' row layout), accumulated band
+// by band in a fixed order: per image row and channel a float product of at most 4096 pixels
+// (accurate at that length), summed in double into the row's total, and the rows' totals added
+// in row order. The result depends neither on the band heights nor on the thread count, so a
+// streamed fit (any band) and an in-memory one (one band) get the same bits, run after run.
+class RowGram {
+ public:
+  explicit RowGram(Eigen::Index columns);
+  // Adds the rows of one band: `matrix` has Observations' layout for the band's selected
+  // `pixel_indices` (y * width + x within the band, ascending) and `channels` channels.
+  void Add(const Eigen::MatrixXf& matrix, std::span<const std::size_t> pixel_indices, int width,
+           int channels);
+  const Eigen::MatrixXd& gram() const { return gram_; }
+  const Eigen::VectorXd& column_sums() const { return column_sums_; }
+
+ private:
+  Eigen::MatrixXd gram_;
+  Eigen::VectorXd column_sums_;
+};
 
 // Copies a (C*m) x k matrix in the observations' row order into the maps j * C + c of `maps`
 // (term-major, as CoefficientMapNames names them): each map plane takes the m values of one

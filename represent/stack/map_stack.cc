@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "represent/stack/stack_band_writer.h"
 
 namespace photomat {
 namespace {
@@ -32,18 +33,9 @@ MapLayout LayoutFromJson(const JsonReader& json) {
 
 }  // namespace
 
-void SaveRepresentation(const fs::path& path, const Representation& representation,
-                        const StackProvenance& provenance, ExrCompression compression) {
-  SaveRepresentation(path, representation, provenance, Image(), compression);
-}
-
-void SaveRepresentation(const fs::path& path, const Representation& representation,
-                        const StackProvenance& provenance, const Image& extra_layers,
-                        ExrCompression compression) {
+nlohmann::json StackDescription(const Representation& representation,
+                                const StackProvenance& provenance) {
   const Image& maps = representation.maps();
-  if (static_cast<int>(maps.channel_names().size()) != maps.channels()) {
-    throw Error(path, "the maps have no channel names");
-  }
   nlohmann::json lights = nlohmann::json::array();
   for (const auto& l : provenance.capture_lights) lights.push_back({l.x(), l.y(), l.z()});
   nlohmann::json description = {
@@ -70,6 +62,32 @@ void SaveRepresentation(const fs::path& path, const Representation& representati
     }
     description["capture"]["images"] = std::move(images);
   }
+  return description;
+}
+
+StackBandWriter::StackBandWriter(const fs::path& path, const nlohmann::json& description,
+                                 std::vector<std::string> channel_names, int width, int height,
+                                 ExrCompression compression)
+    : writer_(path, width, height, std::move(channel_names), [&] {
+        ImageWriteOptions options;
+        options.exr_compression = compression;
+        options.attributes[kStackAttribute] = description.dump();
+        return options;
+      }()) {}
+
+void SaveRepresentation(const fs::path& path, const Representation& representation,
+                        const StackProvenance& provenance, ExrCompression compression) {
+  SaveRepresentation(path, representation, provenance, Image(), compression);
+}
+
+void SaveRepresentation(const fs::path& path, const Representation& representation,
+                        const StackProvenance& provenance, const Image& extra_layers,
+                        ExrCompression compression) {
+  const Image& maps = representation.maps();
+  if (static_cast<int>(maps.channel_names().size()) != maps.channels()) {
+    throw Error(path, "the maps have no channel names");
+  }
+  nlohmann::json description = StackDescription(representation, provenance);
   ImageWriteOptions options;
   options.exr_compression = compression;
   if (extra_layers.empty()) {

@@ -52,24 +52,57 @@ void LimitFileSize(std::size_t bytes) {
   setrlimit(RLIMIT_FSIZE, &limit);
 }
 
+ImageWriteOptions Linear16Bit() {
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint16;
+  return options;
+}
+
 std::filesystem::path PhotomatExecutable() {
   const char* dir = std::getenv("PHOTOMAT_BINARY_DIR");
   return std::filesystem::path(dir ? dir : ".") / "bin" / "photomat";
 }
 
-RunResult RunPhotomat(const std::string& arguments) {
-  const std::string command = PhotomatExecutable().string() + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) {
-    ADD_FAILURE() << "cannot start `" << command << "`: " << std::strerror(errno);
+RunResult RunPhotomat(const std::string& arguments) { return RunPhotomat(arguments, {}); }
+
+RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits) {
+  // Everything the child needs is made before fork: after it, only async-signal-safe calls.
+  const std::string command = PhotomatExecutable().string() + " " + arguments;
+  const rlimit address_space{limits.address_space_bytes, limits.address_space_bytes};
+  std::array<int, 2> output_pipe{};
+  if (pipe(output_pipe.data()) != 0) {
+    ADD_FAILURE() << "cannot make a pipe for `" << command << "`: " << std::strerror(errno);
     return {-1, ""};
   }
+  const pid_t child = fork();
+  if (child < 0) {
+    ADD_FAILURE() << "cannot start `" << command << "`: " << std::strerror(errno);
+    close(output_pipe[0]);
+    close(output_pipe[1]);
+    return {-1, ""};
+  }
+  if (child == 0) {
+    dup2(output_pipe[1], STDOUT_FILENO);
+    dup2(output_pipe[1], STDERR_FILENO);
+    close(output_pipe[0]);
+    close(output_pipe[1]);
+    if (limits.address_space_bytes > 0) setrlimit(RLIMIT_AS, &address_space);
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  close(output_pipe[1]);
   std::string output;
   std::array<char, 4096> buffer;
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe)) {
-    output.append(buffer.data(), n);
+  for (;;) {
+    const ssize_t n = read(output_pipe[0], buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    output.append(buffer.data(), static_cast<std::size_t>(n));
   }
-  const int status = pclose(pipe);
+  close(output_pipe[0]);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
 

@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
 
 #include "core/image.h"
+#include "core/image_io.h"
 
 namespace photomat::testing {
 
@@ -53,6 +55,9 @@ void WriteFile(const std::filesystem::path& path, const std::string& contents);
 // process, e.g. inside EXPECT_EXIT).
 void LimitFileSize(std::size_t bytes);
 
+// Integer images of 16 bits, linear (the write options of most test captures).
+ImageWriteOptions Linear16Bit();
+
 // The built photomat executable (for command-line tests).
 std::filesystem::path PhotomatExecutable();
 
@@ -63,5 +68,12 @@ struct RunResult {
 // Runs the built photomat with `arguments` (passed through the shell, so quote paths with
 // spaces) and collects what it prints.
 RunResult RunPhotomat(const std::string& arguments);
+
+struct RunLimits {
+  // > 0: a hard limit on the child's address space (setrlimit RLIMIT_AS, soft and hard alike,
+  // set in the child before photomat starts): allocations beyond it fail.
+  std::size_t address_space_bytes = 0;
+};
+RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits);
 
 }  // namespace photomat::testing

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "capture/io/load_photometric_set.h"
+#include "core/image_band_io.h"
+#include "core/photometric_set.h"
+#include "core/progress.h"
+
+namespace photomat {
+
+// (Implemented in load_photometric_set.cc: LoadPhotometricSet is this with one band.)
+// A photometric set opened for streaming (README, "Streamed fitting"): what LoadPhotometricSet
+// reads, with every image held open as an ImageBandReader and decoded band by band in row order,
+// so that memory depends on the band, not on the image. Opening reads only the headers, and
+// rejects, before any pixel is decoded, images of another size or channel count (naming them).
+class StreamedSet {
+ public:
+  int size() const { return static_cast<int>(readers_.size()); }
+  int width() const { return readers_.front().width(); }
+  int height() const { return readers_.front().height(); }
+  int channels() const { return readers_.front().channels(); }
+  const std::vector<LightDirection>& lights() const { return lights_; }
+  const std::vector<std::string>& image_names() const { return names_; }
+  const std::filesystem::path& source() const { return source_; }
+  InputKind kind() const { return kind_; }
+  const std::optional<std::filesystem::path>& ground_truth_normals() const {
+    return ground_truth_normals_;
+  }
+  // The intensities the input gives (empty: none) and whether the options asked to apply them.
+  const std::vector<std::vector<float>>& intensities() const { return intensities_; }
+  bool apply_intensities() const { return apply_intensities_; }
+  int next_row() const { return readers_.front().next_row(); }
+  // Per image, how its samples are decoded, decided when its file was opened (the same records
+  // LoadPhotometricSet gives in LoadedSet::encodings).
+  std::vector<ImageEncodingRecord> encodings() const;
+
+  // The next `rows` rows of every image, decoded in parallel: a set of band images with the
+  // lights, names, the band of the mask and the intensities (applied if the options said so,
+  // unless `raw`: then attached, for callers that look at the values as captured first). Throws
+  // Error naming the image for a truncated or corrupt band. `progress` advances once per image.
+  PhotometricSet ReadBand(int rows, bool raw = false, Progress* progress = nullptr);
+  // Pixels of rows [first, first + rows) the mask selects (all without a mask).
+  std::size_t SelectedPixels(int first, int rows) const;
+  // Back to row 0 (every file reopened): a further streamed pass.
+  void Rewind();
+  // Per image, the clipped pixels (a channel at full scale) of the rows read so far.
+  std::vector<std::size_t> SaturatedPixels() const;
+
+ private:
+  friend StreamedSet OpenStreamedSet(const std::filesystem::path& path, const LoadOptions& options);
+  StreamedSet() = default;
+
+  std::vector<std::filesystem::path> files_;
+  ImageReadOptions read_;
+  std::vector<ImageBandReader> readers_;
+  std::vector<LightDirection> lights_;
+  std::vector<std::string> names_;
+  std::filesystem::path source_;
+  InputKind kind_ = InputKind::kManifest;
+  std::optional<Mask> mask_;
+  std::vector<std::vector<float>> intensities_;
+  bool apply_intensities_ = true;
+  std::optional<std::filesystem::path> ground_truth_normals_;
+};
+
+// Opens the set at `path` for streaming (DetectInput, then every image's header). Throws Error
+// naming the file for every fault LoadPhotometricSet reports before decoding.
+StreamedSet OpenStreamedSet(const std::filesystem::path& path, const LoadOptions& options = {});
+
+}  // namespace photomat

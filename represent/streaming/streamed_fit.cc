@@ -1,0 +1,406 @@
+#include "represent/streaming/streamed_fit.h"
+
+#include <fmt/format.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numeric>
+
+#include "calibrate/radiometry/exposure.h"
+#include "core/error.h"
+#include "represent/fitting/fit.h"
+#include "represent/fitting/light_profile_fit.h"
+#include "represent/fitting/observations.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<int> AllImages(int count) {
+  std::vector<int> all(static_cast<std::size_t>(count));
+  std::iota(all.begin(), all.end(), 0);
+  return all;
+}
+
+// Maps of a method's stack (an upper bound for pbr): what a band's maps of it hold per pixel.
+int MapPlanes(const Method& method, int images, int channels) {
+  switch (method.kind) {
+    case Method::Kind::kThreeImage:
+      return 3 * channels;
+    case Method::Kind::kGradient:
+      return 3 + channels;
+    case Method::Kind::kPtm:
+      return 6 * channels;
+    case Method::Kind::kPtmLrgb:
+      return 6 + channels;
+    case Method::Kind::kHsh:
+      return method.hsh_terms * channels;
+    case Method::Kind::kEigen:
+      return method.eigen_k * channels;
+    case Method::Kind::kRbf:
+      return (method.profile.planes > 0 ? std::min(method.profile.planes, images) : images) *
+             channels;
+    case Method::Kind::kBilinear:
+      return (method.profile.planes > 0 ? std::min(method.profile.planes, images)
+                                        : method.profile.grid_size * method.profile.grid_size) *
+             channels;
+    case Method::Kind::kPbr:
+      break;
+  }
+  return 8 + 2 * channels;
+}
+
+bool IsLightProfile(const Method& method) {
+  return method.kind == Method::Kind::kRbf || method.kind == Method::Kind::kBilinear;
+}
+
+// Methods whose fit needs the Gram matrix of the whole set's profiles (a streamed pass first).
+bool NeedsGram(const Method& method) {
+  return method.kind == Method::Kind::kEigen || IsLightProfile(method);
+}
+
+// One band of the set, read and prepared for fitting. Not movable: the observations refer to
+// the set and the robust fit to both.
+struct Band {
+  int first = 0;
+  int rows = 0;
+  std::optional<PhotometricSet> set;  // empty when the mask selects none of its pixels
+  std::optional<Observations> observations;
+  std::vector<Mask> measured;
+  std::optional<RobustFit> robust;
+
+  Band() = default;
+  Band(const Band&) = delete;
+  Band& operator=(const Band&) = delete;
+  bool empty() const { return !observations.has_value(); }
+};
+
+class Streamer {
+ public:
+  Streamer(StreamedSet& set, std::span<const Method> methods, const StreamedFitOptions& options)
+      : set_(set), options_(options), all_(AllImages(set.size())) {
+    band_rows_ =
+        options.band_rows > 0
+            ? std::min(options.band_rows, set.height())
+            : StreamedBandRows(options.memory_bytes > 0 ? options.memory_bytes : DefaultFitMemory(),
+                               set, methods, options.robust);
+    bands_ = (set.height() + band_rows_ - 1) / band_rows_;
+  }
+
+  int band_rows() const { return band_rows_; }
+  int passes() const { return passes_; }
+
+  // Reads the next band of `rows` into `band` (which must be fresh).
+  void Read(Band& band) {
+    band.first = set_.next_row();
+    band.rows = std::min(band_rows_, set_.height() - band.first);
+    PhotometricSet raw = set_.ReadBand(band.rows, true);
+    if (set_.SelectedPixels(band.first, band.rows) == 0) return;
+    if (options_.robust) band.measured = MeasuredPixelMasks(raw);
+    if (set_.apply_intensities()) raw.ApplyIntensities();
+    band.set.emplace(std::move(raw));
+    band.observations.emplace(*band.set);
+    if (options_.robust) {
+      RobustFitOptions robust = options_.robust_options;
+      robust.measured = band.measured;
+      robust.progress = nullptr;
+      band.robust.emplace(*band.observations, band.set->lights(), all_, robust, set_.source());
+    }
+  }
+
+  // One streamed pass: `visit` sees every band in row order.
+  template <typename Visit>
+  void Pass(const std::string& label, Visit&& visit) {
+    if (passes_ > 0 || set_.next_row() != 0) set_.Rewind();
+    ++passes_;
+    NullProgress none;
+    Progress& progress = OrNull(options_.progress, none);
+    progress.Start(label, static_cast<std::size_t>(bands_));
+    for (int b = 0; b < bands_; ++b) {
+      Band band;
+      Read(band);
+      visit(band);
+      progress.Advance();
+    }
+    progress.Finish();
+  }
+
+  const std::vector<int>& all() const { return all_; }
+
+ private:
+  StreamedSet& set_;
+  const StreamedFitOptions& options_;
+  std::vector<int> all_;
+  int band_rows_ = 1;
+  int bands_ = 1;
+  int passes_ = 0;
+};
+
+// The robust weights' summary over bands: counts add, means weigh by the observations.
+void AddSummary(const RobustFitSummary& band, RobustFitSummary& total, double& weight_sum,
+                double& inlier_sum) {
+  total.observations += band.observations;
+  total.not_measured += band.not_measured;
+  total.attached_shadow += band.attached_shadow;
+  total.down_weighted += band.down_weighted;
+  weight_sum += band.mean_weight * static_cast<double>(band.observations);
+  inlier_sum += band.normal_inlier_fraction * static_cast<double>(band.observations);
+}
+
+// The stack of one method: opened at its first band with maps (whose representation describes
+// the whole stack), with the rows of earlier empty bands written as zeros then.
+class MethodStack {
+ public:
+  MethodStack(fs::path path, int width, int height, const StreamedFitOptions& options)
+      : path_(std::move(path)), width_(width), height_(height), options_(options) {}
+
+  void Write(const Representation& band) {
+    if (!writer_) {
+      nlohmann::json description = StackDescription(band, options_.provenance);
+      // Data summaries of one band would be wrong for the stack (StreamedFitReport).
+      if (nlohmann::json& details = description["details"]; details.is_object()) {
+        details.erase("robust_summary");
+        details.erase("pbr_summary");
+      }
+      names_ = band.maps().channel_names();
+      writer_.emplace(path_, description, names_, width_, height_, options_.compression);
+      WriteZeros(pending_zero_rows_);
+    }
+    writer_->Write(band.maps());
+  }
+  // A band the mask leaves empty: zero maps.
+  void WriteEmpty(int rows) {
+    if (!writer_) {
+      pending_zero_rows_ += rows;
+      return;
+    }
+    WriteZeros(rows);
+  }
+  void Commit() {
+    if (!writer_) throw Error(path_, "no band of the set was fitted");
+    writer_->Commit();
+  }
+  int maps() const { return static_cast<int>(names_.size()); }
+
+ private:
+  void WriteZeros(int rows) {
+    if (rows > 0) writer_->Write(Image(width_, rows, static_cast<int>(names_.size())));
+  }
+
+  fs::path path_;
+  int width_, height_;
+  const StreamedFitOptions& options_;
+  std::vector<std::string> names_;
+  std::optional<StackBandWriter> writer_;
+  int pending_zero_rows_ = 0;
+};
+
+}  // namespace
+
+std::size_t DefaultFitMemory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  const std::size_t physical =
+      pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(page)
+                            : std::size_t{4} << 30;
+  std::size_t budget = std::max(physical / 2, std::size_t{256} << 20);
+  if (const std::optional<std::size_t> cgroup = CgroupMemoryLimit()) {
+    budget = std::min(budget, *cgroup / 2);
+  }
+  if (const std::optional<std::size_t> room = AddressSpaceRoom()) {
+    budget = std::min(budget, *room / 2);
+  }
+  return std::max(budget, kMinimumFitMemory);
+}
+
+std::optional<std::size_t> AddressSpaceRoom() {
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
+  // The address space in use now: /proc/self/statm's first field, in pages.
+  std::size_t used_pages = 0;
+  if (std::ifstream statm("/proc/self/statm"); !(statm >> used_pages)) return std::nullopt;
+  const std::size_t used = used_pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const auto cap = static_cast<std::size_t>(limit.rlim_cur);
+  return cap > used ? cap - used : 0;
+}
+
+std::optional<std::size_t> CgroupMemoryLimit() {
+  // cgroup v2: this process's group is the "0::PATH" line of /proc/self/cgroup.
+  std::ifstream groups("/proc/self/cgroup");
+  for (std::string line; std::getline(groups, line);) {
+    if (!line.starts_with("0::")) continue;
+    std::ifstream max(fs::path("/sys/fs/cgroup") / fs::path(line.substr(3)).relative_path() /
+                      "memory.max");
+    std::size_t bytes = 0;
+    if (max >> bytes) return bytes;  // "max" (no limit) does not parse
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
+                     std::span<const Method> methods, bool robust) {
+  const auto n = static_cast<std::size_t>(set.size());
+  const auto channels = static_cast<std::size_t>(set.channels());
+  const auto width = static_cast<std::size_t>(set.width());
+  // Per pixel of a band: the decoded images and their copy as the image data matrix (4 + 4
+  // bytes per sample); robust: the weights (4 per image), the measured masks (1) and, for
+  // Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample); one method's
+  // maps at a time, with the fit's products and the writer's interleaved copy (12 bytes per map).
+  std::size_t per_pixel = n * channels * 8;
+  int planes = 0;
+  bool imputed = false;
+  for (const Method& method : methods) {
+    planes = std::max(planes, MapPlanes(method, set.size(), set.channels()));
+    imputed |= NeedsGram(method);
+  }
+  per_pixel += static_cast<std::size_t>(planes) * 12;
+  if (robust) per_pixel += n * 5 + (imputed ? n * channels * 8 : 0);
+  // Fixed: every decoder's chunk (16 rows of up to 4-byte samples, alpha included).
+  const std::size_t fixed = n * 16 * width * (channels + 1) * 4;
+  const std::size_t room = memory_bytes > fixed ? memory_bytes - fixed : 0;
+  const std::size_t rows = room / std::max<std::size_t>(per_pixel * width, 1);
+  return static_cast<int>(std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(set.height())));
+}
+
+StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
+                              std::span<const fs::path> stacks, const StreamedFitOptions& options) {
+  if (methods.size() != stacks.size()) {
+    throw Error(set.source(),
+                fmt::format("{} methods but {} stack files", methods.size(), stacks.size()));
+  }
+  for (const Method& method : methods) {
+    if (set.size() < method.MinimumImages()) {
+      throw Error(set.source(), fmt::format("{} needs at least {} images; the set has {}",
+                                            method.Name(), method.MinimumImages(), set.size()));
+    }
+  }
+  Streamer streamer(set, methods, options);
+  const int n = set.size();
+  const fs::path& source = set.source();
+  const bool needs_gram = std::any_of(methods.begin(), methods.end(), NeedsGram);
+  // The profiles the Gram-based methods fit: least squares the images, robust the images with
+  // their down-weighted samples imputed from the robust photometric stereo (EigenStart).
+  // `use` sees them by reference: the least-squares band matrix is not copied.
+  const auto with_start_profiles = [](const Band& band, auto&& use) {
+    if (band.robust) return use(band.robust->EigenStart());
+    return use(band.observations->matrix());
+  };
+  RowGram start_gram(n);
+  if (needs_gram) {
+    streamer.Pass("fit: gram", [&](Band& band) {
+      if (band.empty()) return;
+      const Observations& o = *band.observations;
+      with_start_profiles(band, [&](const Eigen::MatrixXf& profiles) {
+        start_gram.Add(profiles, o.pixel_indices(), o.width(), o.channels());
+      });
+    });
+  }
+  // The rbf and bilinear models, by method index: from the Gram pass alone.
+  std::map<std::size_t, LightProfileModel> profiles;
+  nlohmann::json profile_details = nlohmann::json::object();
+  if (options.robust) {
+    profile_details["robust"] = options.robust_options.ToJson();
+    profile_details["robust"]["measured_masks"] = true;  // found per band (StreamedFitOptions)
+  }
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    if (!IsLightProfile(methods[i])) continue;
+    profiles.emplace(i, FitLightProfileModel(start_gram.gram(), start_gram.column_sums(),
+                                             set.lights(), methods[i], source, profile_details));
+  }
+  // The Eigen-k bases, by k: least squares from the Gram pass; robust: the Gram pass gives the
+  // first EM iteration's, and one pass more makes each further iteration's.
+  std::map<int, EigenBasis> eigen;
+  std::map<int, std::vector<EigenBasis>> robust_eigen;  // per k, the basis of each iteration
+  for (const Method& method : methods) {
+    if (method.kind != Method::Kind::kEigen) continue;
+    const EigenBasis basis = EigenBasisFromGram(start_gram.gram(), start_gram.column_sums(),
+                                                streamer.all(), method.eigen_k, source);
+    if (options.robust) {
+      robust_eigen[method.eigen_k] = {basis};
+    } else {
+      eigen[method.eigen_k] = basis;
+    }
+  }
+  for (int iteration = 1; !robust_eigen.empty() && iteration <= kRobustEigenIterations;
+       ++iteration) {
+    std::map<int, RowGram> grams;
+    for (const auto& entry : robust_eigen) grams.emplace(entry.first, RowGram(n));
+    streamer.Pass(
+        fmt::format("fit: robust eigen, EM {} of {}", iteration + 1, kRobustEigenIterations + 1),
+        [&](Band& band) {
+          if (band.empty()) return;
+          const Observations& o = *band.observations;
+          for (auto& [k, bases] : robust_eigen) {
+            Eigen::MatrixXf filled = band.robust->EigenStart();
+            for (const EigenBasis& basis : bases) band.robust->EigenImpute(filled, basis.v);
+            grams.at(k).Add(filled, o.pixel_indices(), o.width(), o.channels());
+          }
+        });
+    for (auto& [k, bases] : robust_eigen) {
+      const RowGram& gram = grams.at(k);
+      bases.push_back(
+          EigenBasisFromGram(gram.gram(), gram.column_sums(), streamer.all(), k, source));
+    }
+  }
+
+  std::vector<std::unique_ptr<MethodStack>> outputs;
+  for (const fs::path& path : stacks) {
+    outputs.push_back(std::make_unique<MethodStack>(path, set.width(), set.height(), options));
+  }
+  StreamedFitReport report;
+  RobustFitSummary summary;
+  double weight_sum = 0.0, inlier_sum = 0.0;
+  streamer.Pass("fit: maps", [&](Band& band) {
+    if (band.empty()) {
+      for (auto& output : outputs) output->WriteEmpty(band.rows);
+      return;
+    }
+    if (band.robust) AddSummary(band.robust->summary(), summary, weight_sum, inlier_sum);
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+      const Method& method = methods[i];
+      const auto representation = [&]() -> Representation {
+        if (IsLightProfile(method)) {
+          return with_start_profiles(band, [&](const Eigen::MatrixXf& profiles_of_band) {
+            return ProjectLightProfiles(profiles.at(i), *band.observations, profiles_of_band,
+                                        streamer.all());
+          });
+        }
+        if (method.kind == Method::Kind::kEigen) {
+          if (!band.robust) {
+            return FitEigenWithBasis(*band.observations, band.set->lights(), streamer.all(),
+                                     eigen.at(method.eigen_k));
+          }
+          const std::vector<EigenBasis>& bases = robust_eigen.at(method.eigen_k);
+          Eigen::MatrixXf filled = band.robust->EigenStart();
+          for (std::size_t t = 0; t + 1 < bases.size(); ++t) {
+            band.robust->EigenImpute(filled, bases[t].v);
+          }
+          return band.robust->EigenFromImputed(filled, bases.back());
+        }
+        if (band.robust) return band.robust->Fit(method);
+        return FitObservations(*band.observations, band.set->lights(), method, streamer.all(),
+                               source);
+      }();
+      outputs[i]->Write(representation);
+    }
+  });
+  for (auto& output : outputs) output->Commit();
+  report.band_rows = streamer.band_rows();
+  report.passes = streamer.passes();
+  for (const auto& output : outputs) report.map_counts.push_back(output->maps());
+  if (options.robust) {
+    const double count = static_cast<double>(std::max<std::size_t>(summary.observations, 1));
+    summary.mean_weight = weight_sum / count;
+    summary.normal_inlier_fraction = inlier_sum / count;
+    report.robust_summary = summary;
+  }
+  report.saturated_pixels = set.SaturatedPixels();
+  return report;
+}
+
+}  // namespace photomat

@@ -1,0 +1,84 @@
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "capture/io/streamed_set.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "represent/fitting/robust_fit.h"
+#include "represent/model/method.h"
+#include "represent/stack/map_stack.h"
+#include "represent/stack/stack_band_writer.h"
+
+namespace photomat {
+
+// Streamed fitting (README, "Streamed fitting"): every method fitted to a set in bands of rows,
+// so that memory follows the band, not the image. Every image is held open (StreamedSet) and a
+// band of rows is decoded from each, in parallel; the band is fitted by the in-memory fits
+// (fit.h, robust_fit.h: every method is per pixel once its light basis is known) and its maps go
+// straight into each method's map stack (StackBandWriter). Global passes stream too: Eigen-k,
+// rbf and bilinear accumulate the Gram matrix and the column sums of the profiles they fit
+// over one pass (RowGram: the same sum for any band; robust: of the imputed profiles,
+// RobustFit::EigenStart), which fixes Eigen-k's basis and the light-profile models (kernel
+// width by leave-one-out, PCA axes, plane signs); robust Eigen-k makes one such pass more per
+// further EM iteration (the robust weights recomputed per band: memory stays bounded, at the
+// cost of kRobustEigenIterations + 1 robust fits of every band). Every stack is written to a
+// temporary name and all are renamed at the end: a fault anywhere (a truncated image mid-way)
+// leaves none. The maps equal the in-memory fit's to float rounding for any band height, and are
+// the same bits run after run.
+
+struct StreamedFitOptions {
+  // Bytes the bands may hold (images, their copy for fitting, the robust weights, one method's
+  // maps); 0: DefaultFitMemory(). Sets the band height (StreamedBandRows).
+  std::size_t memory_bytes = 0;
+  // > 0: exactly this many rows per band, whatever the budget (tests of band independence).
+  int band_rows = 0;
+  bool robust = false;
+  // For robust fits. `measured` and `progress` are ignored: the measured masks are found per band
+  // on the values as captured (MeasuredPixelMasks), before the intensities are applied.
+  RobustFitOptions robust_options;
+  ExrCompression compression = kDefaultExrCompression;
+  StackProvenance provenance;
+  // One phase per streamed pass, one step per band.
+  Progress* progress = nullptr;
+};
+
+struct StreamedFitReport {
+  int band_rows = 0;
+  int passes = 0;               // streamed passes over the images (the global ones, then maps)
+  std::vector<int> map_counts;  // per method, the maps of its stack
+  // Robust fits: the weights' summary over the whole set. A streamed stack's description is
+  // written before the data, so its details hold no data summaries ("robust_summary",
+  // "pbr_summary"): the summary is here instead.
+  std::optional<RobustFitSummary> robust_summary;
+  std::vector<std::size_t> saturated_pixels;  // per image, clipped pixels
+};
+
+// Fits `methods` to `set` (at its first row) and writes method i's stack to `stacks[i]`. Throws
+// Error naming the set's source or the image at fault; nothing is then left at `stacks`.
+StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
+                              std::span<const std::filesystem::path> stacks,
+                              const StreamedFitOptions& options = {});
+
+// IMPLEMENTER CHOICE: half the machine's physical memory (sysconf), at least 256 MiB: the rest is
+// for the program, the decoders and the system; but at most half the process's memory limits:
+// its cgroup's (memory.max, as a Slurm job or a container sets it) and the room its
+// address-space limit (RLIMIT_AS, `ulimit -v`) leaves beyond what is mapped already (the
+// program's libraries alone map about 0.6 GB); never below kMinimumFitMemory.
+std::size_t DefaultFitMemory();
+inline constexpr std::size_t kMinimumFitMemory = std::size_t{16} << 20;
+// The address space left under the soft RLIMIT_AS, or none without a limit.
+std::optional<std::size_t> AddressSpaceRoom();
+// This process's cgroup v2 memory.max, or none where there is no limit or no cgroup v2.
+std::optional<std::size_t> CgroupMemoryLimit();
+
+// The rows per band that `memory_bytes` allows for `methods` on `set` (at least 1, at most the
+// image height), from the bytes per row the band holds (README, "Streamed fitting").
+int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
+                     std::span<const Method> methods, bool robust);
+
+}  // namespace photomat
