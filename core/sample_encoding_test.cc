@@ -248,6 +248,21 @@ std::vector<std::uint16_t> NearGreyCodes(int width, int bits) {
   return codes;
 }
 
+// A 16-bit RGB TIFF of `codes` (interleaved, row by row) tagged with the Adobe RGB profile
+// (OpenImageIO's "ICCProfile").
+void WriteAdobeRgbTiff(const std::filesystem::path& path, int width, int height,
+                       const std::vector<std::uint16_t>& codes) {
+  auto out = OIIO::ImageOutput::create(path.string());
+  ASSERT_TRUE(out);
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT16);
+  const std::vector<unsigned char> profile = AdobeRgbProfile();
+  spec.attribute("ICCProfile", OIIO::TypeDesc(OIIO::TypeDesc::UINT8, profile.size()),
+                 profile.data());
+  ASSERT_TRUE(out->open(path.string(), spec));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, codes.data()));
+  ASSERT_TRUE(out->close());
+}
+
 TEST(SampleEncodingTest, AdobeRgbIccProfileIsLinearisedThroughTheProfile) {
   TempDir dir;
   const auto codes = NearGreyCodes(200, 16);
@@ -261,21 +276,7 @@ TEST(SampleEncodingTest, AdobeRgbIccProfileIsLinearisedThroughTheProfile) {
   EXPECT_LT(png_error, 5e-5);
 
   // The same profile in a TIFF (OpenImageIO's "ICCProfile").
-  Image image(200, 1, 3);
-  for (int k = 0; k < 200; ++k) {
-    for (int c = 0; c < 3; ++c) image.at(k, 0, c) = static_cast<float>(codes[3 * k + c] / 65535.0);
-  }
-  {
-    auto out = OIIO::ImageOutput::create("adobe.tif");
-    OIIO::ImageSpec spec(200, 1, 3, OIIO::TypeDesc::UINT16);
-    const std::vector<unsigned char> profile = AdobeRgbProfile();
-    spec.attribute("ICCProfile", OIIO::TypeDesc(OIIO::TypeDesc::UINT8, profile.size()),
-                   profile.data());
-    ASSERT_TRUE(out->open((dir / "adobe.tif").string(), spec));
-    std::vector<std::uint16_t> samples(codes.begin(), codes.end());
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, samples.data()));
-    ASSERT_TRUE(out->close());
-  }
+  ASSERT_NO_FATAL_FAILURE(WriteAdobeRgbTiff(dir / "adobe.tif", 200, 1, codes));
   const LoadedImage tiff = ReadImage(dir / "adobe.tif");
   EXPECT_EQ(tiff.info.encoding.decided_by, "icc-profile");
   // Measured 2.26e-5; bound 5e-5.
@@ -386,17 +387,7 @@ TEST(SampleEncodingTest, BandReaderDecodesEachBandAsTheWholeImage) {
   TempDir dir;
   constexpr int kWidth = 40, kHeight = 5;
   const auto codes = NearGreyCodes(kWidth * kHeight, 16);
-  {
-    auto out = OIIO::ImageOutput::create("tif");
-    OIIO::ImageSpec spec(kWidth, kHeight, 3, OIIO::TypeDesc::UINT16);
-    const std::vector<unsigned char> profile = AdobeRgbProfile();
-    spec.attribute("ICCProfile", OIIO::TypeDesc(OIIO::TypeDesc::UINT8, profile.size()),
-                   profile.data());
-    ASSERT_TRUE(out->open((dir / "adobe.tif").string(), spec));
-    std::vector<std::uint16_t> samples(codes.begin(), codes.end());
-    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT16, samples.data()));
-    ASSERT_TRUE(out->close());
-  }
+  ASSERT_NO_FATAL_FAILURE(WriteAdobeRgbTiff(dir / "adobe.tif", kWidth, kHeight, codes));
   Image p3_values(kWidth, kHeight, 3);
   for (int y = 0; y < kHeight; ++y) {
     for (int k = 0; k < kWidth; ++k) {
