@@ -78,6 +78,18 @@ struct Band {
   Band(const Band&) = delete;
   Band& operator=(const Band&) = delete;
   bool empty() const { return !observations.has_value(); }
+
+  // The profiles the Gram-based methods (Eigen-k, rbf, bilinear) fit: least squares the
+  // observations' matrix itself, robust that matrix with its down-weighted samples imputed from
+  // the robust photometric stereo (RobustFit::EigenStart), made once per band and shared.
+  const Eigen::MatrixXf& StartProfiles() {
+    if (!robust) return observations->matrix();
+    if (!imputed_start) imputed_start = robust->EigenStart();
+    return *imputed_start;
+  }
+
+ private:
+  std::optional<Eigen::MatrixXf> imputed_start;
 };
 
 class Streamer {
@@ -283,21 +295,12 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
   const int n = set.size();
   const fs::path& source = set.source();
   const bool needs_gram = std::any_of(methods.begin(), methods.end(), NeedsGram);
-  // The profiles the Gram-based methods fit: least squares the images, robust the images with
-  // their down-weighted samples imputed from the robust photometric stereo (EigenStart).
-  // `use` sees them by reference: the least-squares band matrix is not copied.
-  const auto with_start_profiles = [](const Band& band, auto&& use) {
-    if (band.robust) return use(band.robust->EigenStart());
-    return use(band.observations->matrix());
-  };
   RowGram start_gram(n);
   if (needs_gram) {
     streamer.Pass("fit: gram", [&](Band& band) {
       if (band.empty()) return;
       const Observations& o = *band.observations;
-      with_start_profiles(band, [&](const Eigen::MatrixXf& profiles) {
-        start_gram.Add(profiles, o.pixel_indices(), o.width(), o.channels());
-      });
+      start_gram.Add(band.StartProfiles(), o.pixel_indices(), o.width(), o.channels());
     });
   }
   // The rbf and bilinear models, by method index: from the Gram pass alone.
@@ -336,7 +339,7 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
           if (band.empty()) return;
           const Observations& o = *band.observations;
           for (auto& [k, bases] : robust_eigen) {
-            Eigen::MatrixXf filled = band.robust->EigenStart();
+            Eigen::MatrixXf filled = band.StartProfiles();
             for (const EigenBasis& basis : bases) band.robust->EigenImpute(filled, basis.v);
             grams.at(k).Add(filled, o.pixel_indices(), o.width(), o.channels());
           }
@@ -365,10 +368,8 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
       const Method& method = methods[i];
       const auto representation = [&]() -> Representation {
         if (IsLightProfile(method)) {
-          return with_start_profiles(band, [&](const Eigen::MatrixXf& profiles_of_band) {
-            return ProjectLightProfiles(profiles.at(i), *band.observations, profiles_of_band,
-                                        streamer.all());
-          });
+          return ProjectLightProfiles(profiles.at(i), *band.observations, band.StartProfiles(),
+                                      streamer.all());
         }
         if (method.kind == Method::Kind::kEigen) {
           if (!band.robust) {
@@ -376,7 +377,7 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
                                      eigen.at(method.eigen_k));
           }
           const std::vector<EigenBasis>& bases = robust_eigen.at(method.eigen_k);
-          Eigen::MatrixXf filled = band.robust->EigenStart();
+          Eigen::MatrixXf filled = band.StartProfiles();
           for (std::size_t t = 0; t + 1 < bases.size(); ++t) {
             band.robust->EigenImpute(filled, bases[t].v);
           }

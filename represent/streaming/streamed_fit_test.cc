@@ -91,17 +91,6 @@ std::vector<fs::path> FitToFolder(const fs::path& input, const fs::path& out,
   return paths;
 }
 
-// Largest |a - b| over the largest |b|.
-double RelativeDifference(const Image& a, const Image& b) {
-  EXPECT_TRUE(a.SameShape(b));
-  double difference = 0.0, scale = 0.0;
-  for (std::size_t i = 0; i < a.values().size(); ++i) {
-    difference = std::max(difference, std::abs(double{a.values()[i]} - b.values()[i]));
-    scale = std::max(scale, std::abs(double{b.values()[i]}));
-  }
-  return difference / std::max(scale, 1e-30);
-}
-
 void ExpectStreamedEqualsInMemory(bool robust, double bound) {
   const testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
@@ -115,9 +104,10 @@ void ExpectStreamedEqualsInMemory(bool robust, double bound) {
     const LoadedStack one_band = LoadRepresentation(whole[i]);
     EXPECT_EQ(streamed.representation.method(), memory.method());
     EXPECT_EQ(streamed.representation.maps().channel_names(), memory.maps().channel_names());
-    const double to_memory = RelativeDifference(streamed.representation.maps(), memory.maps());
-    const double to_one_band =
-        RelativeDifference(streamed.representation.maps(), one_band.representation.maps());
+    const double to_memory =
+        testing::LargestDifferenceOverLargestValue(streamed.representation.maps(), memory.maps());
+    const double to_one_band = testing::LargestDifferenceOverLargestValue(
+        streamed.representation.maps(), one_band.representation.maps());
     std::printf("%s%s: bands of 3 rows vs in memory %.3g, vs one band %.3g\n",
                 robust ? "robust " : "", methods[i].Name().c_str(), to_memory, to_one_band);
     EXPECT_LE(to_memory, bound) << methods[i].Name();

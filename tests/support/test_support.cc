@@ -4,20 +4,34 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 
 namespace photomat::testing {
 
 bool SameBits(const Image& a, const Image& b) {
   return a.SameShape(b) &&
          std::memcmp(a.values().data(), b.values().data(), a.values().size_bytes()) == 0;
+}
+
+double LargestDifferenceOverLargestValue(const Image& a, const Image& b) {
+  EXPECT_TRUE(a.SameShape(b));
+  if (!a.SameShape(b)) return std::numeric_limits<double>::infinity();
+  double difference = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < a.values().size(); ++i) {
+    difference = std::max(difference, std::abs(double{a.values()[i]} - b.values()[i]));
+    scale = std::max(scale, std::abs(double{b.values()[i]}));
+  }
+  return difference / std::max(scale, 1e-30);
 }
 
 std::optional<std::filesystem::path> TestDataDir() {

@@ -33,6 +33,10 @@ std::optional<std::filesystem::path> TestDataDir();
 // from 0 and a NaN equals the same NaN): for results that must be bit-identical.
 bool SameBits(const Image& a, const Image& b);
 
+// Largest |a - b| over the largest |b|, sample by sample (a failure if the shapes differ): how
+// far two fits of the same maps differ, relative to the maps' scale.
+double LargestDifferenceOverLargestValue(const Image& a, const Image& b);
+
 // A fresh folder under the system temp folder, removed with its contents on destruction.
 class TempDir {
  public:
