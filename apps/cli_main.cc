@@ -8,10 +8,14 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/memory_limits.h"
 
 namespace photomat::app {
 
 int RunCommands(int argc, char** argv, std::initializer_list<AddCommandFunction> commands) {
+  // Before any thread starts: under `ulimit -v`, malloc's per-thread arenas would otherwise
+  // reserve much of the limit (core/memory_limits.h).
+  FitMallocToAddressSpaceLimit();
   spdlog::set_pattern("photomat: %l: %v");
   CLI::App app(std::string(ProgramDescription()), "photomat");
   app.require_subcommand(1);

@@ -1,17 +1,16 @@
 #include "represent/streaming/streamed_fit.h"
 
 #include <fmt/format.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <numeric>
 
 #include "calibrate/radiometry/exposure.h"
 #include "core/error.h"
+#include "core/memory_limits.h"
 #include "represent/fitting/fit.h"
 #include "represent/fitting/light_profile_fit.h"
 #include "represent/fitting/observations.h"
@@ -224,34 +223,11 @@ std::size_t DefaultFitMemory() {
     budget = std::min(budget, *cgroup / 2);
   }
   if (const std::optional<std::size_t> room = AddressSpaceRoom()) {
-    budget = std::min(budget, *room / 2);
+    // The worker threads the fit starts map stacks and malloc arenas from the same room.
+    const std::size_t threads = WorkerThreadsAddressSpace();
+    budget = std::min(budget, *room > threads ? (*room - threads) / 2 : 0);
   }
   return std::max(budget, kMinimumFitMemory);
-}
-
-std::optional<std::size_t> AddressSpaceRoom() {
-  rlimit limit{};
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
-  // The address space in use now: /proc/self/statm's first field, in pages.
-  std::size_t used_pages = 0;
-  if (std::ifstream statm("/proc/self/statm"); !(statm >> used_pages)) return std::nullopt;
-  const std::size_t used = used_pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
-  const auto cap = static_cast<std::size_t>(limit.rlim_cur);
-  return cap > used ? cap - used : 0;
-}
-
-std::optional<std::size_t> CgroupMemoryLimit() {
-  // cgroup v2: this process's group is the "0::PATH" line of /proc/self/cgroup.
-  std::ifstream groups("/proc/self/cgroup");
-  for (std::string line; std::getline(groups, line);) {
-    if (!line.starts_with("0::")) continue;
-    std::ifstream max(fs::path("/sys/fs/cgroup") / fs::path(line.substr(3)).relative_path() /
-                      "memory.max");
-    std::size_t bytes = 0;
-    if (max >> bytes) return bytes;  // "max" (no limit) does not parse
-    return std::nullopt;
-  }
-  return std::nullopt;
 }
 
 int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,

@@ -68,13 +68,10 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
 // for the program, the decoders and the system; but at most half the process's memory limits:
 // its cgroup's (memory.max, as a Slurm job or a container sets it) and the room its
 // address-space limit (RLIMIT_AS, `ulimit -v`) leaves beyond what is mapped already (the
-// program's libraries alone map about 0.6 GB); never below kMinimumFitMemory.
+// program's libraries alone map about 0.6 GB) and what the worker threads will map
+// (WorkerThreadsAddressSpace, core/memory_limits.h); never below kMinimumFitMemory.
 std::size_t DefaultFitMemory();
 inline constexpr std::size_t kMinimumFitMemory = std::size_t{16} << 20;
-// The address space left under the soft RLIMIT_AS, or none without a limit.
-std::optional<std::size_t> AddressSpaceRoom();
-// This process's cgroup v2 memory.max, or none where there is no limit or no cgroup v2.
-std::optional<std::size_t> CgroupMemoryLimit();
 
 // The rows per band that `memory_bytes` allows for `methods` on `set` (at least 1, at most the
 // image height), from the bytes per row the band holds (README, "Streamed fitting").

@@ -1,0 +1,68 @@
+#include "core/memory_limits.h"
+
+#include <malloc.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+
+namespace photomat {
+namespace {
+
+// glibc's HEAP_MAX_SIZE on 64-bit: 2 x the largest mmap threshold (32 MiB).
+constexpr std::size_t kMallocArenaReservation = std::size_t{64} << 20;
+constexpr std::size_t kDefaultThreadStack = std::size_t{8} << 20;
+
+bool HasAddressSpaceLimit() {
+  rlimit limit{};
+  return getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY;
+}
+
+}  // namespace
+
+std::optional<std::size_t> AddressSpaceRoom() {
+  rlimit limit{};
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
+  // The address space in use now: /proc/self/statm's first field, in pages.
+  std::size_t used_pages = 0;
+  if (std::ifstream statm("/proc/self/statm"); !(statm >> used_pages)) return std::nullopt;
+  const std::size_t used = used_pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const auto cap = static_cast<std::size_t>(limit.rlim_cur);
+  return cap > used ? cap - used : 0;
+}
+
+std::optional<std::size_t> CgroupMemoryLimit() {
+  // cgroup v2: this process's group is the "0::PATH" line of /proc/self/cgroup.
+  std::ifstream groups("/proc/self/cgroup");
+  for (std::string line; std::getline(groups, line);) {
+    if (!line.starts_with("0::")) continue;
+    std::ifstream max(std::filesystem::path("/sys/fs/cgroup") /
+                      std::filesystem::path(line.substr(3)).relative_path() / "memory.max");
+    std::size_t bytes = 0;
+    if (max >> bytes) return bytes;  // "max" (no limit) does not parse
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+void FitMallocToAddressSpaceLimit() {
+  if (HasAddressSpaceLimit()) mallopt(M_ARENA_MAX, kMallocArenasUnderAddressSpaceLimit);
+}
+
+std::size_t WorkerThreadsAddressSpace() {
+  rlimit stack{};
+  std::size_t stack_bytes = kDefaultThreadStack;
+  if (getrlimit(RLIMIT_STACK, &stack) == 0 && stack.rlim_cur != RLIM_INFINITY) {
+    stack_bytes = std::max(stack_bytes, static_cast<std::size_t>(stack.rlim_cur));
+  }
+  const std::size_t cores = std::max(1u, std::thread::hardware_concurrency());
+  // The main arena grows from the program break, the rest are each a reservation.
+  const std::size_t arenas = kMallocArenasUnderAddressSpaceLimit - 1;
+  return 3 * cores * stack_bytes + arenas * kMallocArenaReservation;
+}
+
+}  // namespace photomat

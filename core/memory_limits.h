@@ -1,0 +1,36 @@
+#ifndef PHOTOMAT_CORE_MEMORY_LIMITS_H_
+#define PHOTOMAT_CORE_MEMORY_LIMITS_H_
+
+#include <cstddef>
+#include <optional>
+
+// The limits a process's memory runs into (a batch system's cgroup, `ulimit -v`), and what the
+// program maps beyond its data, so that work sized from a budget (the streamed fit's bands)
+// fits under them.
+namespace photomat {
+
+// The address space left under the soft RLIMIT_AS, or none without a limit.
+std::optional<std::size_t> AddressSpaceRoom();
+
+// This process's cgroup v2 memory.max, or none where there is no limit or no cgroup v2.
+std::optional<std::size_t> CgroupMemoryLimit();
+
+// IMPLEMENTER CHOICE: under an address-space limit, glibc's malloc may keep at most this many
+// arenas (the main one included). Each further arena reserves 64 MiB of address space for a
+// thread that allocates while others do (up to 8 per core); measured on 2 cores, a streamed fit
+// made 4 to 5 of them, 250-320 MiB of a 1000 MiB limit reserved, not used. Two keep the
+// contention low (most large buffers are mapped directly) and the reservation to 64 MiB.
+inline constexpr int kMallocArenasUnderAddressSpaceLimit = 2;
+
+// Caps malloc's arenas at kMallocArenasUnderAddressSpaceLimit when RLIMIT_AS is set; no effect
+// otherwise. For a program's main(), before it starts threads: the arenas are process-wide.
+void FitMallocToAddressSpaceLimit();
+
+// The address space worker threads started from now on will map besides the data they hold:
+// a stack each (RLIMIT_STACK, at least 8 MiB) for TBB's workers and the image decoders' two
+// pools (one thread per core each), and the malloc arenas FitMallocToAddressSpaceLimit allows.
+std::size_t WorkerThreadsAddressSpace();
+
+}  // namespace photomat
+
+#endif  // PHOTOMAT_CORE_MEMORY_LIMITS_H_
