@@ -30,8 +30,12 @@ RobustFitOptions RobustOptionsFromCommandLine(const std::string& loss,
 void AddPbrOptions(CLI::App& command, PbrFitOptions& options) {
   command
       .add_option("--pbr-start-roughness", options.start_roughness,
-                  "pbr: roughness every pixel starts from")
+                  "pbr: with --pbr-fixed-start, the roughness every pixel starts from")
       ->capture_default_str();
+  command.add_flag(
+      "!--pbr-fixed-start", options.grid_start,
+      "pbr: start every pixel from --pbr-start-roughness and F0 0.04, not from the best pair of "
+      "the roughness/F0 grid");
   command
       .add_option("--pbr-min-roughness", options.min_roughness,
                   "pbr: lower bound of the roughness (the GGX peak grows as 1/roughness^4)")

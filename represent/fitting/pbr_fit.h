@@ -25,6 +25,9 @@ namespace photomat {
 // near-light directions). Pixels in parallel (TBB), each solved alone on one thread: the result
 // does not depend on the schedule.
 struct PbrFitOptions {
+  // The start of roughness and F0: the best pair of a grid (pbr_fit.cc, GridStart) at the start
+  // normal, with the base colour solved for each; false: start_roughness and start_f0.
+  bool grid_start = true;
   double start_roughness = 0.5;
   double start_f0 = 0.04;
   // GGX's peak grows as 1 / roughness^4: the floor keeps a pixel whose lights miss its lobe from

@@ -6,10 +6,15 @@
 namespace photomat {
 
 nlohmann::json PbrFitOptions::ToJson() const {
-  return {{"start_roughness", start_roughness}, {"start_f0", start_f0},
-          {"min_roughness", min_roughness},     {"loss", "cauchy"},
-          {"loss_scale", loss_scale},           {"prior_weight", prior_weight},
-          {"prior_roughness", prior_roughness}, {"prior_f0", prior_f0},
+  return {{"start", grid_start ? "grid" : "fixed"},
+          {"start_roughness", start_roughness},
+          {"start_f0", start_f0},
+          {"min_roughness", min_roughness},
+          {"loss", "cauchy"},
+          {"loss_scale", loss_scale},
+          {"prior_weight", prior_weight},
+          {"prior_roughness", prior_roughness},
+          {"prior_f0", prior_f0},
           {"max_iterations", max_iterations}};
 }
 
