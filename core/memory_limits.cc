@@ -17,22 +17,28 @@ namespace {
 constexpr std::size_t kMallocArenaReservation = std::size_t{64} << 20;
 constexpr std::size_t kDefaultThreadStack = std::size_t{8} << 20;
 
-bool HasAddressSpaceLimit() {
+// The soft RLIMIT_AS, or none without one.
+std::optional<std::size_t> AddressSpaceLimit() {
   rlimit limit{};
-  return getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY;
+  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
+  return static_cast<std::size_t>(limit.rlim_cur);
 }
 
 }  // namespace
 
+std::optional<std::size_t> MappedAddressSpace() {
+  // /proc/self/statm's first field: the whole address space, in pages.
+  std::size_t pages = 0;
+  if (std::ifstream statm("/proc/self/statm"); !(statm >> pages)) return std::nullopt;
+  return pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
+
 std::optional<std::size_t> AddressSpaceRoom() {
-  rlimit limit{};
-  if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return std::nullopt;
-  // The address space in use now: /proc/self/statm's first field, in pages.
-  std::size_t used_pages = 0;
-  if (std::ifstream statm("/proc/self/statm"); !(statm >> used_pages)) return std::nullopt;
-  const std::size_t used = used_pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
-  const auto cap = static_cast<std::size_t>(limit.rlim_cur);
-  return cap > used ? cap - used : 0;
+  const std::optional<std::size_t> cap = AddressSpaceLimit();
+  if (!cap) return std::nullopt;
+  const std::optional<std::size_t> used = MappedAddressSpace();
+  if (!used) return std::nullopt;
+  return *cap > *used ? *cap - *used : 0;
 }
 
 std::optional<std::size_t> CgroupMemoryLimit() {
@@ -50,7 +56,7 @@ std::optional<std::size_t> CgroupMemoryLimit() {
 }
 
 void FitMallocToAddressSpaceLimit() {
-  if (HasAddressSpaceLimit()) mallopt(M_ARENA_MAX, kMallocArenasUnderAddressSpaceLimit);
+  if (AddressSpaceLimit()) mallopt(M_ARENA_MAX, kMallocArenasUnderAddressSpaceLimit);
 }
 
 std::size_t WorkerThreadsAddressSpace() {

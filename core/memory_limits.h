@@ -9,6 +9,9 @@
 // fits under them.
 namespace photomat {
 
+// The address space this process maps now (/proc/self/statm), or none where it cannot be read.
+std::optional<std::size_t> MappedAddressSpace();
+
 // The address space left under the soft RLIMIT_AS, or none without a limit.
 std::optional<std::size_t> AddressSpaceRoom();
 

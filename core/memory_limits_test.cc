@@ -3,12 +3,10 @@
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <sys/resource.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -16,11 +14,7 @@
 namespace photomat {
 namespace {
 
-std::size_t MappedBytes() {
-  std::size_t pages = 0;
-  std::ifstream("/proc/self/statm") >> pages;
-  return pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
-}
+std::size_t MappedBytes() { return MappedAddressSpace().value_or(0); }
 
 // The tests below set RLIMIT_AS, which stays with the process that sets it: they run in a
 // fresh child (a threadsafe death test re-executes the binary) and report by exit code.

@@ -182,6 +182,9 @@ double SolvePixel(const PbrPixelData& data, const PbrFitOptions& options, double
   solver.parameter_tolerance = 1e-12;
   solver.update_state_every_iteration = true;  // PinOnBound reads the parameters
   solver.callbacks.push_back(&pin_on_bound);
+  // The gradient by the bounded scalars, for freeing held ones (below).
+  ceres::Problem::EvaluateOptions evaluate;
+  for (const BoundedScalar& scalar : scalars) evaluate.parameter_blocks.push_back(scalar.value);
   int steps_left = options.max_iterations;
   double cost = 0.0;
   while (steps_left > 0) {
@@ -208,10 +211,6 @@ double SolvePixel(const PbrPixelData& data, const PbrFitOptions& options, double
     // Nothing settled: free the held scalars the data pull back inside (the gradient of the
     // cost, with every scalar variable, points out of the box at them).
     for (BoundedScalar& scalar : scalars) problem.SetParameterBlockVariable(scalar.value);
-    std::vector<double*> blocks;
-    for (const BoundedScalar& scalar : scalars) blocks.push_back(scalar.value);
-    ceres::Problem::EvaluateOptions evaluate;
-    evaluate.parameter_blocks = blocks;
     std::vector<double> gradient;
     problem.Evaluate(evaluate, nullptr, nullptr, &gradient, nullptr);
     for (std::size_t i = 0; i < scalars.size(); ++i) {

@@ -16,14 +16,15 @@ namespace photomat {
 
 // The `pbr` fit: per pixel, the microfacet maps of represent/model/shading.h (base colour,
 // perceptual roughness, grey F0, normal; core/microfacet_brdf.h) by nonlinear least squares with
-// Ceres (automatic derivatives, one residual block of the three channels per observation under a
-// Cauchy loss, so that cast shadows and other gross outliers lose their pull; clipped samples are
-// left out through the robust fit's measured masks). Bounds: base colour >= 0, roughness in
-// [min_roughness, 1], F0 in [0, 1]; the normal lives on the unit sphere (Ceres' SphereManifold).
-// Start: the robust photometric-stereo normal and albedo (RobustFit), start_roughness and
-// start_f0. Lights: the capture's distant directions (photomat's observations carry no per-pixel
-// near-light directions). Pixels in parallel (TBB), each solved alone on one thread: the result
-// does not depend on the schedule.
+// Ceres: all of a pixel's observations in one residual block with hand-derived Jacobians, under a
+// Cauchy loss per observation (pbr_pixel_cost.h), so that cast shadows and other gross outliers
+// lose their pull; clipped samples are left out through the robust fit's measured masks. Bounds:
+// base colour >= 0, roughness in [min_roughness, 1], F0 in [0, 1], a scalar that settles on its
+// bound held there (pbr_fit.cc, PinOnBound); the normal lives on the unit sphere (Ceres'
+// SphereManifold). Start: the robust photometric-stereo normal and albedo (RobustFit), roughness
+// and F0 from a grid (grid_start) or start_roughness and start_f0. Lights: the capture's distant
+// directions (photomat's observations carry no per-pixel near-light directions). Pixels in
+// parallel (TBB), each solved alone on one thread: the result does not depend on the schedule.
 struct PbrFitOptions {
   // The start of roughness and F0: the best pair of a grid (pbr_fit.cc, GridStart) at the start
   // normal, with the base colour solved for each; false: start_roughness and start_f0.

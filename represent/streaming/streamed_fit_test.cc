@@ -2,13 +2,11 @@
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <numeric>
 
 #include "calibrate/radiometry/exposure.h"
@@ -239,9 +237,7 @@ TEST(StreamedFitTest, BandRowsFollowTheBudget) {
 // leaves once the worker threads' stacks and arenas are set aside (AddressSpaceRoom itself:
 // core/memory_limits_test.cc).
 void ExitWithBudgetUnderAddressSpaceLimit() {
-  std::size_t used_pages = 0;
-  std::ifstream("/proc/self/statm") >> used_pages;
-  const std::size_t used = used_pages * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  const std::size_t used = MappedAddressSpace().value_or(0);
   const std::size_t given = std::size_t{1} << 30;
   const rlimit limit{used + given, used + given};
   setrlimit(RLIMIT_AS, &limit);
