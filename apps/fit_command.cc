@@ -64,9 +64,10 @@ void AddFitCommand(CLI::App& app) {
   AddExrCompressionOption(*command, options->exr_compression);
   command->add_option("--memory", options->memory_mb,
                       fmt::format("Memory budget in MB for the bands of rows fitted at a time "
-                                  "(default: half the physical memory or of this process's memory "
-                                  "limits, here {} MB)",
-                                  DefaultFitMemory() >> 20));
+                                  "(default: {} MB of bands beyond the decoders' buffers, at most "
+                                  "half the physical memory or of this process's memory limits, "
+                                  "here {} MB)",
+                                  kFastBandMemory >> 20, DefaultFitMemory() >> 20));
   command->callback([options] {
     std::vector<Method> methods = ParseMethodList(options->methods);
     ApplyLightProfileOptions(options->profile, methods);

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <future>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -95,11 +96,11 @@ class Streamer {
  public:
   Streamer(StreamedSet& set, std::span<const Method> methods, const StreamedFitOptions& options)
       : set_(set), options_(options), all_(AllImages(set.size())) {
-    band_rows_ =
-        options.band_rows > 0
-            ? std::min(options.band_rows, set.height())
-            : StreamedBandRows(options.memory_bytes > 0 ? options.memory_bytes : DefaultFitMemory(),
-                               set, methods, options.robust);
+    band_rows_ = options.band_rows > 0
+                     ? std::min(options.band_rows, set.height())
+                     : StreamedBandRows(options.memory_bytes > 0 ? options.memory_bytes
+                                                                 : DefaultStreamedBudget(set),
+                                        set, methods, options.robust);
     bands_ = (set.height() + band_rows_ - 1) / band_rows_;
   }
 
@@ -124,7 +125,13 @@ class Streamer {
     }
   }
 
-  // One streamed pass: `visit` sees every band in row order.
+  // One streamed pass: `visit` sees every band in row order. The next band is decoded (and, for
+  // robust fits, its robust start made) on a thread of its own while `visit` fits and writes the
+  // current one, so decoding, fitting and EXR writing overlap (README, "Streamed fitting": two
+  // bands are in memory at once, StreamedBandRows counts both). Bands are read in order by one
+  // thread at a time, so the result does not depend on the overlap. An error in either stops
+  // the pass: the reader's from get(), and a visit's only once the reader has finished (the
+  // future's destructor waits), so no band outlives the pass.
   template <typename Visit>
   void Pass(const std::string& label, Visit&& visit) {
     if (passes_ > 0 || set_.next_row() != 0) set_.Rewind();
@@ -132,11 +139,19 @@ class Streamer {
     NullProgress none;
     Progress& progress = OrNull(options_.progress, none);
     progress.Start(label, static_cast<std::size_t>(bands_));
+    const auto read_band = [this] {
+      auto band = std::make_unique<Band>();
+      Read(*band);
+      return band;
+    };
+    std::unique_ptr<Band> band = read_band();
     for (int b = 0; b < bands_; ++b) {
-      Band band;
-      Read(band);
-      visit(band);
+      std::future<std::unique_ptr<Band>> next;
+      if (b + 1 < bands_) next = std::async(std::launch::async, read_band);
+      visit(*band);
       progress.Advance();
+      band.reset();
+      if (next.valid()) band = next.get();
     }
     progress.Finish();
   }
@@ -211,7 +226,17 @@ class MethodStack {
   int pending_zero_rows_ = 0;
 };
 
+// Fixed: every decoder's chunk (16 rows of up to 4-byte samples, alpha included).
+std::size_t DecoderChunkBytes(const StreamedSet& set) {
+  return static_cast<std::size_t>(set.size()) * 16 * static_cast<std::size_t>(set.width()) *
+         static_cast<std::size_t>(set.channels() + 1) * 4;
+}
+
 }  // namespace
+
+std::size_t DefaultStreamedBudget(const StreamedSet& set) {
+  return std::min(DefaultFitMemory(), DecoderChunkBytes(set) + kFastBandMemory);
+}
 
 std::size_t DefaultFitMemory() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
@@ -237,19 +262,20 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
   const auto width = static_cast<std::size_t>(set.width());
   // Per pixel of a band: the decoded images and their copy as the image data matrix (4 + 4
   // bytes per sample); robust: the weights (4 per image), the measured masks (1) and, for
-  // Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample); one method's
-  // maps at a time, with the fit's products and the writer's interleaved copy (12 bytes per map).
-  std::size_t per_pixel = n * channels * 8;
+  // Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample). Two bands
+  // are held at once (the next one is decoded while this one is fitted: Streamer::Pass). One
+  // method's maps at a time, with the fit's products and the writer's interleaved copy (12 bytes
+  // per map).
   int planes = 0;
   bool imputed = false;
   for (const Method& method : methods) {
     planes = std::max(planes, MapPlanes(method, set.size(), set.channels()));
     imputed |= NeedsGram(method);
   }
-  per_pixel += static_cast<std::size_t>(planes) * 12;
-  if (robust) per_pixel += n * 5 + (imputed ? n * channels * 8 : 0);
-  // Fixed: every decoder's chunk (16 rows of up to 4-byte samples, alpha included).
-  const std::size_t fixed = n * 16 * width * (channels + 1) * 4;
+  std::size_t per_band_pixel = n * channels * 8;
+  if (robust) per_band_pixel += n * 5 + (imputed ? n * channels * 8 : 0);
+  const std::size_t per_pixel = 2 * per_band_pixel + static_cast<std::size_t>(planes) * 12;
+  const std::size_t fixed = DecoderChunkBytes(set);
   const std::size_t room = memory_bytes > fixed ? memory_bytes - fixed : 0;
   const std::size_t rows = room / std::max<std::size_t>(per_pixel * width, 1);
   return static_cast<int>(std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(set.height())));

@@ -222,10 +222,11 @@ TEST(StreamedFitTest, BandRowsFollowTheBudget) {
   const std::vector<Method> methods = StreamedMethods();
   EXPECT_EQ(StreamedBandRows(1, set, methods, false), 1);
   EXPECT_EQ(StreamedBandRows(std::size_t{1} << 30, set, methods, true), 40);
-  // 36 images x 3 channels x 8 bytes + 9 x 3 maps (hsh9, rbf, bilinear: the largest) x 12 bytes =
-  // 1188 bytes per pixel, 57024 per row of 48, after the decoders' 36 x 16 x 48 x 4 x 4 = 442368
-  // bytes.
-  EXPECT_EQ(StreamedBandRows(442368 + 5 * 57024 + 100, set, methods, false), 5);
+  // Two bands of 36 images x 3 channels x 8 bytes + 9 x 3 maps (hsh9, rbf, bilinear: the
+  // largest) x 12 bytes = 2052 bytes per pixel, 98496 per row of 48, after the decoders'
+  // 36 x 16 x 48 x 4 x 4 = 442368 bytes.
+  EXPECT_EQ(StreamedBandRows(442368 + 5 * 98496 + 100, set, methods, false), 5);
+  EXPECT_EQ(StreamedBandRows(442368 + 5 * 98496 - 100, set, methods, false), 4);
   if (!AddressSpaceRoom() && !CgroupMemoryLimit()) {
     EXPECT_GE(DefaultFitMemory(), std::size_t{256} << 20);
   }
