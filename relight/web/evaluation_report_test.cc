@@ -193,5 +193,33 @@ TEST(EvaluationReportTest, ChosenImagesAreSpreadOut) {
       2u);
 }
 
+// Demsar (2006), Figure 1(a): at alpha 0.10 (critical difference 1.12) the Nemenyi test joins
+// C4.5+m+cf, C4.5+m and C4.5+cf in one group and C4.5+cf and C4.5 in another.
+TEST(EvaluationReportTest, CriticalDifferenceDiagramJoinsDemsarsTwoGroups) {
+  MethodComparison c;
+  c.methods = {"C4.5", "C4.5+m", "C4.5+cf", "C4.5+m+cf"};
+  c.friedman.mean_ranks = {3.143, 2.000, 2.893, 1.964};
+  c.alpha = 0.10;
+  c.critical_difference = 1.12;
+  EXPECT_EQ(c.RankOrder(), (std::vector<int>{3, 1, 2, 0}));
+  EXPECT_EQ(IndistinguishableRuns(c), (std::vector<std::pair<int, int>>{{0, 2}, {2, 3}}));
+  const std::string svg = CriticalDifferenceDiagramSvg(c);
+  EXPECT_EQ(Count(svg, "class=\"cd-group\""), 2u);
+  EXPECT_EQ(Count(svg, "class=\"cd-method\""), 4u);
+  EXPECT_NE(svg.find("CD = 1.12"), std::string::npos);
+  // The best mean rank lies to the right of the worst.
+  const auto x_of = [&](const std::string& name) {
+    const std::regex mark("data-cd-method=\"" + std::regex_replace(name, std::regex("\\+"), "\\+") +
+                          "\"[^>]*><polyline points=\"([0-9.]+),");
+    std::smatch match;
+    EXPECT_TRUE(std::regex_search(svg, match, mark)) << name;
+    return std::stod(match[1].str());
+  };
+  EXPECT_GT(x_of("C4.5+m+cf"), x_of("C4.5"));
+  // With a critical difference below every gap nothing is joined.
+  c.critical_difference = 0.01;
+  EXPECT_TRUE(IndistinguishableRuns(c).empty());
+}
+
 }  // namespace
 }  // namespace photomat
