@@ -193,6 +193,41 @@ TEST(EvaluationReportTest, ChosenImagesAreSpreadOut) {
       2u);
 }
 
+TEST(EvaluationReportTest, HeldOutImagesShowTheirPredictionsByTheOneFitAndTheRanking) {
+  TempDir dir;
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  const Observations observations(synthetic.set);
+  EvaluationOptions evaluation;
+  evaluation.hold_out_every = 6;
+  std::vector<MethodEvaluation> evaluations;
+  for (const char* name : {"gradient", "ptm"}) {
+    evaluations.push_back(
+        EvaluateMethod(synthetic.set, observations, Method::Parse(name), nullptr, evaluation));
+  }
+  const auto held_out = static_cast<std::size_t>((synthetic.set.size() + 5) / 6);
+  EvaluationReportOptions options;
+  options.images = {0, 1};  // image 0 is held out, image 1 is not
+  options.comparison = CompareMethods(evaluations);
+  WriteEvaluationReport(dir / "report", synthetic.set, evaluations, nullptr, options);
+  const std::string html = ReadTextFile(dir / "report" / "index.html");
+  EXPECT_TRUE(fs::exists(dir / "report" / "images" / "predicted-ptm-0.png"));
+  EXPECT_FALSE(fs::exists(dir / "report" / "images" / "predicted-ptm-1.png"));
+  EXPECT_EQ(Count(html, "not held out"), 2u);  // one cell per method for image 1
+  // The per-image charts draw a prediction bar for each held-out image only.
+  EXPECT_EQ(Count(html, "<title>[0-9]+, prediction:"), 2 * held_out);
+  EXPECT_EQ(Count(html, "<section id=\"ranking\">"), 1u);
+  EXPECT_EQ(Count(html, "class=\"cd-method\""), 2u);
+  const nlohmann::json report = ReadJsonFile(dir / "report" / "report.json");
+  EXPECT_EQ(report["comparison"], options.comparison->ToJson());
+
+  // By default the images shown are held-out ones.
+  options.images.clear();
+  WriteEvaluationReport(dir / "report2", synthetic.set, evaluations, nullptr, options);
+  const nlohmann::json shown = ReadJsonFile(dir / "report2" / "report.json")["images_shown"];
+  ASSERT_EQ(shown.size(), 3u);
+  for (const auto& index : shown) EXPECT_EQ(index.get<int>() % 6, 0) << index;
+}
+
 // Demsar (2006), Figure 1(a): at alpha 0.10 (critical difference 1.12) the Nemenyi test joins
 // C4.5+m+cf, C4.5+m and C4.5+cf in one group and C4.5+cf and C4.5 in another.
 TEST(EvaluationReportTest, CriticalDifferenceDiagramJoinsDemsarsTwoGroups) {
