@@ -363,10 +363,6 @@ std::string CriticalDifferenceDiagramSvg(const MethodComparison& comparison) {
 
 namespace {
 
-std::string PValueCell(double p) {
-  return p < 1e-4 ? fmt::format("{:.2g}", p) : fmt::format("{:.4f}", p);
-}
-
 // The report's ranking section: mean ranks, the Friedman test, pairwise p-values, the diagram.
 std::string RankingSection(const MethodComparison& c) {
   const FriedmanTest& f = c.friedman;
@@ -389,9 +385,9 @@ std::string RankingSection(const MethodComparison& c) {
       "</tbody>\n</table>\n<p class=\"friedman\">Friedman &#967;&#178; = {:.2f} ({} degrees of "
       "freedom, corrected for ties), p = {}; Kendall's W = {:.3f}; Iman&#8211;Davenport F = {}, "
       "p = {}. Nemenyi critical difference at &#945; = {}: {:.2f} mean ranks.</p>\n",
-      f.chi_square, f.degrees_of_freedom, PValueCell(f.p_value), f.kendalls_w,
+      f.chi_square, f.degrees_of_freedom, FormatPValue(f.p_value), f.kendalls_w,
       std::isfinite(f.iman_davenport_f) ? fmt::format("{:.2f}", f.iman_davenport_f) : "&#8734;",
-      PValueCell(f.iman_davenport_p_value), c.alpha, c.critical_difference);
+      FormatPValue(f.iman_davenport_p_value), c.alpha, c.critical_difference);
   html += CriticalDifferenceDiagramSvg(c) + "\n<table class=\"pairwise\">\n<thead><tr><th></th>";
   for (int m : order) html += "<th>" + EscapeMarkup(c.methods[m]) + "</th>";
   html += "</tr></thead>\n<tbody>\n";
@@ -401,7 +397,7 @@ std::string RankingSection(const MethodComparison& c) {
       html += i == j ? std::string("<td>&#8211;</td>")
                      : fmt::format("<td{}>{}</td>",
                                    c.pairwise_p(i, j) < c.alpha ? " class=\"significant\"" : "",
-                                   PValueCell(c.pairwise_p(i, j)));
+                                   FormatPValue(c.pairwise_p(i, j)));
     }
     html += "</tr>\n";
   }

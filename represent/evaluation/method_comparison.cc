@@ -16,11 +16,11 @@ nlohmann::json FiniteOrNull(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
-std::string PValueText(double p) {
+}  // namespace
+
+std::string FormatPValue(double p) {
   return p < 1e-4 ? fmt::format("{:.2g}", p) : fmt::format("{:.4f}", p);
 }
-
-}  // namespace
 
 std::vector<int> MethodComparison::RankOrder() const {
   std::vector<int> order(methods.size());
@@ -93,15 +93,16 @@ MethodComparison CompareMethods(const std::vector<MethodEvaluation>& evaluations
   for (Eigen::Index m = 0; m < treatments; ++m) {
     const MethodEvaluation& e = evaluations[m];
     comparison.methods.push_back(e.method.Name());
-    for (Eigen::Index b = 0; b < blocks; ++b) errors(b, m) = e.prediction_per_image[b];
+    for (Eigen::Index b = 0; b < blocks; ++b) {
+      errors(b, m) = e.prediction_per_image[b];
+      if (!std::isfinite(errors(b, m))) {
+        throw Error(fmt::format("ranking methods: {}'s prediction error of image {} is {}",
+                                e.method.Name(), comparison.images[b], errors(b, m)));
+      }
+    }
     comparison.mean_errors.push_back(errors.col(m).mean());
   }
-  try {
-    comparison.friedman = Friedman(errors);
-  } catch (const Error& error) {
-    // Name the image and method rather than the matrix's row and column.
-    throw Error(fmt::format("ranking methods: {}", error.fault()));
-  }
+  comparison.friedman = Friedman(errors);
   comparison.critical_difference =
       NemenyiCriticalDifference(static_cast<int>(treatments), static_cast<int>(blocks), alpha);
   comparison.pairwise_p = NemenyiPValues(comparison.friedman.mean_ranks, static_cast<int>(blocks));
@@ -125,9 +126,9 @@ std::string FormatComparisonTable(const MethodComparison& c) {
   text += fmt::format(
       "Friedman chi-square {:.2f} ({} df, tie-corrected), p = {}; Kendall's W {:.3f}; "
       "Iman-Davenport F {}, p = {}\n",
-      f.chi_square, f.degrees_of_freedom, PValueText(f.p_value), f.kendalls_w,
+      f.chi_square, f.degrees_of_freedom, FormatPValue(f.p_value), f.kendalls_w,
       std::isfinite(f.iman_davenport_f) ? fmt::format("{:.2f}", f.iman_davenport_f) : "inf",
-      PValueText(f.iman_davenport_p_value));
+      FormatPValue(f.iman_davenport_p_value));
   text += fmt::format(
       "Nemenyi critical difference (alpha {}): {:.2f} mean ranks; pairwise p-values:\n{:<{}}",
       c.alpha, c.critical_difference, "", width);
@@ -137,7 +138,7 @@ std::string FormatComparisonTable(const MethodComparison& c) {
   for (int i : order) {
     text += fmt::format("{:<{}}", c.methods[i], width);
     for (int j : order) {
-      text += fmt::format("  {:>{}}", i == j ? "-" : PValueText(c.pairwise_p(i, j)),
+      text += fmt::format("  {:>{}}", i == j ? "-" : FormatPValue(c.pairwise_p(i, j)),
                           std::max<std::size_t>(width, 8));
     }
     text += "\n";

@@ -37,6 +37,10 @@ struct MethodComparison {
 MethodComparison CompareMethods(const std::vector<MethodEvaluation>& evaluations,
                                 double alpha = 0.05);
 
+// A p-value as the table and the report print it: four decimals, or two significant digits below
+// 1e-4 (e.g. 2.4e-06).
+std::string FormatPValue(double p);
+
 // The ranking as a text table for the terminal: one row per method in rank order, the Friedman
 // line, the critical difference and the matrix of pairwise p-values.
 std::string FormatComparisonTable(const MethodComparison& comparison);

@@ -87,6 +87,14 @@ TEST(MethodComparisonTest, RefusesWhatCannotBeRanked) {
     EXPECT_NE(std::string(e.what()).find("predicted different images"), std::string::npos);
   }
   EXPECT_THROW(CompareMethods({Predicted("ptm", {0}, {1}), Predicted("hsh9", {0}, {2})}), Error);
+  try {
+    CompareMethods({ptm, Predicted("hsh9", images, {1, std::nan(""), 3})});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("hsh9's prediction error of image 4 is nan"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // Known truth: a Lambertian sample is exactly the gradient's model, so the gradient predicts every

@@ -72,7 +72,7 @@ double NemenyiCriticalDifference(int treatments, int blocks, double alpha = 0.05
 
 // The Nemenyi p-value of every pair (symmetric, ones on the diagonal): the studentized range's
 // upper tail at sqrt 2 |R_i - R_j| / standard error, i.e. already adjusted for the k (k - 1) / 2
-// pairs.
+// pairs. Computed as 1 - CDF: p-values below about 1e-9 are at the quadrature's resolution.
 Eigen::MatrixXd NemenyiPValues(std::span<const double> mean_ranks, int blocks);
 
 }  // namespace photomat
