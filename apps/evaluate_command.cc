@@ -15,6 +15,7 @@
 #include "relight/web/evaluation_report.h"
 #include "relight/web/published_name.h"
 #include "represent/evaluation/evaluation.h"
+#include "represent/evaluation/method_comparison.h"
 
 namespace photomat::app {
 namespace {
@@ -48,6 +49,7 @@ void AddEvaluateCommand(CLI::App& app) {
     std::filesystem::path report;
     std::string report_images;
     bool no_prediction = false;
+    bool compare = false;
     int hold_out_every = 0;
     bool literal_rms = false;
     bool raw_intensities = false;
@@ -79,6 +81,10 @@ void AddEvaluateCommand(CLI::App& app) {
                    "Prediction from one fit without every K-th image (0, K, 2K, ...) instead of "
                    "leave-one-out")
       ->check(CLI::PositiveNumber);
+  command->add_flag("--compare", options->compare,
+                    "Rank the methods over the predicted images: Friedman test, Kendall's W and "
+                    "Nemenyi pairwise p-values (printed, in --json as \"comparison\", and in the "
+                    "--report)");
   command->add_flag("--literal-rms", options->literal_rms,
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
@@ -125,10 +131,14 @@ void AddEvaluateCommand(CLI::App& app) {
                               truth->height(), loaded.set.width(), loaded.set.height()));
     }
     // Checked before the evaluation, which can take minutes.
-    if (options->hold_out_every > 0 && (options->no_prediction || !options->report.empty())) {
+    if (options->hold_out_every > 0 && options->no_prediction) {
       throw Error(
-          "--hold-out-every predicts the held-out images only: it goes with neither "
-          "--no-prediction nor --report (whose per-image views need every image's prediction)");
+          "--hold-out-every chooses the predicted images: it does not go with --no-prediction");
+    }
+    if (options->compare && (options->no_prediction || methods.size() < 2)) {
+      throw Error(
+          "--compare ranks two or more methods by their prediction errors: it needs --methods "
+          "with at least two methods and does not go with --no-prediction");
     }
     const std::vector<int> report_images = ParseIndexList(options->report_images);
     for (int index : report_images) {
@@ -155,12 +165,22 @@ void AddEvaluateCommand(CLI::App& app) {
     fmt::print("{} images, {} pixels{}\n{}", loaded.set.size(), observations.pixels(),
                truth ? fmt::format(", ground truth {}", truth_path->string()) : "",
                FormatEvaluationTable(results));
-    if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+    std::optional<MethodComparison> comparison;
+    if (options->compare) {
+      comparison = CompareMethods(results);
+      fmt::print("\n{}", FormatComparisonTable(*comparison));
+    }
+    if (!options->json.empty()) {
+      nlohmann::json json = EvaluationsToJson(results);
+      if (comparison) json["comparison"] = comparison->ToJson();
+      WriteJsonFile(options->json, json);
+    }
     if (!options->report.empty()) {
       EvaluationReportOptions report;
       report.title = fmt::format("photomat evaluation of {}", PublishedName(options->input));
       report.images = report_images;
       report.robust = evaluation.robust;
+      report.comparison = comparison;
       report.progress = &bar;
       WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
                             report);

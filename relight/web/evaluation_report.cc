@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "core/atomic_file.h"
@@ -283,6 +284,135 @@ std::string BarChartSvg(const BarChart& chart) {
   return svg + "</svg>";
 }
 
+std::vector<std::pair<int, int>> IndistinguishableRuns(const MethodComparison& comparison) {
+  const std::vector<int> order = comparison.RankOrder();
+  const auto rank = [&](int position) { return comparison.friedman.mean_ranks[order[position]]; };
+  std::vector<std::pair<int, int>> runs;
+  const int k = static_cast<int>(order.size());
+  int covered = 0;  // the last position a run already reaches
+  for (int first = 0; first < k; ++first) {
+    int last = first;
+    while (last + 1 < k && rank(last + 1) - rank(first) < comparison.critical_difference) ++last;
+    if (last > first && last > covered) {
+      runs.emplace_back(first, last);
+      covered = last;
+    }
+  }
+  return runs;
+}
+
+std::string CriticalDifferenceDiagramSvg(const MethodComparison& comparison) {
+  const std::vector<int> order = comparison.RankOrder();
+  const int k = static_cast<int>(order.size());
+  const std::vector<double>& ranks = comparison.friedman.mean_ranks;
+  constexpr double kWidth = 760, kAxisLeft = 190, kAxisRight = 570, kAxisY = 64, kRowStep = 22;
+  const double unit = (kAxisRight - kAxisLeft) / std::max(k - 1, 1);
+  // Rank 1 (best) on the right, as Demsar draws it.
+  const auto x_of = [&](double rank) { return kAxisRight - (rank - 1.0) * unit; };
+  const std::vector<std::pair<int, int>> runs = IndistinguishableRuns(comparison);
+  const double first_row = kAxisY + 20 + 8.0 * runs.size();
+  const int right_count = (k + 1) / 2;  // the better half is labelled on the right
+  const double height = first_row + kRowStep * std::max(right_count, k - right_count) + 8;
+
+  std::string svg = fmt::format(
+      "<svg class=\"cd-diagram\" viewBox=\"0 0 {0} {1:.0f}\" width=\"{0}\" height=\"{1:.0f}\" "
+      "role=\"img\" aria-label=\"critical difference diagram: mean ranks of the methods, "
+      "critical difference {2:.2f}\" data-critical-difference=\"{2}\">\n",
+      kWidth, height, comparison.critical_difference);
+  // The critical difference, above the axis from its left end.
+  const double cd_end = std::min(kAxisLeft + comparison.critical_difference * unit, kWidth - 10);
+  svg += fmt::format(
+      "<g class=\"cd-bar\"><line x1=\"{0}\" x2=\"{1:.1f}\" y1=\"18\" y2=\"18\" stroke=\"#333\" "
+      "stroke-width=\"2\"/><line x1=\"{0}\" x2=\"{0}\" y1=\"13\" y2=\"23\" stroke=\"#333\"/>"
+      "<line x1=\"{1:.1f}\" x2=\"{1:.1f}\" y1=\"13\" y2=\"23\" stroke=\"#333\"/>"
+      "<text x=\"{2:.1f}\" y=\"10\" text-anchor=\"middle\">CD = {3:.2f}</text></g>\n",
+      kAxisLeft, cd_end, 0.5 * (kAxisLeft + cd_end), comparison.critical_difference);
+  svg += fmt::format(
+      "<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#333\" stroke-width=\"1.5\"/>\n",
+      kAxisLeft, kAxisRight, kAxisY);
+  for (int tick = 1; tick <= k; ++tick) {
+    svg += fmt::format(
+        "<line x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#333\"/>"
+        "<text x=\"{0:.1f}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>\n",
+        x_of(tick), kAxisY - 6, kAxisY, kAxisY - 10, tick);
+  }
+  for (std::size_t g = 0; g < runs.size(); ++g) {
+    const double y = kAxisY + 12 + 8.0 * g;
+    svg += fmt::format(
+        "<line class=\"cd-group\" x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.1f}\" y2=\"{:.1f}\" "
+        "stroke=\"#111\" stroke-width=\"4\" stroke-linecap=\"round\"/>\n",
+        x_of(ranks[order[runs[g].first]]) + 3, x_of(ranks[order[runs[g].second]]) - 3, y, y);
+  }
+  for (int position = 0; position < k; ++position) {
+    const int m = order[position];
+    const bool right = position < right_count;
+    // Rows from the top: the best method on the right, the worst on the left.
+    const int row = right ? position : k - 1 - position;
+    const double x = x_of(ranks[m]), y = first_row + kRowStep * row;
+    const double end = right ? kAxisRight + 24 : kAxisLeft - 24;
+    svg += fmt::format(
+        "<g class=\"cd-method\" data-cd-method=\"{0}\" data-mean-rank=\"{1}\">"
+        "<polyline points=\"{2:.1f},{3} {2:.1f},{4:.1f} {5:.1f},{4:.1f}\" fill=\"none\" "
+        "stroke=\"#4e79a7\"/><circle cx=\"{2:.1f}\" cy=\"{3}\" r=\"3\" fill=\"#4e79a7\"/>"
+        "<text x=\"{6:.1f}\" y=\"{7:.1f}\" text-anchor=\"{8}\">{0} ({1:.2f})</text></g>\n",
+        EscapeMarkup(comparison.methods[m]), ranks[m], x, kAxisY, y, end, end + (right ? 4 : -4),
+        y + 4, right ? "start" : "end");
+  }
+  return svg + "</svg>";
+}
+
+namespace {
+
+// The report's ranking section: mean ranks, the Friedman test, pairwise p-values, the diagram.
+std::string RankingSection(const MethodComparison& c) {
+  const FriedmanTest& f = c.friedman;
+  std::string html = fmt::format(
+      "<section id=\"ranking\">\n<h2>Ranking of methods</h2>\n<p class=\"note\">Each of the {} "
+      "predicted images ranks the methods by its prediction error e<sub>k</sub>/&#963;<sub>k</sub> "
+      "(1 = lowest; ties share their mean rank). The Friedman test asks whether the methods differ "
+      "at all; the Nemenyi test compares every pair (p-values adjusted for the {} pairs); methods "
+      "joined by a bar in the diagram differ by less than the critical difference.</p>\n"
+      "<table class=\"ranking\">\n<thead><tr><th>rank</th><th>method</th><th>mean rank</th>"
+      "<th>mean eta prediction</th></tr></thead>\n<tbody>\n",
+      c.images.size(), c.methods.size() * (c.methods.size() - 1) / 2);
+  const std::vector<int> order = c.RankOrder();
+  for (std::size_t r = 0; r < order.size(); ++r) {
+    const int m = order[r];
+    html += fmt::format("<tr><td>{}</td><td>{}</td><td>{:.2f}</td><td>{:.5f}</td></tr>\n", r + 1,
+                        EscapeMarkup(c.methods[m]), f.mean_ranks[m], c.mean_errors[m]);
+  }
+  html += fmt::format(
+      "</tbody>\n</table>\n<p class=\"friedman\">Friedman &#967;&#178; = {:.2f} ({} degrees of "
+      "freedom, corrected for ties), p = {}; Kendall's W = {:.3f}; Iman&#8211;Davenport F = {}, "
+      "p = {}. Nemenyi critical difference at &#945; = {}: {:.2f} mean ranks.</p>\n",
+      f.chi_square, f.degrees_of_freedom, FormatPValue(f.p_value), f.kendalls_w,
+      std::isfinite(f.iman_davenport_f) ? fmt::format("{:.2f}", f.iman_davenport_f) : "&#8734;",
+      FormatPValue(f.iman_davenport_p_value), c.alpha, c.critical_difference);
+  html += CriticalDifferenceDiagramSvg(c) + "\n<table class=\"pairwise\">\n<thead><tr><th></th>";
+  for (int m : order) html += "<th>" + EscapeMarkup(c.methods[m]) + "</th>";
+  html += "</tr></thead>\n<tbody>\n";
+  for (int i : order) {
+    html += "<tr><td>" + EscapeMarkup(c.methods[i]) + "</td>";
+    for (int j : order) {
+      html += i == j ? std::string("<td>&#8211;</td>")
+                     : fmt::format("<td{}>{}</td>",
+                                   c.pairwise_p(i, j) < c.alpha ? " class=\"significant\"" : "",
+                                   FormatPValue(c.pairwise_p(i, j)));
+    }
+    html += "</tr>\n";
+  }
+  return html + "</tbody>\n</table>\n</section>\n";
+}
+
+// Where image `index` sits in an evaluation's prediction_images, or -1 when it was not predicted.
+int PredictionPosition(const MethodEvaluation& e, int index) {
+  const auto found = std::find(e.prediction_images.begin(), e.prediction_images.end(), index);
+  return found == e.prediction_images.end() ? -1
+                                            : static_cast<int>(found - e.prediction_images.begin());
+}
+
+}  // namespace
+
 void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
                            const std::vector<MethodEvaluation>& evaluations, const Image* truth,
                            const EvaluationReportOptions& options) {
@@ -294,15 +424,33 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
                               e.reconstruction_per_image.size(), set.size()));
     }
   }
-  std::vector<int> chosen =
-      options.images.empty() ? ChooseReportImages(set.lights()) : options.images;
+  const bool prediction = std::all_of(evaluations.begin(), evaluations.end(),
+                                      [](const auto& e) { return e.eta_prediction.has_value(); });
+  // Held-out evaluation (EvaluationOptions::hold_out_every): one fit without the predicted images
+  // predicts each of them, instead of one fit per image.
+  const std::vector<int> held_out =
+      prediction && static_cast<int>(evaluations.front().prediction_images.size()) < set.size()
+          ? evaluations.front().prediction_images
+          : std::vector<int>{};
+  for (const MethodEvaluation& e : evaluations) {
+    if (prediction && !held_out.empty() && e.prediction_images != held_out) {
+      throw Error(folder, fmt::format("{} and {} predicted different images",
+                                      evaluations.front().method.Name(), e.method.Name()));
+    }
+  }
+  std::vector<int> chosen = options.images;
+  if (chosen.empty() && held_out.empty()) chosen = ChooseReportImages(set.lights());
+  if (chosen.empty()) {
+    // By default the report shows held-out images, whose predictions it can show.
+    std::vector<LightDirection> held_out_lights;
+    for (int i : held_out) held_out_lights.push_back(set.light(i));
+    for (int i : ChooseReportImages(held_out_lights)) chosen.push_back(held_out[i]);
+  }
   for (int i : chosen) {
     if (i < 0 || i >= set.size()) {
       throw Error(fmt::format("image {} is not in the set (0 to {})", i, set.size() - 1));
     }
   }
-  const bool prediction = std::all_of(evaluations.begin(), evaluations.end(),
-                                      [](const auto& e) { return e.eta_prediction.has_value(); });
   const bool any_normals = std::any_of(evaluations.begin(), evaluations.end(),
                                        [](const auto& e) { return e.normals.has_value(); });
   NullProgress no_progress;
@@ -321,6 +469,10 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
   };
   std::vector<int> every_image(set.size());
   std::iota(every_image.begin(), every_image.end(), 0);
+  std::vector<int> kept_images;  // with held-out images: the fit's images
+  for (int i : every_image) {
+    if (std::find(held_out.begin(), held_out.end(), i) == held_out.end()) kept_images.push_back(i);
+  }
 
   WriteFolderAtomically(folder, kReportManifest, kReportFormat, [&](const fs::path& temp) {
     fs::create_directories(temp / "images");
@@ -352,7 +504,12 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "<h2>Normalised RMS error (eta) per method</h2>\n<p class=\"note\">Dong's eta "
         "(thesis eq. 4.5.1): the mean over images of the RMS of relit minus captured, over "
         "the standard deviation of the captured image. Reconstruction: the fit of all images "
-        "relit at each; prediction: each image relit by a fit that left it out.</p>\n";
+        "relit at each; prediction: " +
+        (held_out.empty() ? std::string("each image relit by a fit that left it out")
+                          : fmt::format("each of the {} held-out images relit by the fit of the "
+                                        "other {}",
+                                        held_out.size(), kept_images.size())) +
+        ".</p>\n";
     html +=
         "<table class=\"eta\">\n<thead><tr><th>method</th><th>eta reconstruction</th>"
         "<th>eta prediction</th>";
@@ -379,6 +536,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
       html += "</tr>\n";
     }
     html += "</tbody>\n</table>\n";
+    if (options.comparison) html += RankingSection(*options.comparison);
 
     // The charts.
     BarChart summary{"eta per method",      "eta", {}, {{"reconstruction", {}}},
@@ -407,7 +565,12 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
           fmt::format("{}: eta per image", e.method.Name()), "e_k / sigma_k",      {},
           {{"reconstruction", e.reconstruction_per_image}},  "chart method-chart", e.method.Name()};
       if (!e.prediction_per_image.empty()) {
-        chart.series.push_back({"prediction", e.prediction_per_image});
+        // By image index: images that were not predicted draw no bar.
+        std::vector<double> predicted(set.size(), std::numeric_limits<double>::quiet_NaN());
+        for (std::size_t i = 0; i < e.prediction_images.size(); ++i) {
+          predicted[e.prediction_images[i]] = e.prediction_per_image[i];
+        }
+        chart.series.push_back({"prediction", predicted});
       }
       for (int i = 0; i < set.size(); ++i) chart.categories.push_back(std::to_string(i));
       html += BarChartSvg(chart) + "\n";
@@ -448,13 +611,18 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
     html +=
         "<h2>Captured and relit</h2>\n<p class=\"note\">Each row: a captured image and every "
         "method's relighting of its light by the fit of all images" +
-        std::string(prediction ? ", and below it the prediction by a fit without that image" : "") +
+        std::string(!prediction        ? ""
+                    : held_out.empty() ? ", and below it the prediction by a fit without that image"
+                                       : ", and below it, for a held-out image, its prediction by "
+                                         "the fit without the held-out images") +
         ". Values shown through the sRGB curve; a dark row is brightened by the stated "
         "factor, the same for every image in it.</p>\n<table class=\"compare\">\n<tr><th>"
         "</th><th>captured</th>";
     for (const MethodEvaluation& e : evaluations)
       html += "<th>" + EscapeMarkup(e.method.Name()) + "</th>";
     html += "</tr>\n";
+    // The one fit per method without the held-out images, made when a row first needs it.
+    std::vector<std::optional<Representation>> held_out_fits(evaluations.size());
     progress.Start("report images", chosen.size());
     for (int index : chosen) {
       const LightDirection& light = set.light(index);
@@ -477,16 +645,27 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
             "e/&#963; {}</td>",
             relit, EscapeMarkup(name), Number(evaluations[m].reconstruction_per_image[index]));
         if (!prediction) continue;
-        std::vector<int> others;
-        for (int i = 0; i < set.size(); ++i) {
-          if (i != index) others.push_back(i);
+        const int position = PredictionPosition(evaluations[m], index);
+        if (position < 0) {
+          predicted_cells.push_back("<td class=\"note\">not held out</td>");
+          continue;
         }
-        const Representation fold = fit(evaluations[m].method, others);
+        std::optional<Representation> leave_one_out;
+        if (held_out.empty()) {
+          std::vector<int> others;
+          for (int i = 0; i < set.size(); ++i) {
+            if (i != index) others.push_back(i);
+          }
+          leave_one_out = fit(evaluations[m].method, others);
+        } else if (!held_out_fits[m]) {
+          held_out_fits[m] = fit(evaluations[m].method, kept_images);
+        }
+        const Representation& fold = held_out.empty() ? *leave_one_out : *held_out_fits[m];
         const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
         WriteDisplayImage(temp / predicted, Scaled(fold.Relight(light), gain));
         predicted_cells.push_back(fmt::format(
             "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}</td>",
-            predicted, EscapeMarkup(name), Number(evaluations[m].prediction_per_image[index])));
+            predicted, EscapeMarkup(name), Number(evaluations[m].prediction_per_image[position])));
       }
       html += "</tr>\n";
       if (prediction) {
@@ -501,12 +680,15 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "</table>\n<p class=\"note\">Written by photomat. report.json holds the numbers.</p>\n"
         "</body>\n</html>\n";
     WriteTextFileAtomically(temp / "index.html", html);
-    WriteJsonFile(temp / kReportManifest, {{"format", kReportFormat},
-                                           {"version", 1},
-                                           {"title", options.title},
-                                           {"source", PublishedName(set.source())},
-                                           {"images_shown", chosen},
-                                           {"evaluation", EvaluationsToJson(evaluations)}});
+    WriteJsonFile(temp / kReportManifest,
+                  {{"format", kReportFormat},
+                   {"version", 1},
+                   {"title", options.title},
+                   {"source", PublishedName(set.source())},
+                   {"images_shown", chosen},
+                   {"evaluation", EvaluationsToJson(evaluations)},
+                   {"comparison",
+                    options.comparison ? options.comparison->ToJson() : nlohmann::json(nullptr)}});
   });
 }
 

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/image.h"
@@ -11,6 +12,7 @@
 #include "core/photometric_set.h"
 #include "core/progress.h"
 #include "represent/evaluation/evaluation.h"
+#include "represent/evaluation/method_comparison.h"
 #include "represent/fitting/robust_fit.h"
 
 namespace photomat {
@@ -26,7 +28,11 @@ namespace photomat {
 //    scale for all methods (up to the 95th percentile of all errors, rounded up to 5 degrees);
 //  - for chosen captured images, the photograph beside each method's relighting of its light
 //    (the fit of all images) and, when prediction was evaluated, its prediction (a fit without
-//    that image). Dark images are brightened for display by the same factor in a row (stated).
+//    that image, or with held-out images the one fit without them). Dark images are brightened
+//    for display by the same factor in a row (stated);
+//  - with a comparison (evaluate --compare), the ranking of the methods over the predicted images:
+//    the table of mean ranks, the Friedman test, the Nemenyi p-values of every pair and the
+//    critical-difference diagram (<section id="ranking">).
 
 struct EvaluationReportOptions {
   std::string title = "photomat evaluation";
@@ -36,6 +42,8 @@ struct EvaluationReportOptions {
   // The fits the evaluation used: set when it evaluated robust fits (EvaluationOptions::robust), so
   // that the relit images and normal maps are those of the same fits.
   std::optional<RobustFitOptions> robust;
+  // The ranking of the methods (CompareMethods of the same evaluations), shown when set.
+  std::optional<MethodComparison> comparison;
   Progress* progress = nullptr;
 };
 
@@ -45,6 +53,16 @@ struct EvaluationReportOptions {
 void WriteEvaluationReport(const std::filesystem::path& folder, const PhotometricSet& set,
                            const std::vector<MethodEvaluation>& evaluations, const Image* truth,
                            const EvaluationReportOptions& options = {});
+
+// Demsar's critical-difference diagram as inline SVG (<svg class="cd-diagram">): the mean-rank axis
+// with the best rank on the right, each method's mean rank marked and labelled, the critical
+// difference as a bar above the axis, and a thick line joining each largest run of methods (in
+// rank order) whose mean ranks differ by less than it: methods the Nemenyi test cannot tell apart.
+std::string CriticalDifferenceDiagramSvg(const MethodComparison& comparison);
+
+// The runs the diagram joins: [first, last] positions in rank order (MethodComparison::RankOrder),
+// each a largest run of two or more methods spanning less than the critical difference.
+std::vector<std::pair<int, int>> IndistinguishableRuns(const MethodComparison& comparison);
 
 // `count` images whose lights are far apart (farthest-point order, starting from the light
 // nearest slant 45, tilt 0, the thesis's first 3I light), in the set's order.

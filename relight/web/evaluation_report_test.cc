@@ -193,5 +193,68 @@ TEST(EvaluationReportTest, ChosenImagesAreSpreadOut) {
       2u);
 }
 
+TEST(EvaluationReportTest, HeldOutImagesShowTheirPredictionsByTheOneFitAndTheRanking) {
+  TempDir dir;
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  const Observations observations(synthetic.set);
+  EvaluationOptions evaluation;
+  evaluation.hold_out_every = 6;
+  std::vector<MethodEvaluation> evaluations;
+  for (const char* name : {"gradient", "ptm"}) {
+    evaluations.push_back(
+        EvaluateMethod(synthetic.set, observations, Method::Parse(name), nullptr, evaluation));
+  }
+  const auto held_out = static_cast<std::size_t>((synthetic.set.size() + 5) / 6);
+  EvaluationReportOptions options;
+  options.images = {0, 1};  // image 0 is held out, image 1 is not
+  options.comparison = CompareMethods(evaluations);
+  WriteEvaluationReport(dir / "report", synthetic.set, evaluations, nullptr, options);
+  const std::string html = ReadTextFile(dir / "report" / "index.html");
+  EXPECT_TRUE(fs::exists(dir / "report" / "images" / "predicted-ptm-0.png"));
+  EXPECT_FALSE(fs::exists(dir / "report" / "images" / "predicted-ptm-1.png"));
+  EXPECT_EQ(Count(html, "not held out"), 2u);  // one cell per method for image 1
+  // The per-image charts draw a prediction bar for each held-out image only.
+  EXPECT_EQ(Count(html, "<title>[0-9]+, prediction:"), 2 * held_out);
+  EXPECT_EQ(Count(html, "<section id=\"ranking\">"), 1u);
+  EXPECT_EQ(Count(html, "class=\"cd-method\""), 2u);
+  const nlohmann::json report = ReadJsonFile(dir / "report" / "report.json");
+  EXPECT_EQ(report["comparison"], options.comparison->ToJson());
+
+  // By default the images shown are held-out ones.
+  options.images.clear();
+  WriteEvaluationReport(dir / "report2", synthetic.set, evaluations, nullptr, options);
+  const nlohmann::json shown = ReadJsonFile(dir / "report2" / "report.json")["images_shown"];
+  ASSERT_EQ(shown.size(), 3u);
+  for (const auto& index : shown) EXPECT_EQ(index.get<int>() % 6, 0) << index;
+}
+
+// Demsar (2006), Figure 1(a): at alpha 0.10 (critical difference 1.12) the Nemenyi test joins
+// C4.5+m+cf, C4.5+m and C4.5+cf in one group and C4.5+cf and C4.5 in another.
+TEST(EvaluationReportTest, CriticalDifferenceDiagramJoinsDemsarsTwoGroups) {
+  MethodComparison c;
+  c.methods = {"C4.5", "C4.5+m", "C4.5+cf", "C4.5+m+cf"};
+  c.friedman.mean_ranks = {3.143, 2.000, 2.893, 1.964};
+  c.alpha = 0.10;
+  c.critical_difference = 1.12;
+  EXPECT_EQ(c.RankOrder(), (std::vector<int>{3, 1, 2, 0}));
+  EXPECT_EQ(IndistinguishableRuns(c), (std::vector<std::pair<int, int>>{{0, 2}, {2, 3}}));
+  const std::string svg = CriticalDifferenceDiagramSvg(c);
+  EXPECT_EQ(Count(svg, "class=\"cd-group\""), 2u);
+  EXPECT_EQ(Count(svg, "class=\"cd-method\""), 4u);
+  EXPECT_NE(svg.find("CD = 1.12"), std::string::npos);
+  // The best mean rank lies to the right of the worst.
+  const auto x_of = [&](const std::string& name) {
+    const std::regex mark("data-cd-method=\"" + std::regex_replace(name, std::regex("\\+"), "\\+") +
+                          "\"[^>]*><polyline points=\"([0-9.]+),");
+    std::smatch match;
+    EXPECT_TRUE(std::regex_search(svg, match, mark)) << name;
+    return std::stod(match[1].str());
+  };
+  EXPECT_GT(x_of("C4.5+m+cf"), x_of("C4.5"));
+  // With a critical difference below every gap nothing is joined.
+  c.critical_difference = 0.01;
+  EXPECT_TRUE(IndistinguishableRuns(c).empty());
+}
+
 }  // namespace
 }  // namespace photomat

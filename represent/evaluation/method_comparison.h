@@ -1,0 +1,48 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "represent/evaluation/evaluation.h"
+#include "represent/evaluation/ranking.h"
+
+namespace photomat {
+
+// The ranking of methods over the predicted (held-out) images, as the thesis's psychophysical
+// chapter ranks its conditions: blocks are the predicted images, treatments the methods, and in
+// each image the method with the lowest prediction error e_k / sigma_k ranks first. The Friedman
+// test says whether the methods differ at all; the Nemenyi test which pairs do.
+struct MethodComparison {
+  std::vector<std::string> methods;  // in the order of the evaluations
+  std::vector<int> images;           // the blocks: the predicted images, in prediction order
+  std::vector<double> mean_errors;   // per method: the mean e_k / sigma_k over `images`
+  FriedmanTest friedman;             // mean ranks per method, chi-square, p, W, Iman-Davenport
+  double alpha = 0.05;               // the level of the critical difference
+  double critical_difference = 0.0;  // Nemenyi, in mean ranks, at `alpha`
+  Eigen::MatrixXd pairwise_p;  // Nemenyi p-value of every pair of methods, ones on the diagonal
+
+  // Method indices from the best mean rank to the worst (ties keep the evaluations' order).
+  std::vector<int> RankOrder() const;
+  // The JSON of `evaluate --json`'s "comparison" key: the methods in rank order with mean rank and
+  // mean error, the Friedman and Nemenyi results and the pairwise p-values keyed by method names
+  // (an infinite Iman-Davenport F, every image ranking alike, is written as null).
+  nlohmann::json ToJson() const;
+};
+
+// Compares `evaluations` over their predicted images. Needs at least 2 methods, each evaluated with
+// prediction over the same images (the same EvaluationOptions), and at least 2 images; throws Error
+// saying which condition fails.
+MethodComparison CompareMethods(const std::vector<MethodEvaluation>& evaluations,
+                                double alpha = 0.05);
+
+// A p-value as the table and the report print it: four decimals, or two significant digits below
+// 1e-4 (e.g. 2.4e-06).
+std::string FormatPValue(double p);
+
+// The ranking as a text table for the terminal: one row per method in rank order, the Friedman
+// line, the critical difference and the matrix of pairwise p-values.
+std::string FormatComparisonTable(const MethodComparison& comparison);
+
+}  // namespace photomat
