@@ -16,6 +16,7 @@ int RunCommands(int argc, char** argv, std::initializer_list<AddCommandFunction>
   // Before any thread starts: under `ulimit -v`, malloc's per-thread arenas would otherwise
   // reserve much of the limit (core/memory_limits.h).
   FitMallocToAddressSpaceLimit();
+  KeepFreedMemoryForReuse();
   spdlog::set_pattern("photomat: %l: %v");
   CLI::App app(std::string(ProgramDescription()), "photomat");
   app.require_subcommand(1);

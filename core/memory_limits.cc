@@ -59,6 +59,12 @@ void FitMallocToAddressSpaceLimit() {
   if (AddressSpaceLimit()) mallopt(M_ARENA_MAX, kMallocArenasUnderAddressSpaceLimit);
 }
 
+void KeepFreedMemoryForReuse() {
+  if (AddressSpaceLimit()) return;
+  mallopt(M_MMAP_THRESHOLD, static_cast<int>(kMallocReuseThreshold));
+  mallopt(M_TRIM_THRESHOLD, static_cast<int>(kMallocKeepFreed));
+}
+
 std::size_t WorkerThreadsAddressSpace() {
   rlimit stack{};
   std::size_t stack_bytes = kDefaultThreadStack;

@@ -29,6 +29,20 @@ inline constexpr int kMallocArenasUnderAddressSpaceLimit = 2;
 // otherwise. For a program's main(), before it starts threads: the arenas are process-wide.
 void FitMallocToAddressSpaceLimit();
 
+// IMPLEMENTER CHOICE: outside an address-space limit, malloc keeps freed buffers for reuse:
+// blocks up to kMallocReuseThreshold come from its heaps instead of fresh mappings, and freed heap
+// memory is returned to the system only beyond kMallocKeepFreed. Streamed work allocates the same
+// band buffers again and again; with glibc's defaults each band's buffers were fresh pages, and
+// the kernel's first-touch faults cost a 12 MP x 50 PTM fit 7 s of system time in 6-row bands
+// (3.3 s kept; README, "Streamed fitting"). Under RLIMIT_AS address space is what runs out, so
+// there the defaults stay.
+inline constexpr std::size_t kMallocReuseThreshold = std::size_t{32} << 20;
+inline constexpr std::size_t kMallocKeepFreed = std::size_t{1} << 30;
+
+// Sets the thresholds above when RLIMIT_AS is not set; no effect otherwise. For a program's
+// main(), with FitMallocToAddressSpaceLimit.
+void KeepFreedMemoryForReuse();
+
 // The address space worker threads started from now on will map besides the data they hold:
 // a stack each (RLIMIT_STACK, at least 8 MiB) for TBB's workers and the image decoders' two
 // pools (one thread per core each), and the malloc arenas FitMallocToAddressSpaceLimit allows.
