@@ -53,8 +53,8 @@ TEST(StackBandReaderTest, BandsEqualTheWholeStackForEveryMethod) {
     EXPECT_THAT([&] { reader.ReadNext(1); },
                 ThrowsMessage<Error>(HasSubstr("read past the last row")));
     reader.Rewind();
-    EXPECT_TRUE(testing::SameBits(reader.ReadNext(24).representation.maps(),
-                                  whole.representation.maps()));
+    EXPECT_TRUE(
+        testing::SameBits(reader.ReadNext(24).representation.maps(), whole.representation.maps()));
   }
 }
 
@@ -86,8 +86,8 @@ TEST(StackBandReaderTest, PbrStackKeepsItsShading) {
   const LoadedStack band = reader.ReadNext(2);
   ASSERT_NE(band.representation.shading(), nullptr);
   const LightDirection light = LightDirection::FromSlantTilt(20, 10);
-  EXPECT_TRUE(testing::SameBits(band.representation.Relight(light),
-                                RowsOf(pbr.Relight(light), 2, 2)));
+  EXPECT_TRUE(
+      testing::SameBits(band.representation.Relight(light), RowsOf(pbr.Relight(light), 2, 2)));
 }
 
 TEST(StackBandReaderTest, PlainExrIsNotAStack) {
