@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/image_io.h"
+#include "core/json_file.h"
 #include "core/light_direction.h"
 #include "represent/stack/map_stack.h"
 #include "tests/support/test_support.h"
@@ -71,6 +72,29 @@ TEST(RelightStreamCliTest, RelightUnderAnAddressSpaceLimitBelowTheWholeStackMatc
       {limit});
   EXPECT_NE(whole.exit_code, 0) << whole.output;
   EXPECT_THAT(whole.output, HasSubstr("out of memory"));
+}
+
+// `photomat evaluate INPUT --stack FIT` streams the set and the stack: the same eta of
+// reconstruction as the in-memory evaluation of the same method, which refits.
+TEST(RelightStreamCliTest, EvaluateAStackStreamedGivesTheInMemoryEta) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4").exit_code,
+            0);
+  ASSERT_EQ(
+      RunPhotomat("fit " + capture + " --method ptm --out " + (dir / "fit").string()).exit_code, 0);
+  const RunResult streamed =
+      RunPhotomat("evaluate " + capture + " --stack " + (dir / "fit").string() +
+                  " --memory 1 --json " + (dir / "streamed.json").string());
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  const RunResult whole =
+      RunPhotomat("evaluate " + capture + " --methods ptm --no-prediction --json " +
+                  (dir / "whole.json").string());
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  const double a = ReadJsonFile(dir / "streamed.json")["ptm"]["eta_reconstruction"].get<double>();
+  const double b = ReadJsonFile(dir / "whole.json")["ptm"]["eta_reconstruction"].get<double>();
+  EXPECT_GT(b, 0.0);
+  EXPECT_NEAR(a, b, 1e-9 * b);
 }
 
 }  // namespace
