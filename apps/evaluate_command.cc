@@ -9,13 +9,18 @@
 #include "apps/light_profile_cli.h"
 #include "apps/robust_support.h"
 #include "apps/synthesis_cli.h"
+#include "capture/io/streamed_set.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/memory_limits.h"
 #include "relight/web/evaluation_report.h"
 #include "relight/web/published_name.h"
 #include "represent/evaluation/evaluation.h"
 #include "represent/evaluation/method_comparison.h"
+#include "represent/evaluation/streamed_evaluation.h"
+#include "represent/stack/map_stack.h"
+#include "represent/stack/stack_band_reader.h"
 
 namespace photomat::app {
 namespace {
@@ -57,6 +62,8 @@ void AddEvaluateCommand(CLI::App& app) {
     std::string loss = "cauchy";
     SynthesisEvaluationOptions synthesis;
     LightProfileCli profile;
+    std::filesystem::path stack;
+    std::size_t memory_mb = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "evaluate");
@@ -106,7 +113,34 @@ void AddEvaluateCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
   AddLightProfileOptions(*command, options->profile);
+  command->add_option(
+      "--stack", options->stack,
+      "Evaluate this fitted stack (.exr, or a fit folder with --methods naming one) "
+      "against INPUT, both streamed in bands: the eta of reconstruction only");
+  command->add_option("--memory", options->memory_mb,
+                      fmt::format("With --stack: memory in MB for the bands (default: half the "
+                                  "physical memory or of this process's memory limits, here {} MB)",
+                                  DefaultMemoryBudget(kMinimumEvaluationMemory) >> 20));
   command->callback([options] {
+    if (!options->stack.empty()) {
+      // A fitted stack against its set, streamed (README, "Streamed relighting and export").
+      LoadOptions load;
+      load.apply_intensities = !options->raw_intensities;
+      StreamedSet set = OpenStreamedSet(options->input, load);
+      const std::optional<std::string> method =
+          options->methods == "all" ? std::nullopt : std::optional(options->methods);
+      StackBandReader stack(ResolveStack(options->stack, method));
+      TerminalProgressBar bar;
+      StreamedEvaluationOptions streamed;
+      streamed.memory_bytes = options->memory_mb << 20;
+      streamed.literal_thesis_rms = options->literal_rms;
+      streamed.progress = &bar;
+      const std::vector<MethodEvaluation> results = {EvaluateStackStreamed(set, stack, streamed)};
+      fmt::print("{} images, stack {} (streamed)\n{}", set.size(), stack.path().string(),
+                 FormatEvaluationTable(results));
+      if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+      return;
+    }
     if (!options->synthesis.synthesised.empty()) {
       options->synthesis.sample = options->input;
       options->synthesis.json = options->json;

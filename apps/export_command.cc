@@ -8,7 +8,9 @@
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
 #include "core/colour.h"
+#include "core/disk_space.h"
 #include "core/error.h"
+#include "core/memory_limits.h"
 #include "relight/export/export.h"
 #include "relight/formats/interchange.h"
 #include "relight/formats/ptm_file.h"
@@ -18,6 +20,7 @@
 #include "relight/web/viewer_export.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
+#include "represent/stack/stack_band_reader.h"
 
 namespace photomat::app {
 namespace {
@@ -36,6 +39,8 @@ struct ExportCommandOptions {
   std::string colour_space;
   bool raw_intensities = false;
   std::filesystem::path viewer;
+  std::size_t memory_mb = 0;
+  bool stream = false;
 };
 
 // The .ptm method: what --ptm-format asks, else the input's own PTM form, else LRGB (PTMfitter's).
@@ -74,13 +79,67 @@ void WriteInterchangeFiles(const ExportCommandOptions& options, const std::strin
   }
 }
 
-void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
-  if (options.out.empty()) return;
-  CreateFolder(options.out);
+ExportOptions MapOptions(const ExportCommandOptions& options) {
   ExportOptions export_options;
   export_options.normal_convention = ParseNormalConvention(options.normal_convention);
   export_options.height = ParseHeightIntegrator(options.height);
   export_options.gltf = !options.no_gltf;
+  return export_options;
+}
+
+std::size_t MemoryBudget(const ExportCommandOptions& options) {
+  return options.memory_mb > 0 ? options.memory_mb << 20
+                               : DefaultMemoryBudget(kMinimumExportMemory);
+}
+
+// IMPLEMENTER CHOICE: the maps of a stack are exported streamed (ExportMapsStreamed) when asked
+// (--stream) or when the in-memory export would not fit the memory budget, and it can be: a
+// linear method's stack (.exr), the Poisson height, and no .ptm/.rti/viewer asked (they need the
+// whole stack). Otherwise in memory, whose Poisson height is the exact solve.
+bool StreamsMaps(const ExportCommandOptions& options, const std::filesystem::path& stack_path,
+                 const StackBandReader& stack) {
+  if (options.out.empty() || !options.ptm.empty() || !options.rti.empty()) return false;
+  if (!IsStreamableStack(stack_path)) return false;
+  // Asked for: a pbr stack or --height fc is then an error saying why.
+  if (options.stream) return true;
+  if (stack.header().representation.shading()) return false;
+  if (ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) return false;
+  const Representation& r = stack.header().representation;
+  return InMemoryExportBytes(stack.width(), stack.height(), r.maps().channels(),
+                             r.output_channels()) > MemoryBudget(options);
+}
+
+void CheckExportDiskSpace(const ExportCommandOptions& options, const Representation& r, int width,
+                          int height) {
+  CheckDiskSpace(
+      options.out,
+      ExportOutputBytes(width, height, r.maps().channels(), r.output_channels(), !options.no_gltf),
+      "the export");
+}
+
+void WriteMapsStreamed(const ExportCommandOptions& options, StackBandReader& stack) {
+  CreateFolder(options.out);
+  CheckExportDiskSpace(options, stack.header().representation, stack.width(), stack.height());
+  StreamedExportOptions streamed;
+  streamed.maps = MapOptions(options);
+  streamed.memory_bytes = MemoryBudget(options);
+  TerminalProgressBar bar;
+  streamed.progress = &bar;
+  StreamedExportReport report;
+  const nlohmann::json description = ExportMapsStreamed(stack, options.out, streamed, &report);
+  fmt::print(
+      "wrote the {} maps of {} to {} (normals from {}; streamed in bands of {} rows, "
+      "height by tiled Poisson)\n",
+      stack.header().representation.method(), stack.header().provenance.source,
+      options.out.string(), description["normals"]["source"].get<std::string>(), report.band_rows);
+}
+
+void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
+  if (options.out.empty()) return;
+  CreateFolder(options.out);
+  CheckExportDiskSpace(options, stack.representation, stack.representation.width(),
+                       stack.representation.height());
+  const ExportOptions export_options = MapOptions(options);
   TerminalProgressBar bar;
   const nlohmann::json description = ExportMaps(stack, options.out, export_options, &bar);
   fmt::print("wrote the {} maps of {} to {} (normals from {})\n", stack.representation.method(),
@@ -134,6 +193,16 @@ void RunExport(const ExportCommandOptions& options) {
   if (!options.viewer.empty() && IsStackInput(options.input)) {
     WriteViewer(options, ViewerStacks(options.input, method));
     if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return;
+  }
+  if (IsStackInput(options.input) && !IsInterchangeFile(options.input)) {
+    const std::filesystem::path stack_path = ResolveStack(options.input, method);
+    if (IsStreamableStack(stack_path)) {
+      StackBandReader stack(stack_path);
+      if (StreamsMaps(options, stack_path, stack)) {
+        WriteMapsStreamed(options, stack);
+        return;
+      }
+    }
   }
   if (IsStackInput(options.input)) {
     const LoadedStack stack = LoadStackFile(options.input, method);
@@ -207,6 +276,14 @@ void AddExportCommand(CLI::App& app) {
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "
                       "folder (or --method's), or for a photometric set every method's fit");
+  command->add_option("--memory", options->memory_mb,
+                      fmt::format("Memory in MB for the maps of a stack; a stack whose export does "
+                                  "not fit is exported streamed, in bands (default: half the "
+                                  "physical memory or of this process's memory limits, here {} MB)",
+                                  DefaultMemoryBudget(kMinimumExportMemory) >> 20));
+  command->add_flag("--stream", options->stream,
+                    "Export a stack's maps streamed, in bands, whatever its size (height by "
+                    "tiled Poisson; not for pbr stacks, --height fc, --ptm or --rti)");
   command->callback([options] { RunExport(*options); });
 }
 

@@ -13,6 +13,7 @@
 #include "capture/io/load_photometric_set.h"
 #include "capture/io/streamed_set.h"
 #include "core/colour.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "represent/stack/map_stack.h"
@@ -99,6 +100,7 @@ void AddFitCommand(CLI::App& app) {
     TerminalProgressBar bar;
     fit.progress = &bar;
     CreateFolder(options->out);
+    CheckDiskSpace(options->out, StreamedStackBytes(set, methods), "the map stacks");
     std::vector<std::filesystem::path> paths;
     for (const Method& method : methods) paths.push_back(options->out / (method.Name() + ".exr"));
     const StreamedFitReport report = FitStreamed(set, methods, paths, fit);

@@ -4,12 +4,25 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "core/disk_space.h"
 #include "core/error.h"
+#include "core/memory_limits.h"
 #include "relight/formats/stack_file.h"
 #include "relight/render/relight.h"
+#include "relight/render/streamed_relight.h"
 #include "represent/stack/map_stack.h"
+#include "represent/stack/stack_band_reader.h"
 
 namespace photomat::app {
+namespace {
+
+// The folder the outputs go to: `out` itself for a set, its parent for one image.
+std::filesystem::path OutputFolder(const std::filesystem::path& out, bool one_image) {
+  if (!one_image) return out;
+  return out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
+}
+
+}  // namespace
 
 void AddRelightCommand(CLI::App& app) {
   struct Options {
@@ -21,6 +34,7 @@ void AddRelightCommand(CLI::App& app) {
     std::filesystem::path out;
     std::string format;
     bool clamp = false;
+    std::size_t memory_mb = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "relight");
@@ -41,36 +55,79 @@ void AddRelightCommand(CLI::App& app) {
   command->add_option("--format", options->format,
                       "png8 (sRGB, default for .png), png16 (linear) or exr (default for .exr)");
   command->add_flag("--clamp", options->clamp, "Clamp negative values (attached shadows) to 0");
+  command->add_option("--memory", options->memory_mb,
+                      fmt::format("Memory in MB for the bands of a streamed .exr stack "
+                                  "(default: half the physical memory or of this process's "
+                                  "memory limits, here {} MB)",
+                                  DefaultMemoryBudget(kMinimumRelightMemory) >> 20));
   command->callback([options] {
     if (options->light.empty() && options->lights.empty() && options->sweep.empty()) {
       throw Error("give the light(s): --light SLANT,TILT, --lights FILE or --sweep COUNT[,SLANT]");
     }
     const std::optional<std::string> method =
         options->method.empty() ? std::nullopt : std::optional(options->method);
-    const LoadedStack stack = LoadStackFile(options->stack, method);
     RelitOutputOptions output;
-    output.values = StackValueEncoding(stack.provenance);
     output.relight.clamp_negative = options->clamp;
     if (!options->format.empty()) {
       output.format = ParseRelitFormat(options->format);
     } else if (options->out.extension() == ".exr") {
       output.format = RelitFormat::kExr;
     }
-    if (!options->light.empty()) {
-      WriteRelitImage(options->out, stack.representation, ParseSlantTilt(options->light), output);
-      fmt::print("wrote {}\n", options->out.string());
-      return;
-    }
+    const bool one_image = !options->light.empty();
     std::vector<LightDirection> directions;
-    if (!options->lights.empty()) {
+    if (one_image) {
+      directions = {ParseSlantTilt(options->light)};
+    } else if (!options->lights.empty()) {
       directions = ReadLightDirections(options->lights);
     } else {
       directions = ParseSweep(options->sweep);
     }
     TerminalProgressBar bar;
-    WriteRelitSet(options->out, stack.representation, directions, output, &bar);
-    fmt::print("wrote {} images and manifest.json to {}\n", directions.size(),
-               options->out.string());
+    const bool interchange = IsInterchangeFile(options->stack);
+    const std::filesystem::path stack_path =
+        interchange ? options->stack : ResolveStack(options->stack, method);
+    if (interchange || !IsStreamableStack(stack_path)) {
+      // .ptm and .rti files are read whole (README, "Streamed relighting and export").
+      const LoadedStack stack = LoadStackFile(options->stack, method);
+      output.values = StackValueEncoding(stack.provenance);
+      const Representation& r = stack.representation;
+      CheckDiskSpace(OutputFolder(options->out, one_image),
+                     RelitOutputBytes(r.width(), r.height(), r.output_channels(),
+                                      static_cast<int>(directions.size()), output.format),
+                     "relighting");
+      if (one_image) {
+        WriteRelitImage(options->out, r, directions.front(), output);
+        fmt::print("wrote {}\n", options->out.string());
+      } else {
+        WriteRelitSet(options->out, r, directions, output, &bar);
+        fmt::print("wrote {} images and manifest.json to {}\n", directions.size(),
+                   options->out.string());
+      }
+      return;
+    }
+    // A map stack: streamed band by band (README, "Streamed relighting and export").
+    StackBandReader stack(stack_path);
+    output.values = StackValueEncoding(stack.header().provenance);
+    CheckDiskSpace(OutputFolder(options->out, one_image),
+                   RelitOutputBytes(stack.width(), stack.height(),
+                                    stack.header().representation.output_channels(),
+                                    static_cast<int>(directions.size()), output.format),
+                   "relighting");
+    StreamedRelightOptions streamed;
+    streamed.output = output;
+    streamed.memory_bytes = options->memory_mb << 20;
+    streamed.progress = &bar;
+    if (one_image) {
+      const StreamedRelightReport report =
+          WriteRelitImageStreamed(options->out, stack, directions.front(), streamed);
+      fmt::print("wrote {} (bands of {} rows)\n", options->out.string(), report.band_rows);
+    } else {
+      const StreamedRelightReport report =
+          WriteRelitSetStreamed(options->out, stack, directions, streamed);
+      fmt::print("wrote {} images and manifest.json to {} (bands of {} rows, {} pass{})\n",
+                 directions.size(), options->out.string(), report.band_rows, report.passes,
+                 report.passes == 1 ? "" : "es");
+    }
   });
 }
 

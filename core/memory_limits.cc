@@ -77,4 +77,21 @@ std::size_t WorkerThreadsAddressSpace() {
   return 3 * cores * stack_bytes + arenas * kMallocArenaReservation;
 }
 
+std::size_t DefaultMemoryBudget(std::size_t minimum) {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  const std::size_t physical =
+      pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(page)
+                            : std::size_t{4} << 30;
+  std::size_t budget = std::max(physical / 2, std::size_t{256} << 20);
+  if (const std::optional<std::size_t> cgroup = CgroupMemoryLimit()) {
+    budget = std::min(budget, *cgroup / 2);
+  }
+  if (const std::optional<std::size_t> room = AddressSpaceRoom()) {
+    // The worker threads the command starts map stacks and malloc arenas from the same room.
+    const std::size_t threads = WorkerThreadsAddressSpace();
+    budget = std::min(budget, *room > threads ? (*room - threads) / 2 : 0);
+  }
+  return std::max(budget, minimum);
+}
+
 }  // namespace photomat

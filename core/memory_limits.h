@@ -48,6 +48,15 @@ void KeepFreedMemoryForReuse();
 // pools (one thread per core each), and the malloc arenas FitMallocToAddressSpaceLimit allows.
 std::size_t WorkerThreadsAddressSpace();
 
+// The memory a streamed command may give its bands by default (streamed fit, relight, export,
+// evaluation): IMPLEMENTER CHOICE, half the machine's physical memory (sysconf), at least 256
+// MiB: the rest is for the program, the decoders and the system; but at most half the process's
+// memory limits: its cgroup's (memory.max, as a Slurm job or a container sets it) and the room
+// its address-space limit (RLIMIT_AS, `ulimit -v`) leaves beyond what is mapped already (the
+// program's libraries alone map about 0.6 GB) and what the worker threads will map
+// (WorkerThreadsAddressSpace); never below `minimum`.
+std::size_t DefaultMemoryBudget(std::size_t minimum);
+
 }  // namespace photomat
 
 #endif  // PHOTOMAT_CORE_MEMORY_LIMITS_H_

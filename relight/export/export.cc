@@ -4,13 +4,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
+#include "core/disk_space.h"
 #include "core/error.h"
+#include "core/image_band_io.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/memory_limits.h"
 #include "relight/export/gltf_tile.h"
 #include "relight/formats/stack_file.h"
 #include "represent/model/shading.h"
+#include "represent/stack/stack_band_writer.h"
+#include "represent/surface/surface_integration.h"
 
 namespace photomat {
 namespace {
@@ -144,6 +150,60 @@ PbrFiles WritePbrMaps(const Representation& r, const Mask& mask, const fs::path&
   return files;
 }
 
+// The normal map in glTF's convention (+Y up) when another one is asked.
+constexpr const char* kGltfNormalFile = "normal_gltf.png";
+
+// export.json's description of the maps (without "pbr" and "gltf").
+nlohmann::json ExportDescription(const LoadedStack& stack, int width, int height,
+                                 const std::string& normals_source, const Range& range,
+                                 const ExportOptions& options) {
+  return {
+      {"format", "photomat-export"},
+      {"version", 1},
+      {"method", stack.representation.method()},
+      {"source", stack.provenance.source},
+      {"width", width},
+      {"height", height},
+      {"normals",
+       {{"file", "normal.png"},
+        {"convention", ToString(options.normal_convention)},
+        {"encoding", "16-bit linear, (n + 1) / 2 per component"},
+        {"source", normals_source}}},
+      {"albedo", {{"file", "albedo.png"}, {"encoding", "8-bit sRGB"}}},
+      {"height",
+       {{"file", "height.exr"},
+        {"png", "height.png"},
+        {"units", "pixels"},
+        {"integrator", ToString(options.height)},
+        {"min", range.low},
+        {"max", range.high}}},
+      {"stack", "stack.exr"},
+  };
+}
+
+// The glTF tile over the written textures, and its entry in `description`.
+void WriteTile(const fs::path& folder, int width, int height, const Range& range,
+               const PbrFiles& pbr, const ExportOptions& options, nlohmann::json& description) {
+  GltfTile tile;
+  tile.aspect = static_cast<double>(height) / width;
+  tile.base_color_uri = "albedo.png";
+  tile.normal_uri =
+      options.normal_convention != NormalConvention::kOpenGl ? kGltfNormalFile : "normal.png";
+  tile.height_uri = "height.png";
+  tile.metallic_roughness_uri = pbr.metallic_roughness;
+  tile.specular_uri = pbr.specular;
+  tile.specular_color_factor = pbr.specular_color_factor;
+  // Height in pixels, one pixel = tile.width / image width scene units.
+  const double pixel = tile.width / width;
+  tile.displacement_scale = (range.high - range.low) * pixel;
+  tile.displacement_offset = range.low * pixel;
+  WriteGltfTile(folder / "tile.gltf", tile);
+  description["gltf"] = {{"file", "tile.gltf"},
+                         {"width", tile.width},
+                         {"displacement_scale", tile.displacement_scale},
+                         {"displacement_offset", tile.displacement_offset}};
+}
+
 }  // namespace
 
 nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
@@ -182,28 +242,8 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
   SaveRepresentation(folder / "stack.exr", r, stack.provenance, ExtraLayers(r, maps));
   report.Advance();
 
-  nlohmann::json description = {
-      {"format", "photomat-export"},
-      {"version", 1},
-      {"method", r.method()},
-      {"source", stack.provenance.source},
-      {"width", r.width()},
-      {"height", r.height()},
-      {"normals",
-       {{"file", "normal.png"},
-        {"convention", ToString(options.normal_convention)},
-        {"encoding", "16-bit linear, (n + 1) / 2 per component"},
-        {"source", maps.normals_source}}},
-      {"albedo", {{"file", "albedo.png"}, {"encoding", "8-bit sRGB"}}},
-      {"height",
-       {{"file", "height.exr"},
-        {"png", "height.png"},
-        {"units", "pixels"},
-        {"integrator", ToString(options.height)},
-        {"min", range.low},
-        {"max", range.high}}},
-      {"stack", "stack.exr"},
-  };
+  nlohmann::json description =
+      ExportDescription(stack, r.width(), r.height(), maps.normals_source, range, options);
   PbrFiles pbr;
   if (r.shading()) {
     pbr = WritePbrMaps(r, maps.mask, folder, png16);
@@ -211,34 +251,317 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
     report.Advance();
   }
   if (options.gltf) {
-    GltfTile tile;
-    tile.aspect = static_cast<double>(r.height()) / r.width();
-    tile.base_color_uri = "albedo.png";
-    tile.normal_uri = "normal.png";
     if (options.normal_convention != NormalConvention::kOpenGl) {
       // glTF defines normal textures with +Y up.
-      tile.normal_uri = "normal_gltf.png";
-      WriteImage(folder / tile.normal_uri, EncodeNormalMap(maps.normals, NormalConvention::kOpenGl),
+      WriteImage(folder / kGltfNormalFile, EncodeNormalMap(maps.normals, NormalConvention::kOpenGl),
                  png16);
     }
-    tile.height_uri = "height.png";
-    tile.metallic_roughness_uri = pbr.metallic_roughness;
-    tile.specular_uri = pbr.specular;
-    tile.specular_color_factor = pbr.specular_color_factor;
-    // Height in pixels, one pixel = tile.width / image width scene units.
-    const double pixel = tile.width / r.width();
-    tile.displacement_scale = (range.high - range.low) * pixel;
-    tile.displacement_offset = range.low * pixel;
-    WriteGltfTile(folder / "tile.gltf", tile);
-    description["gltf"] = {{"file", "tile.gltf"},
-                           {"width", tile.width},
-                           {"displacement_scale", tile.displacement_scale},
-                           {"displacement_offset", tile.displacement_offset}};
+    WriteTile(folder, r.width(), r.height(), range, pbr, options, description);
     report.Advance();
   }
   WriteJsonFile(folder / "export.json", description);
   report.Advance();
   report.Finish();
+  return description;
+}
+
+namespace {
+
+// Scratch files of a streamed export, removed however the export ends.
+class ScratchFiles {
+ public:
+  ~ScratchFiles() {
+    std::error_code ignored;
+    for (const fs::path& path : paths_) fs::remove(path, ignored);
+  }
+  const fs::path& Add(fs::path path) { return paths_.emplace_back(std::move(path)); }
+
+ private:
+  std::vector<fs::path> paths_;
+};
+
+// The file channel named `name` of a scratch file.
+int ChannelOf(const ImageBandReader& reader, const std::string& name) {
+  const auto& names = reader.channel_names();
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) throw Error(reader.path(), fmt::format("no channel \"{}\"", name));
+  return static_cast<int>(it - names.begin());
+}
+
+// `count` channels of `stored` from `first` of `channels`, named `names`.
+Image Channels(const Image& stored, const std::vector<int>& channels,
+               const std::vector<std::string>& names) {
+  Image out(stored.width(), stored.height(), names);
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    const auto in = stored.plane(channels[c]);
+    std::copy(in.begin(), in.end(), out.plane(static_cast<int>(c)).begin());
+  }
+  return out;
+}
+
+std::vector<int> ChannelsOf(const ImageBandReader& reader, const std::vector<std::string>& names) {
+  std::vector<int> channels;
+  for (const std::string& name : names) channels.push_back(ChannelOf(reader, name));
+  return channels;
+}
+
+// The surface scratch file's channels: the gradients and the mask (tiled Poisson's input), then
+// the normals and albedo (for stack.exr's extra layers).
+std::vector<std::string> SurfaceChannels(int albedo_channels) {
+  std::vector<std::string> names = {"p", "q", "mask", "normal.X", "normal.Y", "normal.Z"};
+  for (const auto& c : OutputChannelNames(albedo_channels)) names.push_back("albedo." + c);
+  return names;
+}
+
+int StreamedBandRows(const StackBandReader& stack, const StreamedExportOptions& options) {
+  if (options.band_rows > 0) return std::min(options.band_rows, stack.height());
+  const std::size_t memory =
+      options.memory_bytes > 0 ? options.memory_bytes : DefaultMemoryBudget(kMinimumExportMemory);
+  const std::size_t row =
+      static_cast<std::size_t>(stack.width()) * StreamedExportBytesPerPixel(stack);
+  return static_cast<int>(std::clamp<std::size_t>(memory / std::max<std::size_t>(row, 1), 1,
+                                                  static_cast<std::size_t>(stack.height())));
+}
+
+}  // namespace
+
+std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack) {
+  const Representation& r = stack.header().representation;
+  const std::size_t maps = static_cast<std::size_t>(r.maps().channels());
+  const std::size_t stored = static_cast<std::size_t>(stack.stored_channels());
+  const std::size_t channels = static_cast<std::size_t>(r.output_channels());
+  // The stack's band as stored and gathered (4 bytes per channel each), the relit images of the
+  // Lambertian fit (the capture's lights, or the 193-light dome, x channels x 4 bytes), the
+  // surface maps and their scratch copy (gradients, mask, normals, albedo: 6 + C floats, twice),
+  // and stack.exr's band (maps and extra layers).
+  const std::size_t lights =
+      std::max<std::size_t>(stack.header().provenance.capture_lights.size(), 193);
+  return 4 * (stored + maps) + 4 * lights * channels + 8 * (6 + channels) +
+         4 * (maps + 4 + channels);
+}
+
+std::size_t InMemoryExportBytes(int width, int height, int maps, int channels) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  // The stack (twice: read and written with its extra layers), the relit images, normals, albedo
+  // and height, and the Poisson solve: its sparse matrix, normal equations and CG vectors (about
+  // 200 bytes per unknown, double precision).
+  return pixels *
+         (8 * static_cast<std::size_t>(maps) + 4 * 193 * static_cast<std::size_t>(channels) + 200);
+}
+
+std::size_t ExportOutputBytes(int width, int height, int maps, int channels, bool gltf) {
+  // normal.png (16-bit RGB), albedo.png (8-bit), height.exr, height.png (16-bit), stack.exr (the
+  // maps, derived normals and albedo, height), normal_gltf.png at most, and the scratch files of a
+  // streamed export (gradients, mask, normals, albedo; the height).
+  std::size_t bytes =
+      ImageFileBytes(width, height, 3, 2) + ImageFileBytes(width, height, channels, 1) +
+      ImageFileBytes(width, height, 1, 4) + ImageFileBytes(width, height, 1, 2) +
+      ImageFileBytes(width, height, maps + 4 + channels, 4) +
+      ImageFileBytes(width, height, 6 + channels, 4) + ImageFileBytes(width, height, 1, 4);
+  if (gltf) bytes += ImageFileBytes(width, height, 3, 2);
+  return bytes;
+}
+
+nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder,
+                                  const StreamedExportOptions& options,
+                                  StreamedExportReport* report) {
+  const LoadedStack& header = stack.header();
+  const Representation& r = header.representation;
+  if (options.maps.height != HeightIntegrator::kPoisson) {
+    throw Error(stack.path(),
+                "a streamed export integrates the height by tiled Poisson only "
+                "(--height fc needs the whole map in memory)");
+  }
+  if (r.shading()) {
+    throw Error(stack.path(),
+                "a pbr stack is exported in memory only (its specular texture is "
+                "scaled by the largest F0 of the whole map)");
+  }
+  const int width = stack.width(), height = stack.height();
+  const int channels = r.output_channels();
+  const int band_rows = StreamedBandRows(stack, options);
+  const int bands = (height + band_rows - 1) / band_rows;
+  NullProgress none;
+  Progress& progress = OrNull(options.progress, none);
+  MaterialMapOptions map_options;
+  map_options.values = StackValueEncoding(header.provenance);
+  map_options.sample_lights = header.provenance.capture_lights;
+  ScratchFiles scratch;
+  const fs::path surface_path = scratch.Add(folder / ".export-surface.exr");
+  const fs::path height_path = scratch.Add(folder / ".export-height.exr");
+  ImageWriteOptions png16;
+  png16.sample_type = SampleType::kUint16;
+  ImageWriteOptions srgb8;
+  srgb8.sample_type = SampleType::kUint8;
+  srgb8.encoding = ColourSpace::kSrgb;
+  ImageWriteOptions scratch_options;
+  scratch_options.exr_compression = ExrCompression::kNone;  // written once, read back: speed
+  const std::vector<std::string> rgb = {"R", "G", "B"};
+  const std::vector<std::string> surface_names = SurfaceChannels(channels);
+
+  // Pass 1 over the stack: normals, albedo and gradients, band by band. The outputs stay pending
+  // until every pass is done, so a fault anywhere leaves none of them.
+  ImageBandWriter normal_png(folder / "normal.png", width, height, rgb, png16);
+  std::optional<ImageBandWriter> gltf_normal_png;
+  if (options.maps.gltf && options.maps.normal_convention != NormalConvention::kOpenGl) {
+    gltf_normal_png.emplace(folder / kGltfNormalFile, width, height, rgb, png16);
+  }
+  ImageBandWriter albedo_png(folder / "albedo.png", width, height, OutputChannelNames(channels),
+                             srgb8);
+  std::string normals_source;
+  {
+    ImageBandWriter surface(surface_path, width, height, surface_names, scratch_options);
+    std::size_t covered = 0;
+    if (stack.next_row() != 0) stack.Rewind();
+    progress.Start("export: normals and albedo", static_cast<std::size_t>(bands));
+    for (int b = 0; b < bands; ++b) {
+      const LoadedStack band = stack.ReadNext(band_rows);
+      const MaterialMaps maps = ExtractSurfaceMaps(band.representation, map_options);
+      normals_source = maps.normals_source;
+      covered += maps.mask.CountSet();
+      normal_png.WriteNext(EncodeNormalMap(maps.normals, options.maps.normal_convention));
+      if (gltf_normal_png) {
+        gltf_normal_png->WriteNext(EncodeNormalMap(maps.normals, NormalConvention::kOpenGl));
+      }
+      albedo_png.WriteNext(maps.albedo);
+      const Image gradients = GradientsFromNormals(maps.normals);
+      Image rows(width, band.representation.height(), surface_names);
+      auto out = rows.values().begin();  // planar, in surface_names' order
+      out = std::copy(gradients.values().begin(), gradients.values().end(), out);
+      for (std::size_t p = 0; p < maps.mask.pixel_count(); ++p) *out++ = maps.mask[p] ? 1.0f : 0.0f;
+      out = std::copy(maps.normals.values().begin(), maps.normals.values().end(), out);
+      std::copy(maps.albedo.values().begin(), maps.albedo.values().end(), out);
+      surface.WriteNext(rows);
+      progress.Advance();
+    }
+    progress.Finish();
+    if (covered == 0) throw Error(stack.path(), fmt::format("{}: every map is zero", r.method()));
+    surface.Commit();
+  }
+
+  // Pass 2 (two reads of the gradients): the tiled Poisson height, its mean and range over the
+  // mask.
+  double sum = 0.0, covered = 0.0;
+  Range raw{INFINITY, -INFINITY};
+  {
+    ImageBandReader surface(surface_path, {});
+    const std::vector<int> gradient_channels = ChannelsOf(surface, {"p", "q", "mask"});
+    GradientRows rows;
+    rows.rewind = [&] { surface = ImageBandReader(surface_path, {}); };
+    rows.next = [&](int count) {
+      Image stored(width, std::min(count, height - surface.next_row()), surface.channels());
+      surface.ReadNext(stored.View());
+      return Channels(stored, gradient_channels, {"p", "q", "mask"});
+    };
+    ImageBandWriter height_file(height_path, width, height, {"height"}, scratch_options);
+    const int tile_rows = (height + options.poisson.tile - 1) / options.poisson.tile;
+    progress.Start("export: height (tiled Poisson)", static_cast<std::size_t>(tile_rows));
+    IntegrateTiledPoisson(
+        width, height, rows,
+        [&](ConstImageView band) {
+          for (int y = 0; y < band.height(); ++y) {
+            const auto h = band.row(0, y);
+            const auto m = band.row(1, y);
+            for (int x = 0; x < width; ++x) {
+              if (m[x] < 0.5f) continue;
+              sum += h[x];
+              covered += 1.0;
+              raw.low = std::min(raw.low, double{h[x]});
+              raw.high = std::max(raw.high, double{h[x]});
+            }
+          }
+          height_file.WriteNext(band.ChannelRange(0, 1));
+          progress.Advance();
+        },
+        options.poisson);
+    progress.Finish();
+    height_file.Commit();
+  }
+  // Zero mean over the mask, as the in-memory Poisson.
+  const double mean = sum / covered;
+  const Range range{raw.low - mean, raw.high - mean};
+
+  // Pass 3 over the stack: the height files and stack.exr with its extra layers.
+  ImageBandWriter height_exr(folder / "height.exr", width, height, {"height"});
+  ImageWriteOptions height16 = png16;
+  height16.attributes["photomat:height_min"] = fmt::format("{:.9g}", range.low);
+  height16.attributes["photomat:height_max"] = fmt::format("{:.9g}", range.high);
+  ImageBandWriter height_png(folder / "height.png", width, height, {"Y"}, height16);
+  // stack.exr's layers: the maps, then the derived normals and albedo the stack lacks, then height.
+  std::vector<std::string> albedo_names;
+  for (const auto& c : OutputChannelNames(channels)) albedo_names.push_back("albedo." + c);
+  const bool add_normals = r.maps().FindChannel("normal.X") < 0;
+  const bool add_albedo = r.maps().FindChannel(albedo_names.front()) < 0;
+  std::vector<std::string> extra_names;
+  if (add_normals) extra_names.insert(extra_names.end(), {"normal.X", "normal.Y", "normal.Z"});
+  if (add_albedo) extra_names.insert(extra_names.end(), albedo_names.begin(), albedo_names.end());
+  extra_names.push_back("height");
+  nlohmann::json stack_description = StackDescription(r, header.provenance);
+  stack_description["extra_layers"] = extra_names;
+  std::vector<std::string> stack_names = r.maps().channel_names();
+  stack_names.insert(stack_names.end(), extra_names.begin(), extra_names.end());
+  StackBandWriter stack_exr(folder / "stack.exr", stack_description, stack_names, width, height);
+  {
+    stack.Rewind();
+    ImageBandReader surface(surface_path, {});
+    ImageBandReader height_file(height_path, {});
+    std::vector<std::string> derived_names;
+    if (add_normals)
+      derived_names.insert(derived_names.end(), {"normal.X", "normal.Y", "normal.Z"});
+    if (add_albedo)
+      derived_names.insert(derived_names.end(), albedo_names.begin(), albedo_names.end());
+    derived_names.push_back("mask");
+    const std::vector<int> derived_channels = ChannelsOf(surface, derived_names);
+    progress.Start("export: height and stack", static_cast<std::size_t>(bands));
+    for (int b = 0; b < bands; ++b) {
+      const LoadedStack band = stack.ReadNext(band_rows);
+      const int rows = band.representation.height();
+      Image stored(width, rows, surface.channels());
+      surface.ReadNext(stored.View());
+      const Image derived = Channels(stored, derived_channels, derived_names);
+      Image height_band(width, rows, std::vector<std::string>{"height"});
+      height_file.ReadNext(height_band.View());
+      Mask mask(width, rows, false);
+      const auto mask_plane = derived.plane(derived.channels() - 1);
+      for (std::size_t p = 0; p < mask.pixel_count(); ++p) {
+        mask.Set(p, mask_plane[p] >= 0.5f);
+        height_band.pixel(p)[0] =
+            mask[p] ? static_cast<float>(height_band.pixel(p)[0] - mean) : 0.0f;
+      }
+      height_exr.WriteNext(height_band);
+      height_png.WriteNext(NormalisedHeight(height_band, mask, range));
+      Image layers(width, rows, stack_names);
+      auto out = layers.values().begin();  // planar: maps, derived layers, height
+      const auto& maps = band.representation.maps().values();
+      out = std::copy(maps.begin(), maps.end(), out);
+      const auto derived_values = derived.values();
+      out = std::copy(derived_values.begin(),
+                      derived_values.end() - static_cast<std::ptrdiff_t>(mask.pixel_count()), out);
+      std::copy(height_band.values().begin(), height_band.values().end(), out);
+      stack_exr.Write(layers);
+      progress.Advance();
+    }
+    progress.Finish();
+  }
+
+  nlohmann::json description =
+      ExportDescription(header, width, height, normals_source, range, options.maps);
+  description["streamed"] = {{"band_rows", band_rows},
+                             {"tile", options.poisson.tile},
+                             {"overlap", options.poisson.overlap},
+                             {"coarse_factor", CoarseFactor(width, height, options.poisson)}};
+  normal_png.Commit();
+  if (gltf_normal_png) gltf_normal_png->Commit();
+  albedo_png.Commit();
+  height_exr.Commit();
+  height_png.Commit();
+  stack_exr.Commit();
+  if (options.maps.gltf) WriteTile(folder, width, height, range, {}, options.maps, description);
+  WriteJsonFile(folder / "export.json", description);
+  if (report) {
+    report->band_rows = band_rows;
+    report->passes = 3;
+  }
   return description;
 }
 

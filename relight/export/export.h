@@ -7,6 +7,8 @@
 #include "relight/export/material_maps.h"
 #include "relight/export/normal_map.h"
 #include "represent/stack/map_stack.h"
+#include "represent/stack/stack_band_reader.h"
+#include "represent/surface/tiled_poisson.h"
 
 namespace photomat {
 
@@ -29,5 +31,47 @@ struct ExportOptions {
 // description also written to export.json. Throws Error naming the file at fault.
 nlohmann::json ExportMaps(const LoadedStack& stack, const std::filesystem::path& folder,
                           const ExportOptions& options = {}, Progress* progress = nullptr);
+
+// Streamed export (README, "Streamed relighting and export"): the same files from a stack read
+// band by band, for stacks too large to hold. Three passes over the stack: (1) normals and
+// albedo per band (ExtractSurfaceMaps: every pixel's from its own maps, as in memory), written to
+// normal.png and albedo.png and, with the gradients and the mask, to a scratch file beside the
+// outputs; (2) the height by tiled Poisson (represent/surface/tiled_poisson.h) from the scratch
+// file, to a second scratch file, with its mean and range over the mask; (3) height.exr,
+// height.png and stack.exr (the stack's bands with the derived layers). Everything is written to
+// temporary names and renamed at the end; the scratch files are removed however it ends.
+// Normals and albedo equal the in-memory export's; the height differs from the in-memory Poisson
+// solve by the tiling (tiled_poisson_test.cc). Only the Poisson height (kPoisson) and linear
+// methods: a pbr stack or --height fc is an Error (they need the whole map).
+struct StreamedExportOptions {
+  ExportOptions maps;
+  TiledPoissonOptions poisson;
+  // Bytes the bands may hold; 0: DefaultMemoryBudget(kMinimumExportMemory). The tiled Poisson's
+  // window (16 bytes per pixel of tile + 2 overlap rows) comes on top.
+  std::size_t memory_bytes = 0;
+  // > 0: exactly this many rows per band (tests).
+  int band_rows = 0;
+  // One phase per pass.
+  Progress* progress = nullptr;
+};
+inline constexpr std::size_t kMinimumExportMemory = std::size_t{16} << 20;
+
+struct StreamedExportReport {
+  int band_rows = 0;
+  int passes = 0;
+};
+
+nlohmann::json ExportMapsStreamed(StackBandReader& stack, const std::filesystem::path& folder,
+                                  const StreamedExportOptions& options = {},
+                                  StreamedExportReport* report = nullptr);
+
+// Bytes per pixel of a streamed export's band (the stack's band, relit images for the
+// Lambertian fit, the surface maps, stack.exr's band).
+std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack);
+// Bytes the in-memory ExportMaps holds for a stack of these dimensions (the stack, relit images,
+// the maps and the Poisson solve): what decides between the two.
+std::size_t InMemoryExportBytes(int width, int height, int maps, int channels);
+// The bytes the export writes at most (and a streamed export's scratch files), for the disk check.
+std::size_t ExportOutputBytes(int width, int height, int maps, int channels, bool gltf);
 
 }  // namespace photomat

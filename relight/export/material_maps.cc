@@ -133,10 +133,9 @@ Image HeightFromNormals(const Image& normals, const Mask& mask, HeightIntegrator
   return height;
 }
 
-MaterialMaps ExtractMaterialMaps(const Representation& r, const MaterialMapOptions& options) {
+MaterialMaps ExtractSurfaceMaps(const Representation& r, const MaterialMapOptions& options) {
   MaterialMaps out;
   out.mask = CoverageMask(r);
-  if (out.mask.CountSet() == 0) throw Error(fmt::format("{}: every map is zero", r.method()));
   out.normals = NamedMaps(r, {"normal.X", "normal.Y", "normal.Z"});
   // pbr: the base colour is the albedo (diffuse reflectance) of core/microfacet_brdf.h.
   Image albedo = NamedMaps(r, Prefixed(r.shading() ? "base." : "albedo.", r.output_channels()));
@@ -155,6 +154,13 @@ MaterialMaps ExtractMaterialMaps(const Representation& r, const MaterialMapOptio
   }
   ZeroOutside(out.normals, out.mask);
   ZeroOutside(out.albedo, out.mask);
+  return out;
+}
+
+MaterialMaps ExtractMaterialMaps(const Representation& r, const MaterialMapOptions& options) {
+  if (CoverageMask(r).CountSet() == 0)
+    throw Error(fmt::format("{}: every map is zero", r.method()));
+  MaterialMaps out = ExtractSurfaceMaps(r, options);
   out.height = HeightFromNormals(out.normals, out.mask, options.height);
   if (options.height == HeightIntegrator::kFrankotChellappa) ZeroOutside(out.height, out.mask);
   return out;

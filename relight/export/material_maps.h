@@ -52,6 +52,13 @@ Mask CoverageMask(const Representation& representation);
 MaterialMaps ExtractMaterialMaps(const Representation& representation,
                                  const MaterialMapOptions& options = {});
 
+// The per-pixel part of ExtractMaterialMaps: mask, normals, albedo and their source, without the
+// height (left empty). Each pixel's maps depend on its own maps only, so a band of a stack gives
+// the rows of the whole stack's maps (streamed export). Unlike ExtractMaterialMaps, a band whose
+// maps are all zero is not an error (its normals and albedo are 0).
+MaterialMaps ExtractSurfaceMaps(const Representation& representation,
+                                const MaterialMapOptions& options = {});
+
 // Height (pixel units) from unit normals by `integrator`; Poisson over `mask` (all if empty).
 Image HeightFromNormals(const Image& normals, const Mask& mask, HeightIntegrator integrator);
 

@@ -1,7 +1,6 @@
 #include "represent/streaming/streamed_fit.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <future>
@@ -10,6 +9,7 @@
 #include <numeric>
 
 #include "calibrate/radiometry/exposure.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/memory_limits.h"
 #include "represent/fitting/fit.h"
@@ -238,22 +238,7 @@ std::size_t DefaultStreamedBudget(const StreamedSet& set) {
   return std::min(DefaultFitMemory(), DecoderChunkBytes(set) + kFastBandMemory);
 }
 
-std::size_t DefaultFitMemory() {
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-  const std::size_t physical =
-      pages > 0 && page > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(page)
-                            : std::size_t{4} << 30;
-  std::size_t budget = std::max(physical / 2, std::size_t{256} << 20);
-  if (const std::optional<std::size_t> cgroup = CgroupMemoryLimit()) {
-    budget = std::min(budget, *cgroup / 2);
-  }
-  if (const std::optional<std::size_t> room = AddressSpaceRoom()) {
-    // The worker threads the fit starts map stacks and malloc arenas from the same room.
-    const std::size_t threads = WorkerThreadsAddressSpace();
-    budget = std::min(budget, *room > threads ? (*room - threads) / 2 : 0);
-  }
-  return std::max(budget, kMinimumFitMemory);
-}
+std::size_t DefaultFitMemory() { return DefaultMemoryBudget(kMinimumFitMemory); }
 
 int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
                      std::span<const Method> methods, bool robust) {
@@ -404,6 +389,15 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
   }
   report.saturated_pixels = set.SaturatedPixels();
   return report;
+}
+
+std::size_t StreamedStackBytes(const StreamedSet& set, std::span<const Method> methods) {
+  std::size_t bytes = 0;
+  for (const Method& method : methods) {
+    bytes +=
+        ImageFileBytes(set.width(), set.height(), MapPlanes(method, set.size(), set.channels()), 4);
+  }
+  return bytes;
 }
 
 }  // namespace photomat

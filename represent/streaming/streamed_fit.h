@@ -64,12 +64,8 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
                               std::span<const std::filesystem::path> stacks,
                               const StreamedFitOptions& options = {});
 
-// IMPLEMENTER CHOICE: half the machine's physical memory (sysconf), at least 256 MiB: the rest is
-// for the program, the decoders and the system; but at most half the process's memory limits:
-// its cgroup's (memory.max, as a Slurm job or a container sets it) and the room its
-// address-space limit (RLIMIT_AS, `ulimit -v`) leaves beyond what is mapped already (the
-// program's libraries alone map about 0.6 GB) and what the worker threads will map
-// (WorkerThreadsAddressSpace, core/memory_limits.h); never below kMinimumFitMemory.
+// DefaultMemoryBudget(kMinimumFitMemory) (core/memory_limits.h: half the physical memory, at
+// most half of the process's cgroup and address-space limits).
 std::size_t DefaultFitMemory();
 inline constexpr std::size_t kMinimumFitMemory = std::size_t{16} << 20;
 
@@ -89,5 +85,9 @@ std::size_t DefaultStreamedBudget(const StreamedSet& set);
 // image height), from the bytes per row the band holds (README, "Streamed fitting").
 int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
                      std::span<const Method> methods, bool robust);
+
+// The bytes the stacks of `methods` fitted to `set` take on disk at most (ImageFileBytes of their
+// maps as float, core/disk_space.h): `photomat fit` checks the free space for them first.
+std::size_t StreamedStackBytes(const StreamedSet& set, std::span<const Method> methods);
 
 }  // namespace photomat

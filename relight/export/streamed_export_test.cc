@@ -1,0 +1,141 @@
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "relight/export/export.h"
+#include "represent/fitting/fit.h"
+#include "represent/model/shading.h"
+#include "tests/support/synthetic_sets.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+// RMS of a - b over b's range (the bricks cover every pixel).
+double RelativeRmsDifference(const Image& a, const Image& b) {
+  double sum = 0.0, count = 0.0, low = INFINITY, high = -INFINITY;
+  for (std::size_t p = 0; p < b.pixel_count(); ++p) {
+    const double d = a.pixel(p)[0] - b.pixel(p)[0];
+    sum += d * d;
+    count += 1.0;
+    low = std::min(low, double{b.pixel(p)[0]});
+    high = std::max(high, double{b.pixel(p)[0]});
+  }
+  return std::sqrt(sum / count) / (high - low);
+}
+
+// The streamed export writes the files of the in-memory one: normals, albedo, the stack's maps and
+// its derived layers value for value; the height by tiled Poisson, measured against the exact
+// solve. Bands of 9 rows, tiles of 64 + 8 over a 150 x 130 map: several of each.
+TEST(StreamedExportTest, StreamedFilesEqualTheInMemoryExport) {
+  testing::TempDir dir;
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBricks, 64);
+  // A larger stack from the small fit's maps tiled: 150 x 130, no multiple of band or tile.
+  for (const char* name : {"gradient", "ptm", "eigen6"}) {
+    const Representation small = Fit(synthetic.set, Method::Parse(name));
+    Image maps(150, 130, small.maps().channel_names());
+    for (int c = 0; c < maps.channels(); ++c) {
+      for (int y = 0; y < 130; ++y) {
+        for (int x = 0; x < 150; ++x) maps.at(x, y, c) = small.maps().at(x % 64, y % 64, c);
+      }
+    }
+    const LoadedStack stack{small.WithMaps(std::move(maps)),
+                            {synthetic.set.lights(), "linear", "synthetic"}};
+    const fs::path stack_path = dir / fmt::format("{}.exr", name);
+    SaveRepresentation(stack_path, stack.representation, stack.provenance);
+    const fs::path whole = dir / fmt::format("{}-whole", name);
+    const fs::path streamed = dir / fmt::format("{}-streamed", name);
+    fs::create_directories(whole);
+    fs::create_directories(streamed);
+    ExportMaps(stack, whole);
+    StreamedExportOptions options;
+    options.band_rows = 9;
+    options.poisson.tile = 64;
+    options.poisson.overlap = 8;
+    options.poisson.coarse_factor = 4;
+    StackBandReader reader(stack_path);
+    StreamedExportReport report;
+    const nlohmann::json description = ExportMapsStreamed(reader, streamed, options, &report);
+    EXPECT_EQ(report.band_rows, 9);
+    for (const char* file : {"normal.png", "albedo.png"}) {
+      EXPECT_TRUE(
+          testing::SameBits(ReadImage(streamed / file).image, ReadImage(whole / file).image))
+          << name << " " << file;
+    }
+    const Image height = ReadImage(streamed / "height.exr").image;
+    const double difference = RelativeRmsDifference(height, ReadImage(whole / "height.exr").image);
+    std::printf("%s: streamed export height against the in-memory one: relative RMS %.3g\n", name,
+                difference);
+    // Measured: 2.1e-3 for each method (the same normals); bound 1.4 x.
+    EXPECT_LT(difference, 3e-3) << name;
+    // stack.exr: the same maps, the derived layers and the streamed height.
+    const LoadedStack whole_stack = LoadRepresentation(whole / "stack.exr");
+    const LoadedStack streamed_stack = LoadRepresentation(streamed / "stack.exr");
+    EXPECT_TRUE(
+        testing::SameBits(streamed_stack.representation.maps(), whole_stack.representation.maps()));
+    ASSERT_EQ(streamed_stack.extra_layers.channel_names(),
+              whole_stack.extra_layers.channel_names());
+    const int layers = streamed_stack.extra_layers.channels();
+    for (int c = 0; c + 1 < layers; ++c) {
+      const auto a = streamed_stack.extra_layers.plane(c), b = whole_stack.extra_layers.plane(c);
+      ASSERT_TRUE(std::equal(a.begin(), a.end(), b.begin())) << name << " layer " << c;
+    }
+    const auto stored_height = streamed_stack.extra_layers.plane(layers - 1);
+    EXPECT_TRUE(std::equal(stored_height.begin(), stored_height.end(), height.values().begin()));
+    // export.json and the tile as in memory; the streamed export says how it was made.
+    const nlohmann::json written = ReadJsonFile(streamed / "export.json");
+    EXPECT_EQ(written["normals"]["source"],
+              ReadJsonFile(whole / "export.json")["normals"]["source"]);
+    EXPECT_EQ(written["streamed"]["tile"], 64);
+    EXPECT_TRUE(fs::exists(streamed / "tile.gltf"));
+    // The height range (height.png's attributes; export.json's "height" key holds the image
+    // height, which shadows the height map's entry there): as in memory, within the tiling.
+    const auto range = [](const fs::path& png) {
+      const auto attributes = ReadImage(png).info.attributes;
+      return std::pair(std::stod(attributes.at("photomat:height_min")),
+                       std::stod(attributes.at("photomat:height_max")));
+    };
+    const auto [low, high] = range(streamed / "height.png");
+    const auto [whole_low, whole_high] = range(whole / "height.png");
+    EXPECT_NEAR(low, whole_low, 0.05 * (whole_high - whole_low)) << name;
+    EXPECT_NEAR(high, whole_high, 0.05 * (whole_high - whole_low)) << name;
+    // No scratch file is left.
+    for (const auto& entry : fs::directory_iterator(streamed)) {
+      EXPECT_FALSE(entry.path().filename().string().starts_with(".")) << entry.path();
+    }
+  }
+}
+
+TEST(StreamedExportTest, PbrAndFrankotChellappaAreRefusedWithTheReason) {
+  testing::TempDir dir;
+  Image maps(3, 4, MicrofacetShading().MapNames());
+  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
+    const float values[] = {0.5f, 0.4f, 0.3f, 0.3f, 0.05f, 0.1f, 0.0f, 0.995f};
+    for (int c = 0; c < 8; ++c) maps.pixel(p)[c] = values[c];
+  }
+  SaveRepresentation(dir / "pbr.exr",
+                     Representation("pbr", maps, std::make_shared<MicrofacetShading>()));
+  StackBandReader pbr(dir / "pbr.exr");
+  EXPECT_THAT([&] { ExportMapsStreamed(pbr, dir.path()); },
+              ThrowsMessage<Error>(HasSubstr("a pbr stack is exported in memory only")));
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  SaveRepresentation(dir / "g.exr", Fit(synthetic.set, Method::Parse("gradient")));
+  StackBandReader gradient(dir / "g.exr");
+  StreamedExportOptions options;
+  options.maps.height = HeightIntegrator::kFrankotChellappa;
+  EXPECT_THAT([&] { ExportMapsStreamed(gradient, dir.path(), options); },
+              ThrowsMessage<Error>(HasSubstr("tiled Poisson only")));
+}
+
+}  // namespace
+}  // namespace photomat

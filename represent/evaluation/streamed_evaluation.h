@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstddef>
+
+#include "capture/io/streamed_set.h"
+#include "core/progress.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/stack/stack_band_reader.h"
+
+namespace photomat {
+
+// Evaluation of a fitted stack against its photometric set, both read band by band (README,
+// "Streamed relighting and export"): Dong's eta of reconstruction (eq. 4.5.1, as
+// MethodEvaluation::eta_reconstruction) of a stack too large to hold with its set. Per image, the
+// sums that make e_k and sigma_k (count, sum of captured values and of their squares, sum of
+// squared differences, all in double) are accumulated over the bands, so memory follows the
+// band. The stack is what was fitted (it is not refitted): prediction (leave-one-out, held-out
+// lights) needs fits and stays in memory (EvaluateMethod).
+struct StreamedEvaluationOptions {
+  // Bytes the bands may hold (the set's band and its observation matrix, the stack's band and
+  // the relit values); 0: DefaultMemoryBudget(kMinimumEvaluationMemory).
+  std::size_t memory_bytes = 0;
+  // > 0: exactly this many rows per band (tests).
+  int band_rows = 0;
+  bool literal_thesis_rms = false;
+  Progress* progress = nullptr;  // one step per band
+};
+inline constexpr std::size_t kMinimumEvaluationMemory = std::size_t{16} << 20;
+
+// eta_reconstruction and reconstruction_per_image of `stack` against `set` (from row 0; the
+// mask selects the pixels). Throws Error naming the stack when its size or output channels differ
+// from the set's.
+MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
+                                       const StreamedEvaluationOptions& options = {});
+
+}  // namespace photomat

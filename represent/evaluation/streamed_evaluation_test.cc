@@ -1,0 +1,84 @@
+#include "represent/evaluation/streamed_evaluation.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "capture/io/capture_manifest.h"
+#include "capture/io/load_photometric_set.h"
+#include "core/error.h"
+#include "represent/fitting/fit.h"
+#include "represent/stack/map_stack.h"
+#include "tests/support/synthetic_sets.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+// A 40 x 36 capture with shadows and highlights and a mask whose first rows are empty (bands
+// without a pixel), as float EXRs.
+fs::path WriteCapture(const fs::path& folder) {
+  const auto synthetic = testing::ShadowedSpecularSet(40);
+  std::vector<Image> images;
+  for (const Image& image : synthetic.set.images()) images.emplace_back(image.Rows(0, 36));
+  PhotometricSet set(std::move(images), synthetic.set.lights());
+  Mask mask(40, 36, false);
+  for (int y = 6; y < 36; ++y) {
+    for (int x = 0; x < 40; ++x) mask.Set(x, y, (x - 20) * (x - 20) + (y - 20) * (y - 20) < 250);
+  }
+  set.set_mask(mask);
+  SaveSetOptions options;
+  options.sample_type = SampleType::kFloat;
+  SavePhotometricSet(folder, set, options);
+  return folder;
+}
+
+// The streamed eta of reconstruction equals the in-memory evaluation's (the same fit relit at every
+// captured light) to double rounding: the same squared differences, summed per band.
+TEST(StreamedEvaluationTest, BandsGiveTheInMemoryEtaOfReconstruction) {
+  testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  const LoadedSet loaded = LoadPhotometricSet(input);
+  const Observations observations(loaded.set);
+  EvaluationOptions in_memory;
+  in_memory.prediction = false;
+  for (const char* name : {"gradient", "ptm", "eigen6", "hsh9"}) {
+    const Method method = Method::Parse(name);
+    SaveRepresentation(dir / "stack.exr", Fit(loaded.set, method));
+    const MethodEvaluation whole =
+        EvaluateMethod(loaded.set, observations, method, nullptr, in_memory);
+    StreamedSet set = OpenStreamedSet(input);
+    StackBandReader stack(dir / "stack.exr");
+    StreamedEvaluationOptions options;
+    options.band_rows = 5;
+    const MethodEvaluation streamed = EvaluateStackStreamed(set, stack, options);
+    EXPECT_EQ(streamed.method.Name(), name);
+    EXPECT_NEAR(streamed.eta_reconstruction, whole.eta_reconstruction,
+                1e-9 * whole.eta_reconstruction)
+        << name;
+    ASSERT_EQ(streamed.reconstruction_per_image.size(), whole.reconstruction_per_image.size());
+    for (std::size_t k = 0; k < whole.reconstruction_per_image.size(); ++k) {
+      EXPECT_NEAR(streamed.reconstruction_per_image[k], whole.reconstruction_per_image[k],
+                  1e-9 * whole.reconstruction_per_image[k])
+          << name << " image " << k;
+    }
+  }
+}
+
+TEST(StreamedEvaluationTest, AStackOfAnotherSizeIsRefused) {
+  testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  const auto other = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  SaveRepresentation(dir / "small.exr", Fit(other.set, Method::Parse("gradient")));
+  StreamedSet set = OpenStreamedSet(input);
+  StackBandReader stack(dir / "small.exr");
+  EXPECT_THAT([&] { EvaluateStackStreamed(set, stack); },
+              ThrowsMessage<Error>(HasSubstr("small.exr: a 16x16 stack of 3 channels cannot be "
+                                             "evaluated against")));
+}
+
+}  // namespace
+}  // namespace photomat
