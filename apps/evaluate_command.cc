@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 
 #include "apps/cli_main.h"
@@ -64,6 +65,7 @@ void AddEvaluateCommand(CLI::App& app) {
     LightProfileCli profile;
     std::filesystem::path stack;
     std::size_t memory_mb = 0;
+    PbrFitOptions pbr;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "evaluate");
@@ -121,6 +123,7 @@ void AddEvaluateCommand(CLI::App& app) {
                       fmt::format("With --stack: memory in MB for the bands (default: half the "
                                   "physical memory or of this process's memory limits, here {} MB)",
                                   DefaultMemoryBudget(kMinimumEvaluationMemory) >> 20));
+  AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
       // A fitted stack against its set, streamed (README, "Streamed relighting and export").
@@ -151,7 +154,11 @@ void AddEvaluateCommand(CLI::App& app) {
     ApplyLightProfileOptions(options->profile, methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
-    const RobustInput input = options->robust
+    // pbr is fitted as `fit --method pbr` fits it, robustly (its start, the measured masks and
+    // the --pbr-* options), with or without --robust.
+    const bool pbr = std::any_of(methods.begin(), methods.end(),
+                                 [](const Method& m) { return m.kind == Method::Kind::kPbr; });
+    const RobustInput input = options->robust || pbr
                                   ? LoadSetForRobustFit(options->input, load)
                                   : RobustInput{LoadSetForCommand(options->input, load), {}};
     const LoadedSet& loaded = input.loaded;
@@ -193,8 +200,13 @@ void AddEvaluateCommand(CLI::App& app) {
     }
     std::vector<MethodEvaluation> results;
     for (const Method& method : methods) {
-      results.push_back(
-          EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr, evaluation));
+      EvaluationOptions method_evaluation = evaluation;
+      if (method.kind == Method::Kind::kPbr) {
+        method_evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
+        method_evaluation.robust->pbr = options->pbr;
+      }
+      results.push_back(EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr,
+                                       method_evaluation));
     }
     fmt::print("{} images, {} pixels{}\n{}", loaded.set.size(), observations.pixels(),
                truth ? fmt::format(", ground truth {}", truth_path->string()) : "",

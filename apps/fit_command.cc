@@ -108,6 +108,7 @@ void AddFitCommand(CLI::App& app) {
     fmt::print("streamed in bands of {} of {} rows, {} pass(es) over the images\n",
                report.band_rows, set.height(), report.passes);
     if (report.robust_summary) fmt::print("{}\n", DescribeRobustFit(*report.robust_summary));
+    if (report.pbr_summary) fmt::print("pbr summary: {}\n", report.pbr_summary->ToJson().dump());
     std::map<std::string, std::string> stacks;
     for (std::size_t i = 0; i < methods.size(); ++i) {
       stacks[methods[i].Name()] = paths[i].filename().string();

@@ -75,34 +75,69 @@ struct MicrofacetDerivatives {
   double specular_normal[3] = {};   // d specular / d normal
 };
 
-inline MicrofacetDerivatives MicrofacetRadianceDerivatives(const double* normal,
-                                                           const double* light, double roughness,
-                                                           double f0) {
+// The terms of MicrofacetRadiance that depend on the light alone (the view is fixed at +z): a fit
+// evaluates the same lights at many parameters, so it computes them once per light.
+struct MicrofacetLight {
+  double direction[3] = {0.0, 0.0, 1.0};  // unit, towards the light
+  double halfway[3] = {0.0, 0.0, 1.0};    // h = (l + v) / |l + v|
+  double schlick = 0.0;                   // Schlick's (1 - v.h)^5
+
+  MicrofacetLight() = default;
+  explicit MicrofacetLight(const double* light) {
+    const double hz = light[2] + 1.0;
+    const double h_norm = std::sqrt(light[0] * light[0] + light[1] * light[1] + hz * hz);
+    for (int k = 0; k < 3; ++k) direction[k] = light[k];
+    halfway[0] = light[0] / h_norm;
+    halfway[1] = light[1] / h_norm;
+    halfway[2] = hz / h_norm;
+    const double m = 1.0 - halfway[2];
+    schlick = m * m * m * m * m;
+  }
+};
+
+// The terms that depend on the surface alone (normal, roughness, F0), once per evaluation of all
+// of a pixel's lights.
+struct MicrofacetSurface {
+  const double* normal;  // unit
+  double roughness, f0;
+  double alpha2;     // alpha^2 = roughness^4
+  double view_term;  // sqrt((n.v)^2 (1 - alpha^2) + alpha^2), V's term of the view
+
+  MicrofacetSurface(const double* unit_normal, double perceptual_roughness, double grey_f0)
+      : normal(unit_normal), roughness(perceptual_roughness), f0(grey_f0) {
+    alpha2 = roughness * roughness * roughness * roughness;
+    view_term = std::sqrt(normal[2] * normal[2] * (1.0 - alpha2) + alpha2);
+  }
+};
+
+// The response of `surface` to `light`, with its derivatives only when `with_derivatives` (a
+// trial step's cost needs the value alone).
+inline MicrofacetDerivatives MicrofacetRadianceDerivatives(const MicrofacetSurface& surface,
+                                                           const MicrofacetLight& light,
+                                                           bool with_derivatives = true) {
   MicrofacetDerivatives out;
-  const double n_dot_l = normal[0] * light[0] + normal[1] * light[1] + normal[2] * light[2];
+  const double* normal = surface.normal;
+  const double* l = light.direction;
+  const double* h = light.halfway;
+  const double n_dot_l = normal[0] * l[0] + normal[1] * l[1] + normal[2] * l[2];
   const double n_dot_v = normal[2];
   if (!(n_dot_l > 0.0) || !(n_dot_v > 0.0)) {
     out.value = {0.0, 0.0};
     return out;
   }
-  const double hx = light[0], hy = light[1], hz = light[2] + 1.0;
-  const double h_norm = std::sqrt(hx * hx + hy * hy + hz * hz);
-  const double h[3] = {hx / h_norm, hy / h_norm, hz / h_norm};
   const double n_dot_h = normal[0] * h[0] + normal[1] * h[1] + normal[2] * h[2];
-  const double v_dot_h = h[2];
-
-  const double alpha2 = roughness * roughness * roughness * roughness;
+  const double alpha2 = surface.alpha2;
   const double d_denominator = n_dot_h * n_dot_h * (alpha2 - 1.0) + 1.0;
-  const double distribution = alpha2 / (std::numbers::pi * d_denominator * d_denominator);
-  const double a = std::sqrt(n_dot_v * n_dot_v * (1.0 - alpha2) + alpha2);
+  const double pi = std::numbers::pi;
+  const double distribution = alpha2 / (pi * d_denominator * d_denominator);
+  const double a = surface.view_term;
   const double b = std::sqrt(n_dot_l * n_dot_l * (1.0 - alpha2) + alpha2);
   const double q = n_dot_l * a + n_dot_v * b;
   const double visibility = 0.5 / q;
-  const double m = 1.0 - v_dot_h;
-  const double m5 = m * m * m * m * m;
-  const double fresnel = f0 + (1.0 - f0) * m5;
-  const double pi = std::numbers::pi;
+  const double m5 = light.schlick;
+  const double fresnel = surface.f0 + (1.0 - surface.f0) * m5;
   out.value = {(1.0 - fresnel) * n_dot_l, pi * fresnel * distribution * visibility * n_dot_l};
+  if (!with_derivatives) return out;
 
   // F depends on F0 only (v and h are fixed by the light); D and V on alpha^2 and the normal.
   const double fresnel_f0 = 1.0 - m5;
@@ -119,20 +154,29 @@ inline MicrofacetDerivatives MicrofacetRadianceDerivatives(const double* normal,
   const double q_n_dot_l = a + n_dot_v * n_dot_l * (1.0 - alpha2) / b;
   const double q_n_dot_v = n_dot_l * n_dot_v * (1.0 - alpha2) / a + b;
   const double visibility_alpha2 = -visibility / q * q_alpha2;
+  const double roughness = surface.roughness;
   const double alpha2_roughness = 4.0 * roughness * roughness * roughness;
   out.specular_roughness = pi * fresnel * n_dot_l *
                            (distribution_alpha2 * visibility + distribution * visibility_alpha2) *
                            alpha2_roughness;
   for (int k = 0; k < 3; ++k) {
     const double v_k = k == 2 ? 1.0 : 0.0;  // d n.v / d n_k
-    const double visibility_k = -visibility / q * (q_n_dot_l * light[k] + q_n_dot_v * v_k);
-    out.diffuse_normal[k] = (1.0 - fresnel) * light[k];
+    const double visibility_k = -visibility / q * (q_n_dot_l * l[k] + q_n_dot_v * v_k);
+    out.diffuse_normal[k] = (1.0 - fresnel) * l[k];
     out.specular_normal[k] =
         pi * fresnel *
         (distribution_n_dot_h * h[k] * visibility * n_dot_l +
-         distribution * visibility_k * n_dot_l + distribution * visibility * light[k]);
+         distribution * visibility_k * n_dot_l + distribution * visibility * l[k]);
   }
   return out;
+}
+
+// The same for one `normal` (unit), `light` (unit), roughness and F0.
+inline MicrofacetDerivatives MicrofacetRadianceDerivatives(const double* normal,
+                                                           const double* light, double roughness,
+                                                           double f0) {
+  return MicrofacetRadianceDerivatives(MicrofacetSurface(normal, roughness, f0),
+                                       MicrofacetLight(light));
 }
 
 }  // namespace photomat

@@ -17,6 +17,7 @@
 
 #include "core/error.h"
 #include "core/microfacet_brdf.h"
+#include "represent/fitting/pbr_fit_summary.h"
 #include "represent/fitting/pbr_pixel_cost.h"
 #include "represent/model/shading.h"
 
@@ -60,17 +61,27 @@ constexpr std::array<double, 10> kGridF0 = {0.0, 0.01, 0.02, 0.04, 0.07, 0.12, 0
 void GridStart(const PbrPixelData& data, const PbrFitOptions& options, double loss_scale,
                PixelParameters& p) {
   const std::size_t n = data.lights.size();
-  std::vector<double> diffuse(n), specular(n);
+  // Per light, n.l and the specular at F0 = 1 (pi D V n.l: the roughness's alone); Schlick's F is
+  // linear in F0, so each F0 of the grid costs only a multiply-add per light.
+  std::vector<double> n_dot_l(n), unit_specular(n), diffuse(n), specular(n);
+  const double squared_scale = loss_scale * loss_scale;
   double best = std::numeric_limits<double>::infinity();
   PixelParameters chosen = p;
   for (double grid_roughness : kGridRoughness) {
     const double roughness = std::max(grid_roughness, options.min_roughness);
+    const MicrofacetSurface surface(p.normal.data(), roughness, 1.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const MicrofacetDerivatives r = MicrofacetRadianceDerivatives(surface, data.lights[i], false);
+      const double* l = data.lights[i].direction;
+      const double cosine = p.normal[0] * l[0] + p.normal[1] * l[1] + p.normal[2] * l[2];
+      n_dot_l[i] = cosine > 0.0 && p.normal[2] > 0.0 ? cosine : 0.0;  // as MicrofacetRadiance
+      unit_specular[i] = r.value.specular;
+    }
     for (double f0 : kGridF0) {
       for (std::size_t i = 0; i < n; ++i) {
-        const MicrofacetResponse<double> r =
-            MicrofacetRadiance(p.normal.data(), data.lights[i].data(), roughness, f0);
-        diffuse[i] = r.diffuse;
-        specular[i] = r.specular;
+        const double fresnel = f0 + (1.0 - f0) * data.lights[i].schlick;
+        diffuse[i] = (1.0 - fresnel) * n_dot_l[i];
+        specular[i] = fresnel * unit_specular[i];
       }
       PixelParameters candidate = p;
       candidate.roughness = roughness;
@@ -90,8 +101,7 @@ void GridStart(const PbrPixelData& data, const PbrFitOptions& options, double lo
               diffuse[i] * candidate.base[c] + specular[i] - data.observed[i][c];
           squared += residual * residual;
         }
-        const double shrink = CauchyShrink(squared, loss_scale * loss_scale);
-        cost += squared * shrink * shrink;  // Cauchy's rho
+        cost += squared_scale * std::log1p(squared / squared_scale);  // Cauchy's rho
       }
       if (cost < best) {
         best = cost;
@@ -250,11 +260,12 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
   const Eigen::MatrixXf& matrix = observations.matrix();
   const auto shading = std::make_shared<MicrofacetShading>();
   Image maps(observations.width(), observations.height(), shading->MapNames());
-  struct Tally {
-    std::size_t sampled = 0, unsampled = 0, regularised = 0;
-    double cost = 0.0;
-  };
-  tbb::enumerable_thread_specific<Tally> tallies;
+  tbb::enumerable_thread_specific<PbrFitSummary> tallies;
+  std::vector<MicrofacetLight> light_terms;  // once per image, not per pixel
+  for (const LightDirection& light : lights) {
+    const Eigen::Vector3d l = light.vector();
+    light_terms.emplace_back(l.data());
+  }
   NullProgress no_progress;
   Progress& bar = OrNull(progress, no_progress);
   bar.Start("pbr fit", static_cast<std::size_t>((m + kPixelGrain - 1) / kPixelGrain));
@@ -262,7 +273,7 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
                                                                                  blocked_range<
                                                                                      Eigen::Index>&
                                                                                      range) {
-    Tally& tally = tallies.local();
+    PbrFitSummary& tally = tallies.local();
     PbrPixelData data;
     for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
       const std::size_t pixel = observations.pixel_indices()[k];
@@ -270,8 +281,7 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
       data.observed.clear();
       for (int image : selected) {
         if (!measured.empty() && !measured[image][pixel]) continue;
-        const Eigen::Vector3d l = lights[image].vector();
-        data.lights.push_back({l.x(), l.y(), l.z()});
+        data.lights.push_back(light_terms[image]);
         data.observed.push_back({matrix(k, image), matrix(m + k, image), matrix(2 * m + k, image)});
       }
       PixelParameters start;
@@ -295,12 +305,12 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
       if (data.lights.size() >= 3) cost = SolvePixel(data, options, brightness, 0.0, fitted);
       const Eigen::Vector3d normal(fitted.normal[0], fitted.normal[1], fitted.normal[2]);
       const bool sampled = std::any_of(data.lights.begin(), data.lights.end(), [&](auto& l) {
-        return InSpecularLobe(normal, Eigen::Vector3d(l[0], l[1], l[2]), fitted.roughness);
+        return InSpecularLobe(normal, Eigen::Vector3d(l.direction), fitted.roughness);
       });
       if (sampled) {
-        ++tally.sampled;
+        ++tally.lobe_sampled;
       } else {
-        ++tally.unsampled;
+        ++tally.lobe_unsampled;
         if (options.prior_weight > 0.0 && data.lights.size() >= 3) {
           fitted = start;
           const double weight = options.prior_weight * brightness *
@@ -309,7 +319,7 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
           ++tally.regularised;
         }
       }
-      tally.cost += cost;
+      tally.total_cost += cost;
       const auto out = maps.pixel(pixel);
       for (int c = 0; c < 3; ++c)
         out[MicrofacetShading::kBase + c] = static_cast<float>(fitted.base[c]);
@@ -321,20 +331,12 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
     bar.Advance();
   });
   bar.Finish();
-  Tally total;
-  for (const Tally& t : tallies) {
-    total.sampled += t.sampled;
-    total.unsampled += t.unsampled;
-    total.regularised += t.regularised;
-    total.cost += t.cost;
-  }
+  PbrFitSummary total;
+  for (const PbrFitSummary& t : tallies) total.Add(t);
+  total.pixels = static_cast<std::size_t>(m);  // pixels with fewer than 3 samples too
   if (!details.is_object()) details = nlohmann::json::object();
   details["pbr"] = options.ToJson();
-  details["pbr_summary"] = {{"pixels", m},
-                            {"lobe_sampled", total.sampled},
-                            {"lobe_unsampled", total.unsampled},
-                            {"regularised", total.regularised},
-                            {"mean_final_cost", total.cost / std::max<double>(1.0, m)}};
+  details["pbr_summary"] = total.ToJson();
   return Representation("pbr", std::move(maps), shading, std::move(details));
 }
 

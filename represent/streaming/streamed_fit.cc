@@ -374,6 +374,11 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
         return FitObservations(*band.observations, band.set->lights(), method, streamer.all(),
                                source);
       }();
+      if (const auto found = representation.details().find("pbr_summary");
+          found != representation.details().end()) {
+        if (!report.pbr_summary) report.pbr_summary.emplace();
+        report.pbr_summary->Add(PbrFitSummary::FromJson(*found));
+      }
       outputs[i]->Write(representation);
     }
   });

@@ -9,6 +9,7 @@
 #include "capture/io/streamed_set.h"
 #include "core/image_io.h"
 #include "core/progress.h"
+#include "represent/fitting/pbr_fit_summary.h"
 #include "represent/fitting/robust_fit.h"
 #include "represent/model/method.h"
 #include "represent/stack/map_stack.h"
@@ -55,6 +56,8 @@ struct StreamedFitReport {
   // written before the data, so its details hold no data summaries ("robust_summary",
   // "pbr_summary"): the summary is here instead.
   std::optional<RobustFitSummary> robust_summary;
+  // A pbr fit's summary over the whole set: its bands' summed.
+  std::optional<PbrFitSummary> pbr_summary;
   std::vector<std::size_t> saturated_pixels;  // per image, clipped pixels
 };
 

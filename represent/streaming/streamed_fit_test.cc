@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <numeric>
+#include <string>
 
 #include "calibrate/radiometry/exposure.h"
 #include "capture/io/capture_manifest.h"
@@ -16,6 +17,7 @@
 #include "core/error.h"
 #include "core/memory_limits.h"
 #include "represent/fitting/fit.h"
+#include "represent/fitting/pbr_fit_summary.h"
 #include "represent/fitting/robust_fit.h"
 #include "represent/stack/map_stack.h"
 #include "tests/support/synthetic_sets.h"
@@ -135,6 +137,45 @@ TEST(StreamedFitTest, BandsOfThreeRowsEqualTheInMemoryFit) {
 
 TEST(StreamedFitTest, RobustBandsOfThreeRowsEqualTheInMemoryFit) {
   ExpectStreamedEqualsInMemory(true, 1e-6);
+}
+
+// pbr streams as the other robust fits do (every pixel solved alone from the band's robust
+// start), and the report holds the whole set's pbr summary: the bands' summed.
+TEST(StreamedFitTest, PbrBandsSumToTheWholeSetsSummary) {
+  const testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  const std::vector<Method> pbr = {Method::Parse("pbr")};
+  StreamedSet set = OpenStreamedSet(input);
+  StreamedFitOptions options;
+  options.band_rows = 3;
+  options.robust = true;
+  const std::vector<fs::path> paths = {dir / "pbr.exr"};
+  StreamedFitReport report;
+  try {
+    report = FitStreamed(set, pbr, paths, options);
+  } catch (const Error& error) {
+    // A build without Ceres (PHOTOMAT_WITH_CERES=OFF) has no pbr fit, and says so.
+    if (std::string(error.what()).find("built without") != std::string::npos) {
+      GTEST_SKIP() << error.what();
+    }
+    throw;
+  }
+  const Representation memory = FitInMemory(input, pbr[0], true);
+  const PbrFitSummary whole = PbrFitSummary::FromJson(memory.details().at("pbr_summary"));
+  ASSERT_TRUE(report.pbr_summary);
+  const PbrFitSummary& banded = *report.pbr_summary;
+  std::printf("pbr: %zu pixels, %zu lobe sampled; mean cost in bands %.9g, in memory %.9g\n",
+              banded.pixels, banded.lobe_sampled, banded.total_cost / banded.pixels,
+              whole.total_cost / whole.pixels);
+  EXPECT_GT(whole.pixels, 0u);
+  EXPECT_EQ(banded.pixels, whole.pixels);
+  EXPECT_EQ(banded.lobe_sampled, whole.lobe_sampled);
+  EXPECT_EQ(banded.lobe_unsampled, whole.lobe_unsampled);
+  EXPECT_EQ(banded.regularised, whole.regularised);
+  EXPECT_NEAR(banded.total_cost, whole.total_cost, 1e-9 * whole.total_cost);
+  EXPECT_LE(testing::LargestDifferenceOverLargestValue(
+                LoadRepresentation(paths[0]).representation.maps(), memory.maps()),
+            1e-6);
 }
 
 // The streamed stack records how each image was decoded, as the in-memory load decides it
