@@ -502,6 +502,7 @@ RelightWebStack PolynomialFromStack(const LoadedStack& loaded, const RelightWebO
   stack.width = encoded.width();
   stack.height = encoded.height();
   stack.quality = options.quality;
+  for (const auto& light : loaded.provenance.capture_lights) stack.lights.push_back(light.vector());
   QuantisePlanes(values, stack);
   return stack;
 }
