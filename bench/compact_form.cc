@@ -139,6 +139,13 @@ double Psnr(const Representation& r, const HeldOut& held_out, bool encoded) {
   return total / held_out.lights.size();
 }
 
+// A web folder's PSNR, decoded as its colour profile says (relight-cli's default: linear codes).
+double PsnrOfFolder(const fs::path& folder, const HeldOut& held_out) {
+  const LoadedStack stack = LoadStackFile(folder);
+  return Psnr(stack.representation, held_out,
+              StackValueEncoding(stack.provenance) == ColourSpace::kSrgb);
+}
+
 int Run(int argc, char** argv) {
   const Arguments arguments = Parse(argc, argv);
   const LoadedSet loaded = LoadPhotometricSet(arguments.set);
@@ -206,10 +213,10 @@ int Run(int argc, char** argv) {
     const fs::path from_stack = work / (basis + "-stack");
     WriteRelightWeb(from_stack,
                     RelightWebFromStack({fit, StackProvenance(train_lights, "linear")}, options));
-    const double stack_db = Psnr(LoadStackFile(from_stack).representation, held_out, true);
+    const double stack_db = PsnrOfFolder(from_stack, held_out);
     const fs::path from_photos = work / (basis + "-photos");
     WriteRelightWeb(from_photos, RelightWebFromSet(train, options));
-    const double photos_db = Psnr(LoadStackFile(from_photos).representation, held_out, true);
+    const double photos_db = PsnrOfFolder(from_photos, held_out);
     std::string theirs = "-";
     std::string ratio = "-";
     if (photos) {
@@ -218,7 +225,7 @@ int Run(int argc, char** argv) {
           "{} {} {} {} > {} 2>&1", arguments.relight_cli->string(), RelightCliArguments(basis),
           photos->string(), folder.string(), (work / "relight-cli.log").string());
       if (std::system(command.c_str()) != 0) throw Error("relight-cli failed: " + command);
-      const double db = Psnr(LoadStackFile(folder).representation, held_out, true);
+      const double db = PsnrOfFolder(folder, held_out);
       const auto bytes = FolderBytes(folder, false);
       theirs = fmt::format("{:.2f}, {:.0f} (+ {:.0f})", db, bytes / 1024.0,
                            FolderBytes(folder, true) / 1024.0);

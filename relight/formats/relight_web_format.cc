@@ -183,6 +183,15 @@ RelightWebStack ReadRelightWeb(const fs::path& folder) {
     json["format"].Fail("only \"jpg\" planes are read");
   }
   if (json.Has("quality")) stack.quality = json["quality"].Integer();
+  if (json.Has("colorprofile")) {
+    const std::string profile = json["colorprofile"].String();
+    if (profile == "RGB") {
+      stack.linear = true;
+    } else if (profile != "sRGB") {
+      json["colorprofile"].Fail(fmt::format(
+          "colour profile \"{}\" is not one photomat reads (RGB: linear, sRGB)", profile));
+    }
+  }
   stack.basis = ParseBasis(json["type"]);
   stack.colour_space = ParseColourSpace(json["colorspace"]);
   const int planes = json["nplanes"].Integer();
@@ -248,6 +257,7 @@ void WriteRelightWeb(const fs::path& folder, const RelightWebStack& stack) {
   }
   info["nplanes"] = stack.PlaneCount();
   info["quality"] = stack.quality;
+  info["colorprofile"] = stack.linear ? "RGB" : "sRGB";
   if (stack.colour_space == RelightWebColourSpace::kMrgb) info["basis"] = stack.basis_values;
   nlohmann::ordered_json material;
   if (stack.colour_space == RelightWebColourSpace::kMrgb) material["range"] = stack.range;

@@ -31,13 +31,14 @@ namespace photomat {
 //        0.001 or less dropped), bilinear on a resolution^2 octahedral grid of the hemisphere).
 //
 // Values (IMPLEMENTER CHOICE, as for .ptm and .rti files, relight/formats/interchange.h): the
-// codes are sRGB-encoded display values, so a folder reads as a representation of sRGB-encoded
-// values in [0, 1] (codes / 255) and is written from a fit in the encoded domain.
+// codes are sRGB-encoded display values unless "colorprofile" says "RGB" (relight-cli's default:
+// linear codes), so a folder reads as a representation of values in [0, 1] (codes / 255) with the
+// stack colour space "srgb" or "linear", and is written from a fit in the encoded domain.
 //
 // The compact stack form (issue 19) IS this format (IMPLEMENTER CHOICE): PCA-compressed (rbf,
 // bilinear) or polynomial (ptm, hsh) planes quantised to 8 bits with a per-plane scale and bias,
-// which relight, OpenLIME and photomat read directly; `photomat export --relight-web DIR` and
-// `photomat fit --compact DIR` write it.
+// which relight, OpenLIME and photomat read directly; `photomat export --relight-web DIR` writes
+// it (there is no separate `fit --compact`: fit, then export).
 
 enum class RelightWebBasis { kPtm, kHsh, kRbf, kBilinear };
 enum class RelightWebColourSpace { kRgb, kLrgb, kMrgb };
@@ -61,6 +62,11 @@ struct RelightWebStack {
   std::vector<Eigen::Vector3d> lights;  // rbf: the interpolation nodes; others: optional
   double sigma = 0.125;                 // rbf
   int resolution = 8;                   // bilinear
+  // "colorprofile": what the codes encode. relight-cli writes "RGB" (linear codes, its default),
+  // "sRGB" or "P3"; files without it (older relight, OpenLIME's samples) hold sRGB display codes.
+  // photomat writes "sRGB" and reads "RGB" as linear, "sRGB" or none as sRGB-encoded; "P3" is
+  // rejected (other primaries).
+  bool linear = false;
 
   int PlaneCount() const { return static_cast<int>(planes.size()); }
   int Dimensions() const;  // rbf: lights, bilinear: resolution^2, else 0

@@ -233,6 +233,9 @@ TEST(RelightWebFormatTest, MalformedFoldersAreRejectedWithTheFault) {
   WriteInfo(folder, R"({"width": 4, "height": 4, "type": "rbf", "colorspace": "mycc",
     "nplanes": 9})");
   EXPECT_THAT([&] { ReadRelightWeb(folder); }, ThrowsMessage<Error>(HasSubstr("\"mycc\"")));
+  WriteInfo(folder, R"({"width": 4, "height": 4, "type": "ptm", "colorspace": "rgb",
+    "nplanes": 18, "colorprofile": "P3"})");
+  EXPECT_THAT([&] { ReadRelightWeb(folder); }, ThrowsMessage<Error>(HasSubstr("\"P3\"")));
   WriteInfo(folder, R"({"width": 4, "height": 4, "type": "hsh", "colorspace": "rgb",
     "nplanes": 18, "materials": [{"scale": [], "bias": []}]})");
   EXPECT_THAT([&] { ReadRelightWeb(folder); }, ThrowsMessage<Error>(HasSubstr("12 or 27")));

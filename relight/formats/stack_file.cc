@@ -42,7 +42,8 @@ LoadedStack LoadRelightWebFolder(const fs::path& path, const std::optional<std::
                 fmt::format("holds a {} representation, not {}", representation.method(), *method));
   }
   StackProvenance provenance;
-  provenance.colour_space = std::string(ToString(ColourSpace::kSrgb));
+  provenance.colour_space =
+      std::string(ToString(stack.linear ? ColourSpace::kLinear : ColourSpace::kSrgb));
   provenance.source = path.string();
   for (const auto& light : stack.lights) {
     provenance.capture_lights.push_back(LightDirection::FromVector(light));
