@@ -15,7 +15,8 @@ namespace photomat {
 // True for a .ptm or .rti path.
 bool IsInterchangeFile(const std::filesystem::path& path);
 // True if `path` is something LoadStackFile reads: a .exr, .ptm or .rti file, a folder with a
-// stacks.json, or a relight web folder (info.json + plane_N.jpg, relight_web_format.h). (Anything else is a photometric set or nothing.)
+// stacks.json, or a relight web folder (info.json + plane_N.jpg, relight_web_format.h). (Anything
+// else is a photometric set or nothing.)
 bool IsStackInput(const std::filesystem::path& path);
 
 // Loads a map stack (`method` picks one from a fit folder), a .ptm, an .rti or a relight web
