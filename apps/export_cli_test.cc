@@ -11,7 +11,9 @@
 #include "core/json_file.h"
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/ptm_jpeg_test_codings.h"
+#include "relight/formats/relight_web_format.h"
 #include "relight/formats/rti_file.h"
+#include "relight/formats/stack_file.h"
 #include "represent/stack/map_stack.h"
 #include "tests/support/test_support.h"
 
@@ -109,6 +111,46 @@ TEST(ExportCliTest, PtmAndRtiFilesFromASetRelightDirectly) {
   const RunResult maps = RunPhotomat("export " + ptm + " --out " + (dir / "maps").string());
   ASSERT_EQ(maps.exit_code, 0) << maps.output;
   EXPECT_THAT(maps.output, HasSubstr("PTM luminance maximum"));
+}
+
+// `export --relight-web DIR` writes relight's web format (the compact stack form) from a set and
+// from a stack, with the input's basis; `relight DIR` relights it as the folder's own
+// representation does (the 8-bit PNG within the rounding to codes), and `export DIR --viewer`
+// shows it. A second export replaces the folder; a folder that is not a web folder is kept.
+TEST(ExportCliTest, RelightWebFoldersAreWrittenAndReadWhereverStacksAre) {
+  TempDir dir;
+  const std::string capture = Generate(dir);
+  const std::string web = (dir / "web").string();
+  RunResult run = RunPhotomat("export " + capture + " --relight-web " + web);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("ptm rgb, 18 planes"));
+  EXPECT_TRUE(fs::exists(dir / "web" / "plane_5.jpg"));
+  run = RunPhotomat("export " + capture + " --relight-web " + web + " --relight-basis rbf");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("rbf mrgb, 9 planes"));
+  EXPECT_FALSE(fs::exists(dir / "web" / "plane_5.jpg"));  // replaced whole
+  const fs::path png = dir / "relit.png";
+  run = RunPhotomat("relight " + web + " --light 40,30 --format png8 --out " + png.string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const Image expected =
+      LoadStackFile(web).representation.Relight(LightDirection::FromSlantTilt(40, 30));
+  ImageReadOptions codes;
+  codes.colour_space = ColourSpace::kLinear;
+  const Image image = ReadImage(png, codes).image;
+  ASSERT_TRUE(image.SameShape(expected));
+  double worst = 0.0;
+  for (std::size_t v = 0; v < image.values().size(); ++v) {
+    worst = std::max(
+        worst, 255.0 * std::abs(image.values()[v] - std::clamp(expected.values()[v], 0.0f, 1.0f)));
+  }
+  EXPECT_LE(worst, 0.5 + 1e-3);
+  run = RunPhotomat("export " + web + " --viewer " + (dir / "viewer").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_TRUE(fs::exists(dir / "viewer" / "viewer.json"));
+  testing::WriteFile(dir / "other" / "notes.txt", "keep");
+  run = RunPhotomat("export " + capture + " --relight-web " + (dir / "other").string());
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(fs::exists(dir / "other" / "notes.txt"));
 }
 
 // Must show: a JPEG_LRGB file predicted as HP's files are (inverted references, a reference

@@ -14,6 +14,7 @@
 #include "relight/export/export.h"
 #include "relight/formats/interchange.h"
 #include "relight/formats/ptm_file.h"
+#include "relight/formats/relight_web_format.h"
 #include "relight/formats/rti_file.h"
 #include "relight/formats/stack_file.h"
 #include "relight/web/published_name.h"
@@ -41,7 +42,54 @@ struct ExportCommandOptions {
   std::filesystem::path viewer;
   std::size_t memory_mb = 0;
   bool stream = false;
+  std::filesystem::path relight_web;
+  std::string relight_basis;
+  int relight_planes = 9;
+  int relight_quality = 95;
 };
+
+// relight's basis for --relight-web: --relight-basis, else the input's own (ptm, hsh4/9, rbf,
+// bilinear), else ptm.
+RelightWebOptions RelightWebOptionsFor(const ExportCommandOptions& options,
+                                       const std::string& input_method) {
+  RelightWebOptions web;
+  web.planes = options.relight_planes;
+  web.quality = options.relight_quality;
+  std::string basis = options.relight_basis;
+  if (basis.empty()) {
+    if (input_method.starts_with("hsh"))
+      basis = "hsh";
+    else if (input_method == "rbf" || input_method == "relight-rbf")
+      basis = "rbf";
+    else if (input_method == "bilinear" || input_method == "relight-bilinear")
+      basis = "bilinear";
+    else
+      basis = "ptm";
+  }
+  if (basis == "ptm")
+    web.basis = RelightWebBasis::kPtm;
+  else if (basis == "hsh")
+    web.basis = RelightWebBasis::kHsh;
+  else if (basis == "rbf")
+    web.basis = RelightWebBasis::kRbf;
+  else if (basis == "bilinear")
+    web.basis = RelightWebBasis::kBilinear;
+  else
+    throw Error(
+        fmt::format("--relight-basis: expected ptm, hsh, rbf or bilinear, not \"{}\"", basis));
+  if (options.hsh_terms != 0)
+    web.hsh_terms = options.hsh_terms;
+  else if (input_method == "hsh4")
+    web.hsh_terms = 4;
+  return web;
+}
+
+void PrintRelightWeb(const ExportCommandOptions& options, const RelightWebStack& web) {
+  WriteRelightWeb(options.relight_web, web);
+  fmt::print("wrote {} (relight web format: {} {}, {} planes, {}x{})\n",
+             options.relight_web.string(), ToString(web.basis), ToString(web.colour_space),
+             web.PlaneCount(), web.width, web.height);
+}
 
 // The .ptm method: what --ptm-format asks, else the input's own PTM form, else LRGB (PTMfitter's).
 Method PtmMethod(const ExportCommandOptions& options, const std::string& input_method,
@@ -169,7 +217,9 @@ void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedSt
 // Every stack of a fit folder (in photomat's method order), or the one `method` or the file names.
 std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
                                       const std::optional<std::string>& method) {
-  if (method || !std::filesystem::is_directory(input)) return {LoadStackFile(input, method)};
+  if (method || !std::filesystem::is_directory(input) || IsRelightWebFolder(input)) {
+    return {LoadStackFile(input, method)};
+  }
   const auto files = ReadFitManifest(input);
   std::vector<std::string> order;
   for (const Method& m : AllMethods()) {
@@ -184,15 +234,20 @@ std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
 }
 
 void RunExport(const ExportCommandOptions& options) {
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty()) {
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty() &&
+      options.relight_web.empty()) {
     throw Error(
-        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE and/or --viewer DIR");
+        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE, --relight-web DIR and/or "
+        "--viewer DIR");
   }
   const std::optional<std::string> method =
       options.method.empty() ? std::nullopt : std::optional(options.method);
   if (!options.viewer.empty() && IsStackInput(options.input)) {
     WriteViewer(options, ViewerStacks(options.input, method));
-    if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return;
+    if (options.out.empty() && options.ptm.empty() && options.rti.empty() &&
+        options.relight_web.empty()) {
+      return;
+    }
   }
   if (IsStackInput(options.input) && !IsInterchangeFile(options.input)) {
     const std::filesystem::path stack_path = ResolveStack(options.input, method);
@@ -209,6 +264,10 @@ void RunExport(const ExportCommandOptions& options) {
     const Representation& r = stack.representation;
     WriteInterchangeFiles(options, r.method(), r.output_channels(),
                           [&](const Method& target) { return ConvertToEncoded(stack, target); });
+    if (!options.relight_web.empty()) {
+      PrintRelightWeb(options,
+                      RelightWebFromStack(stack, RelightWebOptionsFor(options, r.method())));
+    }
     WriteMaps(options, stack);
     return;
   }
@@ -233,6 +292,9 @@ void RunExport(const ExportCommandOptions& options) {
   }
   WriteInterchangeFiles(options, "", loaded.set.channels(),
                         [&](const Method& target) { return FitEncoded(loaded.set, target); });
+  if (!options.relight_web.empty()) {
+    PrintRelightWeb(options, RelightWebFromSet(loaded.set, RelightWebOptionsFor(options, "")));
+  }
   if (options.out.empty()) return;
   const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
                                    loaded.encodings};
@@ -245,9 +307,10 @@ void AddExportCommand(CLI::App& app) {
   auto options = std::make_shared<ExportCommandOptions>();
   CLI::App* command = AddListedCommand(app, "export");
   command
-      ->add_option("input", options->input,
-                   "A map stack (.exr or fit folder), a .ptm or .rti file, or a photometric set "
-                   "(folder, .lp, manifest, DiLiGenT)")
+      ->add_option(
+          "input", options->input,
+          "A map stack (.exr or fit folder), a .ptm or .rti file, a relight web folder, or "
+          "a photometric set (folder, .lp, manifest, DiLiGenT)")
       ->required();
   command->add_option("--method", options->method,
                       "Which stack of a fit folder; for a photometric set, the method the maps "
@@ -273,6 +336,15 @@ void AddExportCommand(CLI::App& app) {
                       "or srgb; a file's own colour tags come first)");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "For a photometric set: do not divide by the light intensities it gives");
+  command->add_option("--relight-web", options->relight_web,
+                      "Also write relight's web format (info.json + plane_N.jpg; photomat's "
+                      "compact stack form) into this folder");
+  command->add_option("--relight-basis", options->relight_basis,
+                      "ptm, hsh, rbf or bilinear (default: the input's own, else ptm)");
+  command->add_option("--relight-planes", options->relight_planes,
+                      "rbf/bilinear: PCA planes (default 9)");
+  command->add_option("--relight-quality", options->relight_quality,
+                      "JPEG quality of the planes (default 95)");
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "
                       "folder (or --method's), or for a photometric set every method's fit");

@@ -40,8 +40,8 @@ void AddRelightCommand(CLI::App& app) {
   CLI::App* command = AddListedCommand(app, "relight");
   command
       ->add_option("stack", options->stack,
-                   "A map stack (.exr), a folder written by `photomat fit`, or a .ptm or .rti "
-                   "file")
+                   "A map stack (.exr), a folder written by `photomat fit`, a .ptm or .rti "
+                   "file, or a relight web folder (info.json + plane_N.jpg)")
       ->required();
   command->add_option("--method", options->method, "Which stack of a fit folder");
   auto* light = command->add_option("--light", options->light, "One light: SLANT,TILT in degrees");

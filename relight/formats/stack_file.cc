@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/text_parsing.h"
 #include "relight/formats/ptm_file.h"
+#include "relight/formats/relight_web_format.h"
 #include "relight/formats/rti_file.h"
 
 namespace photomat {
@@ -23,11 +24,39 @@ bool IsInterchangeFile(const fs::path& path) {
 
 bool IsStackInput(const fs::path& path) {
   std::error_code ec;
-  if (fs::is_directory(path, ec)) return fs::exists(path / kFitManifestName, ec);
+  if (fs::is_directory(path, ec)) {
+    return fs::exists(path / kFitManifestName, ec) || IsRelightWebFolder(path);
+  }
   return IsInterchangeFile(path) || LowerExtension(path) == ".exr";
 }
 
+namespace {
+
+// A relight web folder (relight/formats/relight_web_format.h): sRGB-encoded values; its lights,
+// when it lists them, are the capture's.
+LoadedStack LoadRelightWebFolder(const fs::path& path, const std::optional<std::string>& method) {
+  const RelightWebStack stack = ReadRelightWeb(path);
+  Representation representation = RepresentationFromRelightWeb(stack);
+  if (method && *method != representation.method()) {
+    throw Error(path,
+                fmt::format("holds a {} representation, not {}", representation.method(), *method));
+  }
+  StackProvenance provenance;
+  provenance.colour_space =
+      std::string(ToString(stack.linear ? ColourSpace::kLinear : ColourSpace::kSrgb));
+  provenance.source = path.string();
+  for (const auto& light : stack.lights) {
+    provenance.capture_lights.push_back(LightDirection::FromVector(light));
+  }
+  return {std::move(representation), std::move(provenance)};
+}
+
+}  // namespace
+
 LoadedStack LoadStackFile(const fs::path& path, const std::optional<std::string>& method) {
+  if (IsRelightWebFolder(path) && !fs::exists(path / kFitManifestName)) {
+    return LoadRelightWebFolder(path, method);
+  }
   if (!IsInterchangeFile(path)) return LoadRepresentation(ResolveStack(path, method));
   const bool ptm = LowerExtension(path) == ".ptm";
   Representation representation =

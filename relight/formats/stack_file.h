@@ -14,11 +14,13 @@ namespace photomat {
 
 // True for a .ptm or .rti path.
 bool IsInterchangeFile(const std::filesystem::path& path);
-// True if `path` is something LoadStackFile reads: a .exr, .ptm or .rti file, or a folder with a
-// stacks.json. (Anything else is a photometric set or nothing.)
+// True if `path` is something LoadStackFile reads: a .exr, .ptm or .rti file, a folder with a
+// stacks.json, or a relight web folder (info.json + plane_N.jpg, relight_web_format.h). (Anything
+// else is a photometric set or nothing.)
 bool IsStackInput(const std::filesystem::path& path);
 
-// Loads a map stack (`method` picks one from a fit folder), a .ptm or an .rti. Interchange files
+// Loads a map stack (`method` picks one from a fit folder), a .ptm, an .rti or a relight web
+// folder (colour space "srgb", its lights as capture lights). Interchange files
 // load with colour space "srgb" and their path as source; `method` must then be empty or name
 // what the file holds. Throws Error naming the file.
 LoadedStack LoadStackFile(const std::filesystem::path& path,

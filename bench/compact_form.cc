@@ -1,0 +1,264 @@
+// The compact stack form (relight's web format, issue 19) against the float stack and against
+// relight-cli's own folders: size and held-out-light PSNR. Every K-th light of the set is held
+// out; the rest are fitted (float stack: photomat's linear fit), exported (`RelightWebFromStack`,
+// and `RelightWebFromSet` from the photographs) and built by relight-cli from the same photographs
+// (8-bit sRGB JPEGs, quality 95, and an .lp file) when it is available. Every result is relit at
+// the held-out lights, decoded to linear, and compared with the photographs over the mask, the set
+// first scaled so that its largest value (over the mask) is 1, both clamped to [0, 1]: PSNR with
+// peak 1. Sizes are the folders' files (info.json and plane_N.jpg; relight-cli's extra
+// materials.png is counted separately).
+//
+//   compact_form [SET] [--every K] [--methods ptm,hsh,rbf,bilinear] [--relight-cli PATH]
+//
+// (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10; relight-cli from $PHOTOMAT_RELIGHT_CLI
+// or
+// ~/.cache/photomat-peers/relight-build.)
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "capture/io/load_photometric_set.h"
+#include "core/colour.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "relight/formats/interchange.h"
+#include "relight/formats/relight_web_format.h"
+#include "relight/formats/stack_file.h"
+#include "represent/fitting/fit.h"
+#include "represent/stack/map_stack.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Arguments {
+  fs::path set;
+  int every = 10;
+  std::vector<std::string> methods = {"ptm", "hsh", "rbf", "bilinear"};
+  std::optional<fs::path> relight_cli;
+};
+
+Arguments Parse(int argc, char** argv) {
+  Arguments arguments;
+  if (const char* data = std::getenv("PHOTOMAT_TEST_DATA")) {
+    arguments.set = fs::path(data) / "diligent" / "cat";
+  }
+  if (const char* cli = std::getenv("PHOTOMAT_RELIGHT_CLI"); cli && *cli) {
+    arguments.relight_cli = cli;
+  } else if (const char* home = std::getenv("HOME")) {
+    const fs::path cached =
+        fs::path(home) / ".cache/photomat-peers/relight-build/relight-cli/relight-cli";
+    if (fs::exists(cached)) arguments.relight_cli = cached;
+  }
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw Error(fmt::format("{} needs a value", a));
+      return argv[++i];
+    };
+    if (a == "--every") {
+      arguments.every = std::stoi(value());
+    } else if (a == "--methods") {
+      arguments.methods.clear();
+      std::string list = value();
+      for (std::size_t start = 0; start <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        arguments.methods.push_back(list.substr(start, comma - start));
+        start = comma + 1;
+      }
+    } else if (a == "--relight-cli") {
+      arguments.relight_cli = value();
+    } else {
+      arguments.set = a;
+    }
+  }
+  if (arguments.set.empty()) throw Error("no set given and PHOTOMAT_TEST_DATA is not set");
+  if (arguments.every < 2) throw Error("--every must be at least 2");
+  return arguments;
+}
+
+RelightWebBasis BasisNamed(const std::string& name) {
+  if (name == "ptm") return RelightWebBasis::kPtm;
+  if (name == "hsh") return RelightWebBasis::kHsh;
+  if (name == "rbf") return RelightWebBasis::kRbf;
+  if (name == "bilinear") return RelightWebBasis::kBilinear;
+  throw Error(fmt::format("unknown basis {}", name));
+}
+
+std::string FloatMethod(const std::string& basis) { return basis == "hsh" ? "hsh9" : basis; }
+
+std::string RelightCliArguments(const std::string& basis) {
+  if (basis == "ptm") return "-b ptm -p 18";
+  if (basis == "hsh") return "-b hsh -p 27";
+  return fmt::format("-b {} -p 9", basis);
+}
+
+std::uintmax_t FolderBytes(const fs::path& folder, bool materials) {
+  std::uintmax_t bytes = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const std::string name = entry.path().filename().string();
+    const bool web = name == "info.json" || (name.starts_with("plane_") && name.ends_with(".jpg"));
+    if (materials ? name == "materials.png" : web) bytes += entry.file_size();
+  }
+  return bytes;
+}
+
+struct HeldOut {
+  const PhotometricSet* set;
+  std::vector<int> lights;
+  Mask mask;
+};
+
+// Mean PSNR (peak 1) over the held-out lights; `encoded` results are decoded to linear first.
+double Psnr(const Representation& r, const HeldOut& held_out, bool encoded) {
+  double total = 0;
+  for (int i : held_out.lights) {
+    const Image relit = r.Relight(held_out.set->light(i));
+    const Image& photo = held_out.set->images()[i];
+    double sum = 0;
+    std::size_t count = 0;
+    for (int c = 0; c < photo.channels(); ++c) {
+      const auto a = relit.plane(c);
+      const auto b = photo.plane(c);
+      for (std::size_t p = 0; p < photo.pixel_count(); ++p) {
+        if (!held_out.mask[p]) continue;
+        const double v = encoded ? SrgbToLinear(a[p]) : a[p];
+        const double d = std::clamp(v, 0.0, 1.0) - std::clamp(double{b[p]}, 0.0, 1.0);
+        sum += d * d;
+        ++count;
+      }
+    }
+    total += 10.0 * std::log10(static_cast<double>(count) / sum);
+  }
+  return total / held_out.lights.size();
+}
+
+// A web folder's PSNR, decoded as its colour profile says (relight-cli's default: linear codes).
+double PsnrOfFolder(const fs::path& folder, const HeldOut& held_out) {
+  const LoadedStack stack = LoadStackFile(folder);
+  return Psnr(stack.representation, held_out,
+              StackValueEncoding(stack.provenance) == ColourSpace::kSrgb);
+}
+
+int Run(int argc, char** argv) {
+  const Arguments arguments = Parse(argc, argv);
+  const LoadedSet loaded = LoadPhotometricSet(arguments.set);
+  const Mask mask = loaded.set.MaskOrAll();
+  float peak = 0;
+  for (const Image& image : loaded.set.images()) {
+    for (int c = 0; c < image.channels(); ++c) {
+      const auto plane = image.plane(c);
+      for (std::size_t p = 0; p < image.pixel_count(); ++p) {
+        if (mask[p]) peak = std::max(peak, plane[p]);
+      }
+    }
+  }
+  std::vector<Image> scaled = loaded.set.images();
+  for (Image& image : scaled) {
+    for (float& v : image.values()) v /= peak;
+  }
+  PhotometricSet all(scaled, loaded.set.lights(), loaded.set.image_names(), arguments.set);
+  std::vector<Image> train_images;
+  std::vector<LightDirection> train_lights;
+  HeldOut held_out{&all, {}, mask};
+  for (int i = 0; i < all.size(); ++i) {
+    if (i % arguments.every == 0) {
+      held_out.lights.push_back(i);
+    } else {
+      train_images.push_back(scaled[i]);
+      train_lights.push_back(all.light(i));
+    }
+  }
+  PhotometricSet train(std::move(train_images), train_lights, {}, arguments.set);
+  train.set_mask(mask);
+  fmt::print("{}: {} images {}x{}, {} held out (every {}th), scaled by 1 / {:.4g}\n",
+             arguments.set.string(), all.size(), all.width(), all.height(), held_out.lights.size(),
+             arguments.every, peak);
+
+  const fs::path work = fs::temp_directory_path() / fmt::format("compact_form.{}", ::getpid());
+  fs::create_directories(work);
+  std::optional<fs::path> photos;
+  if (arguments.relight_cli) {
+    photos = work / "photos";
+    fs::create_directories(*photos);
+    std::ofstream lp(*photos / "lights.lp");
+    lp << train.size() << "\n";
+    ImageWriteOptions jpeg;
+    jpeg.sample_type = SampleType::kUint8;
+    jpeg.encoding = ColourSpace::kSrgb;
+    for (int i = 0; i < train.size(); ++i) {
+      const std::string name = fmt::format("img{:03d}.jpg", i);
+      WriteImage(*photos / name, train.images()[i], jpeg);
+      const auto& l = train.light(i);
+      lp << fmt::format("{} {:.6f} {:.6f} {:.6f}\n", name, l.x(), l.y(), l.z());
+    }
+  } else {
+    fmt::print("relight-cli: not available (set PHOTOMAT_RELIGHT_CLI), its columns are empty\n");
+  }
+  fmt::print(
+      "| basis | float stack dB | encoded refit, unquantised dB | compact (from stack) dB, loss, "
+      "KB "
+      "| compact (from photos) dB, KB | relight-cli dB, KB (+ materials.png) | compact / "
+      "relight-cli size |\n"
+      "| --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  for (const std::string& basis : arguments.methods) {
+    const Representation fit = Fit(train, Method::Parse(FloatMethod(basis)));
+    const double float_db = Psnr(fit, held_out, false);
+    // The float stack refitted in sRGB-encoded values (what ptm/hsh folders hold), before any
+    // quantisation: how much of the loss is the change of domain.
+    std::string refit = "-";
+    if (basis == "ptm" || basis == "hsh") {
+      const Representation encoded = ConvertToEncoded(
+          {fit, StackProvenance(train_lights, "linear")}, Method::Parse(FloatMethod(basis)));
+      refit = fmt::format("{:.2f}", Psnr(encoded, held_out, true));
+    }
+    RelightWebOptions options;
+    options.basis = BasisNamed(basis);
+    const fs::path from_stack = work / (basis + "-stack");
+    WriteRelightWeb(from_stack,
+                    RelightWebFromStack({fit, StackProvenance(train_lights, "linear")}, options));
+    const double stack_db = PsnrOfFolder(from_stack, held_out);
+    const fs::path from_photos = work / (basis + "-photos");
+    WriteRelightWeb(from_photos, RelightWebFromSet(train, options));
+    const double photos_db = PsnrOfFolder(from_photos, held_out);
+    std::string theirs = "-";
+    std::string ratio = "-";
+    if (photos) {
+      const fs::path folder = work / (basis + "-relight-cli");
+      const std::string command = fmt::format(
+          "{} {} {} {} > {} 2>&1", arguments.relight_cli->string(), RelightCliArguments(basis),
+          photos->string(), folder.string(), (work / "relight-cli.log").string());
+      if (std::system(command.c_str()) != 0) throw Error("relight-cli failed: " + command);
+      const double db = PsnrOfFolder(folder, held_out);
+      const auto bytes = FolderBytes(folder, false);
+      theirs = fmt::format("{:.2f}, {:.0f} (+ {:.0f})", db, bytes / 1024.0,
+                           FolderBytes(folder, true) / 1024.0);
+      ratio = fmt::format("{:.2f}", static_cast<double>(FolderBytes(from_photos, false)) / bytes);
+    }
+    fmt::print("| {} | {:.2f} | {} | {:.2f}, {:+.2f}, {:.0f} | {:.2f}, {:.0f} | {} | {} |\n", basis,
+               float_db, refit, stack_db, stack_db - float_db,
+               FolderBytes(from_stack, false) / 1024.0, photos_db,
+               FolderBytes(from_photos, false) / 1024.0, theirs, ratio);
+  }
+  fs::remove_all(work);
+  return 0;
+}
+
+}  // namespace
+}  // namespace photomat
+
+int main(int argc, char** argv) {
+  try {
+    return photomat::Run(argc, argv);
+  } catch (const std::exception& error) {
+    fmt::print(stderr, "compact_form: {}\n", error.what());
+    return 1;
+  }
+}
