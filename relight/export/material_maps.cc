@@ -139,7 +139,8 @@ MaterialMaps ExtractMaterialMaps(const Representation& r, const MaterialMapOptio
   if (out.mask.CountSet() == 0) throw Error(fmt::format("{}: every map is zero", r.method()));
   out.normals = NamedMaps(r, {"normal.X", "normal.Y", "normal.Z"});
   // pbr: the base colour is the albedo (diffuse reflectance) of core/microfacet_brdf.h.
-  Image albedo = NamedMaps(r, Prefixed(r.shading() ? "base." : "albedo.", r.output_channels()));
+  Image albedo =
+      NamedMaps(r, Prefixed(IsMicrofacet(r.shading()) ? "base." : "albedo.", r.output_channels()));
   if (!albedo.empty()) albedo.set_channel_names(Prefixed("albedo.", r.output_channels()));
   if (!out.normals.empty() && !albedo.empty() && options.values == ColourSpace::kLinear) {
     out.normals_source = "the representation's normal maps";
