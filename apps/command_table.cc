@@ -2,6 +2,7 @@
 
 #include <array>
 #include <stdexcept>
+#include <string>
 
 namespace photomat::app {
 namespace {
@@ -9,6 +10,15 @@ namespace {
 constexpr Component kLiveCapture = Component::kLiveCapture;
 constexpr Component kSolids = Component::kSolids;
 constexpr Component kSurfacePatterns = Component::kSurfacePatterns;
+constexpr Component kNeural = Component::kNeural;
+
+constexpr std::string_view kEvaluateDescription =
+    "Measure how well each method relights the captured images: Dong's normalised RMS error for "
+    "reconstruction (fit all, relight each) and leave-one-out prediction, and the normal angular "
+    "error against ground truth.";
+constexpr std::string_view kFitDescription =
+    "Fit relightable representations to a photometric set; writes one multi-layer EXR map stack "
+    "per method and stacks.json into --out.";
 
 // The programs (apps/CMakeLists.txt): photomat-pipeline holds every command of the core, the
 // others one optional component each (or, for calibrate, Ceres).
@@ -18,19 +28,12 @@ constexpr std::array kCommands{
                 "and RGB albedo) under known lights. Writes images, manifest.json and "
                 "gt_normals/albedo/height.exr.",
                 "photomat-pipeline"},
-    CommandInfo{"fit",
-                "Fit relightable representations to a photometric set; writes one multi-layer EXR "
-                "map stack per method and stacks.json into --out.",
-                "photomat-pipeline"},
+    CommandInfo{"fit", kFitDescription, "photomat-pipeline"},
     CommandInfo{"relight",
                 "Render a map stack under new lights. One light (--light) writes one image to "
                 "--out; several (--lights, --sweep) write a folder of images with a manifest.json.",
                 "photomat-pipeline"},
-    CommandInfo{"evaluate",
-                "Measure how well each method relights the captured images: Dong's normalised RMS "
-                "error for reconstruction (fit all, relight each) and leave-one-out prediction, "
-                "and the normal angular error against ground truth.",
-                "photomat-pipeline"},
+    CommandInfo{"evaluate", kEvaluateDescription, "photomat-pipeline"},
     CommandInfo{"demo",
                 "Run the whole pipeline on the built-in synthetic sample: generate, fit all "
                 "methods, evaluate, relight a light sweep, then grow every stack to 4x its area "
@@ -75,6 +78,26 @@ constexpr std::array kCommands{
                 "photomat-batch"},
 };
 
+// `fit --method neural` and `evaluate --methods neural`: the neural basis's training
+// (represent/neural, libtorch).
+constexpr CommandInfo kNeuralFit{"fit", kFitDescription, "photomat-neural", &kNeural};
+constexpr CommandInfo kNeuralEvaluate{"evaluate", kEvaluateDescription, "photomat-neural",
+                                      &kNeural};
+
+// Whether `arguments` hold `OPTION neural` or `OPTION=neural`.
+bool NamesNeural(std::span<char* const> arguments, std::string_view option) {
+  const std::string joined = std::string(option) + "=neural";
+  for (std::size_t i = 0; i < arguments.size(); ++i) {
+    const std::string_view argument = arguments[i];
+    if (argument == joined) return true;
+    if (argument == option && i + 1 < arguments.size() &&
+        std::string_view(arguments[i + 1]) == "neural") {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 std::span<const CommandInfo> Commands() { return kCommands; }
@@ -84,6 +107,18 @@ const CommandInfo* FindCommand(std::string_view name) {
     if (command.name == name) return &command;
   }
   return nullptr;
+}
+
+const CommandInfo* FindCommandFor(std::span<char* const> arguments) {
+  if (arguments.empty()) return nullptr;
+  const CommandInfo* command = FindCommand(arguments[0]);
+  if (command && command->name == "fit" && NamesNeural(arguments.subspan(1), "--method")) {
+    return &kNeuralFit;
+  }
+  if (command && command->name == "evaluate" && NamesNeural(arguments.subspan(1), "--methods")) {
+    return &kNeuralEvaluate;
+  }
+  return command;
 }
 
 std::string_view CommandDescription(std::string_view name) {
@@ -104,6 +139,8 @@ std::string_view ComponentAbsence(Component component) {
       return PHOTOMAT_WITHOUT_SURFACE_PATTERNS;
     case Component::kCarving:
       return PHOTOMAT_WITHOUT_CARVING;
+    case Component::kNeural:
+      return PHOTOMAT_WITHOUT_TORCH;
   }
   return {};
 }

@@ -7,7 +7,7 @@
 namespace photomat::app {
 
 // The optional components a command, or a part of one, needs (README "Optional components").
-enum class Component { kLiveCapture, kSolids, kSurfacePatterns, kCarving };
+enum class Component { kLiveCapture, kSolids, kSurfacePatterns, kCarving, kNeural };
 
 // One subcommand of `photomat`: its name and description (as `photomat --help` lists them), the
 // program that implements it (`photomat NAME ...` runs `libexec/photomat/PROGRAM NAME ...`, so a
@@ -23,6 +23,11 @@ struct CommandInfo {
 std::span<const CommandInfo> Commands();
 // The subcommand called `name`, or nullptr.
 const CommandInfo* FindCommand(std::string_view name);
+// The command that `photomat ARGUMENTS...` runs (arguments[0] is the subcommand's name), or
+// nullptr: FindCommand's, except that `fit --method neural` runs in photomat-neural (IMPLEMENTER
+// CHOICE: the neural basis's training links libtorch, whose ~290 shared libraries take seconds to
+// load, so only that program links it and every other command starts as before).
+const CommandInfo* FindCommandFor(std::span<char* const> arguments);
 // The description of a listed subcommand (throws std::out_of_range for an unlisted name).
 std::string_view CommandDescription(std::string_view name);
 

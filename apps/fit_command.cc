@@ -46,7 +46,8 @@ void AddFitCommand(CLI::App& app) {
                    "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), hsh4, "
                    "hsh9, hsh16, pbr (microfacet maps; implies --robust), rbf, bilinear, a "
                    "comma-separated list, "
-                   "or all (the first six)")
+                   "or all (the first six); `--method neural` alone trains the neural basis "
+                   "(its own options: `photomat fit --method neural --help`)")
       ->capture_default_str();
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_flag("--ignore-intensities", options->raw_intensities,

@@ -1,7 +1,8 @@
 // photomat: relightable material maps from photographs under many lights.
 //
 // This program only dispatches: `photomat NAME ARGS...` runs the program that implements NAME
-// (libexec/photomat/photomat-pipeline, -capture, -calibrate, -solid, -rd; see command_table.h)
+// (libexec/photomat/photomat-pipeline, -capture, -calibrate, -solid, -rd, -neural for `fit --method
+// neural`; see command_table.h)
 // with the same arguments, so that each command loads only the shared libraries it needs (fit
 // does not load libcamera, OpenVDB, assimp or Ceres) and `photomat --help` loads none of them.
 // The help, --version and the errors for a missing or unknown subcommand are the same CLI11 app
@@ -13,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <system_error>
 
@@ -50,7 +52,8 @@ int RunProgram(const CommandInfo& command, char** argv) {
 
 int main(int argc, char** argv) {
   if (argc >= 2) {
-    if (const CommandInfo* command = photomat::app::FindCommand(argv[1])) {
+    if (const CommandInfo* command = photomat::app::FindCommandFor(
+            std::span<char* const>(argv + 1, static_cast<std::size_t>(argc - 1)))) {
       return RunProgram(*command, argv);
     }
   }

@@ -224,6 +224,59 @@ TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
   EXPECT_EQ(ReadJsonFile(dir / "v3" / "viewer.json")["methods"].size(), 1u);
 }
 
+TEST(PhotomatCliTest, NeuralTrainingRunsInItsOwnProgram) {
+  const std::vector<std::string> neural = {"fit", "in", "--method", "neural", "--out", "o"};
+  const std::vector<std::string> ptm = {"fit", "in", "--method", "ptm", "--out", "o"};
+  const std::vector<std::string> equals = {"fit", "in", "--method=neural"};
+  auto program = [](const std::vector<std::string>& words) {
+    std::vector<char*> arguments;
+    for (const std::string& word : words) arguments.push_back(const_cast<char*>(word.c_str()));
+    return std::string(app::FindCommandFor(arguments)->program);
+  };
+  EXPECT_EQ(program(neural), "photomat-neural");
+  EXPECT_EQ(program(equals), "photomat-neural");
+  EXPECT_EQ(program(ptm), "photomat-pipeline");
+  EXPECT_EQ(program({"evaluate", "in", "--methods", "neural", "--hold-out-every", "4"}),
+            "photomat-neural");
+  EXPECT_EQ(program({"evaluate", "in", "--methods", "ptm,neural"}), "photomat-pipeline");
+  EXPECT_EQ(program({"relight", "s.exr", "--method", "neural"}), "photomat-pipeline");
+}
+
+// `fit --method neural` trains (tiny here), and the stack relights like every method's.
+TEST(PhotomatCliTest, NeuralFitsAndRelightsOrSaysWhatThisBuildLacks) {
+  TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  const std::string stacks = (dir / "stacks").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 12x10 --seed 4").exit_code, 0);
+  const RunResult fit = RunPhotomat("fit " + capture + " --method neural --neural-k 4 " +
+                                    "--neural-epochs 2 --seed 3 --out " + stacks);
+  if (!app::ComponentAbsence(app::Component::kNeural).empty()) {
+    EXPECT_EQ(fit.exit_code, 1);
+    EXPECT_THAT(fit.output, HasSubstr(app::BuiltWithout(app::Component::kNeural)));
+    return;
+  }
+  ASSERT_EQ(fit.exit_code, 0) << fit.output;
+  const LoadedStack neural = LoadRepresentation(dir / "stacks" / "neural.exr");
+  EXPECT_EQ(neural.representation.maps().channels(), 4);
+  EXPECT_EQ(neural.representation.shading()->kind(), "neural");
+  EXPECT_EQ(neural.representation.details()["neural"]["seed"], 3);
+  const RunResult relit = RunPhotomat("relight " + stacks + " --method neural --sweep 3 --out " +
+                                      (dir / "relit").string());
+  ASSERT_EQ(relit.exit_code, 0) << relit.output;
+  EXPECT_EQ(LoadPhotometricSet(dir / "relit").set.size(), 3);
+  const RunResult evaluate = RunPhotomat("evaluate " + capture + " --methods neural " +
+                                         "--hold-out-every 6 --neural-k 4 --neural-epochs 2 " +
+                                         "--json " + (dir / "e.json").string());
+  ASSERT_EQ(evaluate.exit_code, 0) << evaluate.output;
+  const nlohmann::json e = ReadJsonFile(dir / "e.json");
+  EXPECT_EQ(e["neural"]["prediction_images"].size(), 6u);
+  EXPECT_GT(e["neural"]["eta_prediction"].get<double>(), 0.0);
+  const RunResult mixed =
+      RunPhotomat("fit " + capture + " --method ptm,neural --out " + (dir / "mixed").string());
+  EXPECT_EQ(mixed.exit_code, 1);
+  EXPECT_THAT(mixed.output, HasSubstr("neural is trained on its own"));
+}
+
 TEST(PhotomatCliTest, RbfAndBilinearFitRelightAndExportLikeEveryMethod) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();

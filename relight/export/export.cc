@@ -211,7 +211,7 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
   NullProgress no_progress;
   Progress& report = OrNull(progress, no_progress);
   const Representation& r = stack.representation;
-  report.Start("export", (options.gltf ? 7 : 6) + (r.shading() ? 1 : 0));
+  report.Start("export", (options.gltf ? 7 : 6) + (IsMicrofacet(r.shading()) ? 1 : 0));
   MaterialMapOptions map_options;
   map_options.height = options.height;
   map_options.values = StackValueEncoding(stack.provenance);
@@ -245,7 +245,7 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
   nlohmann::json description =
       ExportDescription(stack, r.width(), r.height(), maps.normals_source, range, options);
   PbrFiles pbr;
-  if (r.shading()) {
+  if (IsMicrofacet(r.shading())) {
     pbr = WritePbrMaps(r, maps.mask, folder, png16);
     description["pbr"] = pbr.description;
     report.Advance();

@@ -138,7 +138,8 @@ MaterialMaps ExtractSurfaceMaps(const Representation& r, const MaterialMapOption
   out.mask = CoverageMask(r);
   out.normals = NamedMaps(r, {"normal.X", "normal.Y", "normal.Z"});
   // pbr: the base colour is the albedo (diffuse reflectance) of core/microfacet_brdf.h.
-  Image albedo = NamedMaps(r, Prefixed(r.shading() ? "base." : "albedo.", r.output_channels()));
+  Image albedo =
+      NamedMaps(r, Prefixed(IsMicrofacet(r.shading()) ? "base." : "albedo.", r.output_channels()));
   if (!albedo.empty()) albedo.set_channel_names(Prefixed("albedo.", r.output_channels()));
   if (!out.normals.empty() && !albedo.empty() && options.values == ColourSpace::kLinear) {
     out.normals_source = "the representation's normal maps";

@@ -379,6 +379,8 @@ Representation FitObservations(const Observations& observations,
           FitLightProfileModel(sub, sums, fit.SelectedLights(), method, source), observations,
           observations.matrix(), selected);
     }
+    case Method::Kind::kNeural:
+      fit.Fail(NeuralIsTrainedApart());
     case Method::Kind::kEigen:
       break;
   }

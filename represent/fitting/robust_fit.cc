@@ -370,6 +370,8 @@ Representation RobustFit::Fit(const Method& method) const {
                     options_.pbr,
                     {{"robust", options_.ToJson()}, {"robust_summary", summary_.ToJson()}}, source_,
                     options_.progress);
+    case Method::Kind::kNeural:
+      throw Error(source_, NeuralIsTrainedApart());
   }
   return FitObservations(observations_, lights_, method, selected_, source_);
 }

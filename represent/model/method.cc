@@ -26,6 +26,8 @@ std::string Method::Name() const {
       return "rbf";
     case Kind::kBilinear:
       return "bilinear";
+    case Kind::kNeural:
+      return "neural";
     case Kind::kEigen:
       break;
   }
@@ -50,6 +52,10 @@ int Method::MinimumImages() const {
     case Kind::kBilinear:
       // The affine tail of the interpolation and a leave-one-out choice need a few lights.
       return 4;
+    case Kind::kNeural:
+      // The encoder's input is the pixel's profile; below 6 lights PTM's 6 terms would already
+      // interpolate them exactly.
+      return 6;
     case Kind::kEigen:
       break;
   }
@@ -58,7 +64,7 @@ int Method::MinimumImages() const {
 
 Method Method::Parse(std::string_view name) {
   for (Kind kind : {Kind::kThreeImage, Kind::kGradient, Kind::kPtm, Kind::kPtmLrgb, Kind::kPbr,
-                    Kind::kRbf, Kind::kBilinear}) {
+                    Kind::kRbf, Kind::kBilinear, Kind::kNeural}) {
     if (name == Method{kind}.Name()) return {kind};
   }
   if (name.starts_with("eigen")) {
@@ -76,8 +82,13 @@ Method Method::Parse(std::string_view name) {
   }
   throw Error(fmt::format(
       "unknown method \"{}\": expected 3i, gradient, ptm, ptm-lrgb, eigenK (K = 1..64, e.g. "
-      "eigen3, eigen6), hsh4, hsh9, hsh16, pbr, rbf or bilinear, or all",
+      "eigen3, eigen6), hsh4, hsh9, hsh16, pbr, rbf, bilinear or neural, or all",
       name));
+}
+
+std::string NeuralIsTrainedApart() {
+  return "neural is trained on its own, by `photomat fit --method neural` (the photomat-neural "
+         "program, which links libtorch); fit the other methods in a separate run";
 }
 
 std::vector<Method> ParseMethodList(std::string_view list) {

@@ -37,6 +37,8 @@ struct Method {
     kPbr,         // "pbr": diffuse + GGX microfacet maps per pixel (represent/model/shading.h)
     kRbf,         // "rbf": Gaussian RBF interpolation of each pixel's light profile, PCA planes
     kBilinear,    // "bilinear": the light profile resampled on an (lx, ly) grid, PCA planes
+    kNeural,      // "neural": a learned per-pixel encoder and shared decoder (NeuralRTI); trained
+                  // by represent/neural (libtorch) in the photomat-neural program only
   };
   Kind kind = Kind::kGradient;
   int eigen_k = 0;                   // for kEigen
@@ -51,6 +53,10 @@ struct Method {
 
   bool operator==(const Method&) const = default;
 };
+
+// Why the in-memory, robust and streamed fits refuse `neural`: its training links libtorch, which
+// only the photomat-neural program loads (`photomat fit --method neural`, represent/neural).
+std::string NeuralIsTrainedApart();
 
 // "all" (AllMethods) or a comma-separated list of names.
 std::vector<Method> ParseMethodList(std::string_view list);

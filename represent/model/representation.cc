@@ -182,10 +182,12 @@ double CombinedBasis(const Representation& r, PixelValues<const float> maps, int
 
 std::optional<Image> EstimateNormals(const Representation& r) {
   if (const PixelShading* shading = r.shading()) {
+    const std::optional<int> offset = shading->normal_offset();
+    if (!offset) return std::nullopt;
     Image normals = NormalImage(r.width(), r.height());
     tbb::parallel_for(std::size_t{0}, normals.pixel_count(), [&](std::size_t p) {
       const auto maps = r.maps().pixel(p);
-      const int n = shading->normal_offset();
+      const int n = *offset;
       StoreNormal(normals, p, Eigen::Vector3d(maps[n], maps[n + 1], maps[n + 2]));
     });
     return normals;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/microfacet_brdf.h"
+#include "represent/model/neural_decoder.h"
 
 namespace photomat {
 
@@ -21,7 +22,11 @@ void MicrofacetShading::Shade(PixelValues<const float> maps, std::span<const flo
 std::shared_ptr<const PixelShading> PixelShadingFromJson(const JsonReader& json) {
   const std::string kind = json["kind"].String();
   if (kind == "microfacet") return std::make_shared<MicrofacetShading>();
-  json["kind"].Fail(fmt::format("unknown shading \"{}\": expected \"microfacet\"", kind));
+  if (kind == "neural") {
+    return std::make_shared<NeuralShading>(NeuralDecoder::FromJson(json["decoder"]));
+  }
+  json["kind"].Fail(
+      fmt::format("unknown shading \"{}\": expected \"microfacet\" or \"neural\"", kind));
 }
 
 }  // namespace photomat

@@ -2,6 +2,7 @@
 
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -25,8 +26,9 @@ class PixelShading {
   virtual int output_channels() const = 0;
   // Names of the maps, in order (the stack's layer names).
   virtual std::vector<std::string> MapNames() const = 0;
-  // The first of the three maps holding the unit normal.
-  virtual int normal_offset() const = 0;
+  // The first of the three maps holding the unit normal; nullopt for a shading without normal
+  // maps (the `neural` basis's learned coefficients).
+  virtual std::optional<int> normal_offset() const = 0;
   // `light` is the unit direction towards the light (3 values).
   virtual void Shade(PixelValues<const float> maps, std::span<const float> light,
                      std::span<float> out) const = 0;
@@ -50,13 +52,19 @@ class MicrofacetShading final : public PixelShading {
   int map_count() const override { return kMapCount; }
   int output_channels() const override { return 3; }
   std::vector<std::string> MapNames() const override;
-  int normal_offset() const override { return kNormal; }
+  std::optional<int> normal_offset() const override { return kNormal; }
   void Shade(PixelValues<const float> maps, std::span<const float> light,
              std::span<float> out) const override;
   nlohmann::json ToJson() const override { return {{"kind", "microfacet"}}; }
 };
 
-// Throws Error naming the reader's file and JSON path for unknown kinds.
+// Whether `shading` is the `pbr` method's (its maps are base colour, roughness, F0 and a normal).
+inline bool IsMicrofacet(const PixelShading* shading) {
+  return shading && shading->kind() == "microfacet";
+}
+
+// "microfacet" or "neural" (represent/model/neural_decoder.h). Throws Error naming the reader's
+// file and JSON path for unknown kinds or a malformed decoder.
 std::shared_ptr<const PixelShading> PixelShadingFromJson(const JsonReader& json);
 
 }  // namespace photomat

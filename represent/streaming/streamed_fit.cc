@@ -50,6 +50,7 @@ int MapPlanes(const Method& method, int images, int channels) {
                                         : method.profile.grid_size * method.profile.grid_size) *
              channels;
     case Method::Kind::kPbr:
+    case Method::Kind::kNeural:  // refused by FitStreamed
       break;
   }
   return 8 + 2 * channels;
@@ -273,6 +274,7 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
                 fmt::format("{} methods but {} stack files", methods.size(), stacks.size()));
   }
   for (const Method& method : methods) {
+    if (method.kind == Method::Kind::kNeural) throw Error(set.source(), NeuralIsTrainedApart());
     if (set.size() < method.MinimumImages()) {
       throw Error(set.source(), fmt::format("{} needs at least {} images; the set has {}",
                                             method.Name(), method.MinimumImages(), set.size()));

@@ -1,0 +1,94 @@
+#include "apps/neural_evaluate_command.h"
+
+#include <fmt/format.h>
+
+#include "apps/cli_main.h"
+#include "apps/cli_support.h"
+#include "capture/io/load_photometric_set.h"
+#include "core/error.h"
+#include "core/json_file.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/neural/neural_fit.h"
+
+namespace photomat::app {
+
+void AddNeuralEvaluateCommand(CLI::App& app) {
+  struct Options {
+    std::filesystem::path input;
+    std::string methods;
+    std::filesystem::path json;
+    int hold_out_every = 0;
+    bool raw_intensities = false;
+    NeuralFitOptions neural;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = AddListedCommand(app, "evaluate");
+  command->add_option("input", options->input, "Photometric set")->required();
+  command->add_option("--methods", options->methods, "neural (this program evaluates it alone)")
+      ->required();
+  command
+      ->add_option("--hold-out-every", options->hold_out_every,
+                   "One training without the images 0, K, 2K, ..., which it predicts (required: "
+                   "a training per image, as leave-one-out needs, would take hours)")
+      ->required();
+  command->add_option("--json", options->json, "Write the evaluation as JSON");
+  command->add_flag("--ignore-intensities", options->raw_intensities,
+                    "Do not divide the images by the light intensities the input gives");
+  command->add_option("--neural-k", options->neural.coefficients, "Coefficients per pixel")
+      ->capture_default_str();
+  command->add_option("--neural-epochs", options->neural.max_epochs, "Most training epochs")
+      ->capture_default_str();
+  command
+      ->add_option("--neural-patience", options->neural.patience,
+                   "Epochs without a better validation loss before training stops")
+      ->capture_default_str();
+  command->add_option("--seed", options->neural.seed, "Seed of the training")
+      ->capture_default_str();
+  command->callback([options] {
+    if (options->methods != "neural") {
+      throw Error(
+          fmt::format("--methods {}: this program evaluates neural only", options->methods));
+    }
+    if (options->hold_out_every < 2) throw Error("--hold-out-every: expected 2 or more");
+    LoadOptions load;
+    load.apply_intensities = !options->raw_intensities;
+    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    const PhotometricSet& set = loaded.set;
+    const Observations observations(set);
+    MethodEvaluation evaluation;
+    evaluation.method = Method::Parse("neural");
+    std::vector<int> kept;
+    for (int i = 0; i < set.size(); ++i) {
+      (i % options->hold_out_every == 0 ? evaluation.prediction_images : kept).push_back(i);
+    }
+    TerminalProgressBar bar;
+    const Representation r =
+        FitNeural(observations, set.lights(), kept, options->neural, set.source(), &bar);
+    // IMPLEMENTER CHOICE: the reconstruction error is that of the same training at the images it
+    // saw (a second training on every image would double the time).
+    for (int i : kept) {
+      evaluation.reconstruction_per_image.push_back(NormalisedRmsError(
+          observations, i, RelightObservedPixels(r, observations, set.lights()[i])));
+    }
+    for (int i : evaluation.prediction_images) {
+      const Eigen::VectorXf relit = RelightObservedPixels(r, observations, set.lights()[i]);
+      evaluation.prediction_per_image.push_back(NormalisedRmsError(observations, i, relit));
+      evaluation.psnr_prediction_per_image.push_back(
+          PeakSignalToNoiseRatio(observations, i, relit));
+    }
+    auto mean = [](const std::vector<double>& values) {
+      double sum = 0.0;
+      for (double v : values) sum += v;
+      return sum / static_cast<double>(values.size());
+    };
+    evaluation.eta_reconstruction = mean(evaluation.reconstruction_per_image);
+    evaluation.eta_prediction = mean(evaluation.prediction_per_image);
+    evaluation.psnr_prediction = mean(evaluation.psnr_prediction_per_image);
+    fmt::print("{}", FormatEvaluationTable({evaluation}));
+    fmt::print("neural: held out every {} ({} images), PSNR {:.2f} dB\n", options->hold_out_every,
+               evaluation.prediction_images.size(), *evaluation.psnr_prediction);
+    if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson({evaluation}));
+  });
+}
+
+}  // namespace photomat::app

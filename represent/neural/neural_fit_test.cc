@@ -1,0 +1,175 @@
+#include "represent/neural/neural_fit.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "core/error.h"
+#include "represent/evaluation/evaluation.h"
+#include "represent/fitting/fit.h"
+#include "represent/neural/neural_network.h"
+#include "tests/support/synthetic_sets.h"
+
+namespace photomat {
+namespace {
+
+// Small networks and few epochs: the tests check properties, not the final quality.
+NeuralFitOptions TinyOptions() {
+  NeuralFitOptions options;
+  options.coefficients = 6;
+  options.encoder_width = 32;
+  options.decoder_width = 24;
+  options.max_epochs = 3;
+  options.batch_pixels = 32;
+  options.seed = 5;
+  return options;
+}
+
+std::vector<int> AllImages(int n) {
+  std::vector<int> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  return all;
+}
+
+TEST(NeuralFitTest, EigenDecoderEqualsTheTorchForward) {
+  torch::manual_seed(3);
+  torch::nn::Sequential network = MakePerceptron(9 + 2, 50, 3, 3);
+  // Biases and weights larger than the initialisation's, so that every ELU branch is taken.
+  {
+    torch::NoGradGuard no_grad;
+    for (torch::Tensor& p : network->parameters()) p.mul_(2.0);
+  }
+  const float scale = 0.75f;
+  const NeuralDecoder decoder = ToNeuralDecoder(network, scale);
+  ASSERT_EQ(decoder.coefficients(), 9);
+  ASSERT_EQ(decoder.outputs(), 3);
+  const torch::Tensor inputs = torch::randn({200, 11});
+  torch::Tensor expected;
+  {
+    torch::NoGradGuard no_grad;
+    expected = (network->forward(inputs) * scale).contiguous();
+  }
+  double largest = 0.0;
+  for (int r = 0; r < 200; ++r) {
+    std::vector<float> in(11);
+    for (int j = 0; j < 11; ++j) in[j] = inputs[r][j].item<float>();
+    float out[3];
+    decoder.Evaluate(std::span<const float>(in.data(), 9), in[9], in[10], out);
+    for (int c = 0; c < 3; ++c) {
+      const double want = expected[r][c].item<float>();
+      largest = std::max(largest, std::abs(out[c] - want) / std::max(1.0, std::abs(want)));
+    }
+  }
+  // Float evaluation in another order than torch's: rounding only.
+  EXPECT_LT(largest, 1e-6);
+  RecordProperty("largest_relative_difference", fmt::format("{:.3g}", largest));
+}
+
+TEST(NeuralFitTest, TheSameSeedGivesTheSameBits) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  const Observations observations(synthetic.set);
+  const auto all = AllImages(synthetic.set.size());
+  const Representation a = FitNeural(observations, synthetic.set.lights(), all, TinyOptions());
+  const Representation b = FitNeural(observations, synthetic.set.lights(), all, TinyOptions());
+  ASSERT_EQ(a.maps().channels(), 6);
+  EXPECT_EQ(a.maps().channel_names()[0], "neural.0");
+  bool identical = true;
+  for (std::size_t p = 0; p < a.maps().pixel_count(); ++p) {
+    for (int j = 0; j < 6; ++j) identical &= a.maps().pixel(p)[j] == b.maps().pixel(p)[j];
+  }
+  EXPECT_TRUE(identical);
+  EXPECT_EQ(a.shading()->ToJson(), b.shading()->ToJson());
+  NeuralFitOptions other = TinyOptions();
+  other.seed = 6;
+  const Representation c = FitNeural(observations, synthetic.set.lights(), all, other);
+  EXPECT_NE(a.shading()->ToJson(), c.shading()->ToJson());
+}
+
+TEST(NeuralFitTest, ReportsTrainingAndStopsEarly) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
+  const Observations observations(synthetic.set);
+  NeuralFitOptions options = TinyOptions();
+  options.max_epochs = 200;
+  options.patience = 1;
+  options.min_improvement = 0.5;  // demands halving the loss every epoch: stops early
+  NeuralFitReport report;
+  const Representation r =
+      FitNeural(observations, synthetic.set.lights(), AllImages(synthetic.set.size()), options, {},
+                nullptr, &report);
+  EXPECT_LT(report.epochs, 200);
+  EXPECT_GE(report.best_epoch, 1);
+  EXPECT_LE(report.best_epoch, report.epochs);
+  EXPECT_EQ(report.validation_pixels, 26);  // 10 % of 256
+  EXPECT_EQ(report.training_pixels + report.validation_pixels, 256);
+  EXPECT_EQ(r.details()["neural_training"]["epochs"], report.epochs);
+}
+
+TEST(NeuralFitTest, RefusesTooFewImagesNamingTheSource) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 8);
+  const Observations observations(synthetic.set);
+  const std::vector<int> five = {0, 1, 2, 3, 4};
+  try {
+    FitNeural(observations, synthetic.set.lights(), five, TinyOptions(), "capture.lp");
+    FAIL() << "five images were accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("capture.lp"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("at least 6 images"), std::string::npos)
+        << error.what();
+  }
+}
+
+// Issue 19's claim: on the shadowed specular capture (highlights and cast shadows, which PTM's
+// biquadratic cannot follow), the neural basis predicts lights it never saw better than PTM.
+// Every 6th light of the 36 is held out; both fit the other 30. Not met yet (measured: neural
+// 0.3026, PTM 0.2848 held-out eta; 40 epochs on 576 pixels: 0.43 against 0.34): an expected
+// failure that asserts the measured state and fails once the target is met.
+TEST(NeuralFitTest, BeatingPtmOnHeldOutSpecularLightsMissesItsTarget) {
+  const auto synthetic = testing::ShadowedSpecularSet(16);
+  const Observations observations(synthetic.set);
+  std::vector<int> kept;
+  std::vector<int> held_out;
+  for (int i = 0; i < synthetic.set.size(); ++i) (i % 6 == 0 ? held_out : kept).push_back(i);
+  // A small capture (256 pixels): small minibatches for enough steps, one thread (the steps are
+  // too small to share), every light per step.
+  NeuralFitOptions options;
+  options.max_epochs = 150;
+  options.patience = 10;
+  options.batch_pixels = 16;
+  options.lights_per_batch = 0;
+  options.learning_rate = 3e-3;
+  options.threads = 1;
+  options.seed = 1;
+  NeuralFitReport report;
+  const Representation neural =
+      FitNeural(observations, synthetic.set.lights(), kept, options, {}, nullptr, &report);
+  const Representation ptm =
+      FitObservations(observations, synthetic.set.lights(), Method::Parse("ptm"), kept);
+  double eta_neural = 0.0;
+  double eta_ptm = 0.0;
+  for (int i : held_out) {
+    const LightDirection& light = synthetic.set.lights()[i];
+    eta_neural +=
+        NormalisedRmsError(observations, i, RelightObservedPixels(neural, observations, light));
+    eta_ptm += NormalisedRmsError(observations, i, RelightObservedPixels(ptm, observations, light));
+  }
+  eta_neural /= static_cast<double>(held_out.size());
+  eta_ptm /= static_cast<double>(held_out.size());
+  RecordProperty("eta_neural", fmt::format("{:.4f}", eta_neural));
+  RecordProperty("eta_ptm", fmt::format("{:.4f}", eta_ptm));
+  RecordProperty("epochs", report.epochs);
+  std::printf("held-out eta: neural %.4f (epochs %d, best %d), ptm %.4f\n", eta_neural,
+              report.epochs, report.best_epoch, eta_ptm);
+  EXPECT_GE(eta_neural, eta_ptm) << "the target is met: make this an EXPECT_LT";
+  if (eta_neural >= eta_ptm) {
+    std::printf(
+        "EXPECTED FAILURE: target neural held-out eta < PTM's (%.4f) not met (measured %.4f) "
+        "because a 256-pixel capture trains the decoder's light interpolation on 30 lights only "
+        "and early stopping watches held-out pixels, not held-out lights\n",
+        eta_ptm, eta_neural);
+  }
+}
+
+}  // namespace
+}  // namespace photomat
