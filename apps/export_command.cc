@@ -249,7 +249,7 @@ void RunExport(const ExportCommandOptions& options) {
       return;
     }
   }
-  if (IsStackInput(options.input) && !IsInterchangeFile(options.input)) {
+  if (IsStackInput(options.input) && !IsReadWholeStackInput(options.input)) {
     const std::filesystem::path stack_path = ResolveStack(options.input, method);
     if (IsStreamableStack(stack_path)) {
       StackBandReader stack(stack_path);

@@ -83,11 +83,12 @@ void AddRelightCommand(CLI::App& app) {
       directions = ParseSweep(options->sweep);
     }
     TerminalProgressBar bar;
-    const bool interchange = IsInterchangeFile(options->stack);
+    const bool interchange = IsReadWholeStackInput(options->stack);
     const std::filesystem::path stack_path =
         interchange ? options->stack : ResolveStack(options->stack, method);
     if (interchange || !IsStreamableStack(stack_path)) {
-      // .ptm and .rti files are read whole (README, "Streamed relighting and export").
+      // .ptm and .rti files and relight's web folders are read whole (README, "Streamed
+      // relighting and export").
       const LoadedStack stack = LoadStackFile(options->stack, method);
       output.values = StackValueEncoding(stack.provenance);
       const Representation& r = stack.representation;

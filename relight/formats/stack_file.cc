@@ -22,6 +22,12 @@ bool IsInterchangeFile(const fs::path& path) {
   return extension == ".ptm" || extension == ".rti";
 }
 
+bool IsReadWholeStackInput(const fs::path& path) {
+  std::error_code ec;
+  return IsInterchangeFile(path) ||
+         (IsRelightWebFolder(path) && !fs::exists(path / kFitManifestName, ec));
+}
+
 bool IsStackInput(const fs::path& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
@@ -54,7 +60,7 @@ LoadedStack LoadRelightWebFolder(const fs::path& path, const std::optional<std::
 }  // namespace
 
 LoadedStack LoadStackFile(const fs::path& path, const std::optional<std::string>& method) {
-  if (IsRelightWebFolder(path) && !fs::exists(path / kFitManifestName)) {
+  if (IsReadWholeStackInput(path) && !IsInterchangeFile(path)) {
     return LoadRelightWebFolder(path, method);
   }
   if (!IsInterchangeFile(path)) return LoadRepresentation(ResolveStack(path, method));

@@ -14,6 +14,11 @@ namespace photomat {
 
 // True for a .ptm or .rti path.
 bool IsInterchangeFile(const std::filesystem::path& path);
+
+// Inputs LoadStackFile reads whole, not as a map stack: a .ptm or .rti file, or a folder in
+// relight's web format (info.json, without photomat's fit manifest). Streamed relighting and
+// export take only map stacks.
+bool IsReadWholeStackInput(const std::filesystem::path& path);
 // True if `path` is something LoadStackFile reads: a .exr, .ptm or .rti file, a folder with a
 // stacks.json, or a relight web folder (info.json + plane_N.jpg, relight_web_format.h). (Anything
 // else is a photometric set or nothing.)
