@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/memory_limits.h"
 #include "core/text_parsing.h"
 #include "relight/render/relight.h"
 
@@ -85,6 +86,15 @@ void AddExrCompressionOption(CLI::App& command, std::string& name) {
       .add_option("--exr-compression", name,
                   "Compression of the map stack (lossless): none, rle, zips, zip or piz")
       ->capture_default_str();
+}
+
+void AddBandMemoryOption(CLI::App& command, std::size_t& memory_mb, std::string_view bands,
+                         std::size_t minimum) {
+  command.add_option(
+      "--memory", memory_mb,
+      fmt::format("Memory in MB for {} (default: {} MB, at most half the physical memory or of "
+                  "this process's memory limits, here {} MB)",
+                  bands, kFastBandMemory >> 20, DefaultMemoryBudget(minimum) >> 20));
 }
 
 void CreateFolder(const std::filesystem::path& folder) {

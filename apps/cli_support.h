@@ -39,6 +39,11 @@ LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOption
 // with ParseExrCompression, whose error lists the allowed names.
 void AddExrCompressionOption(CLI::App& command, std::string& name);
 
+// `--memory MB` on a streamed command: the bytes `bands` (what they hold, for the help) may use;
+// 0 (not given) leaves the default to the step: DefaultBandBudget(minimum) (core/memory_limits.h).
+void AddBandMemoryOption(CLI::App& command, std::size_t& memory_mb, std::string_view bands,
+                         std::size_t minimum);
+
 // Creates `folder` (and parents); Error naming it on failure.
 void CreateFolder(const std::filesystem::path& folder);
 

@@ -14,7 +14,6 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "core/memory_limits.h"
 #include "relight/web/evaluation_report.h"
 #include "relight/web/published_name.h"
 #include "represent/evaluation/evaluation.h"
@@ -119,10 +118,8 @@ void AddEvaluateCommand(CLI::App& app) {
       "--stack", options->stack,
       "Evaluate this fitted stack (.exr, or a fit folder with --methods naming one) "
       "against INPUT, both streamed in bands: the eta of reconstruction only");
-  command->add_option("--memory", options->memory_mb,
-                      fmt::format("With --stack: memory in MB for the bands (default: half the "
-                                  "physical memory or of this process's memory limits, here {} MB)",
-                                  DefaultMemoryBudget(kMinimumEvaluationMemory) >> 20));
+  AddBandMemoryOption(*command, options->memory_mb, "the bands (with --stack)",
+                      kMinimumEvaluationMemory);
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {

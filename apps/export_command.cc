@@ -170,7 +170,8 @@ void WriteMapsStreamed(const ExportCommandOptions& options, StackBandReader& sta
   CheckExportDiskSpace(options, stack.header().representation, stack.width(), stack.height());
   StreamedExportOptions streamed;
   streamed.maps = MapOptions(options);
-  streamed.memory_bytes = MemoryBudget(options);
+  // Without --memory the bands take DefaultBandBudget's few tens of MB, not the whole budget.
+  streamed.memory_bytes = options.memory_mb << 20;
   TerminalProgressBar bar;
   streamed.progress = &bar;
   StreamedExportReport report;
@@ -348,11 +349,13 @@ void AddExportCommand(CLI::App& app) {
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "
                       "folder (or --method's), or for a photometric set every method's fit");
-  command->add_option("--memory", options->memory_mb,
-                      fmt::format("Memory in MB for the maps of a stack; a stack whose export does "
-                                  "not fit is exported streamed, in bands (default: half the "
-                                  "physical memory or of this process's memory limits, here {} MB)",
-                                  DefaultMemoryBudget(kMinimumExportMemory) >> 20));
+  command->add_option(
+      "--memory", options->memory_mb,
+      fmt::format("Memory in MB for the maps of a stack; a stack whose export does "
+                  "not fit is exported streamed, in bands (default: half the "
+                  "physical memory or of this process's memory limits, here {} "
+                  "MB, of which streamed bands take {} MB)",
+                  DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
   command->add_flag("--stream", options->stream,
                     "Export a stack's maps streamed, in bands, whatever its size (height by "
                     "tiled Poisson; not for pbr stacks, --height fc, --ptm or --rti)");

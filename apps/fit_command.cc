@@ -64,12 +64,9 @@ void AddFitCommand(CLI::App& app) {
   AddPbrOptions(*command, options->pbr);
   AddLightProfileOptions(*command, options->profile);
   AddExrCompressionOption(*command, options->exr_compression);
-  command->add_option("--memory", options->memory_mb,
-                      fmt::format("Memory budget in MB for the bands of rows fitted at a time "
-                                  "(default: {} MB of bands beyond the decoders' buffers, at most "
-                                  "half the physical memory or of this process's memory limits, "
-                                  "here {} MB)",
-                                  kFastBandMemory >> 20, DefaultFitMemory() >> 20));
+  AddBandMemoryOption(*command, options->memory_mb,
+                      "the bands of rows fitted at a time, beyond the decoders' buffers",
+                      kMinimumFitMemory);
   command->callback([options] {
     std::vector<Method> methods = ParseMethodList(options->methods);
     ApplyLightProfileOptions(options->profile, methods);

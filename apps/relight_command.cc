@@ -6,7 +6,6 @@
 #include "apps/cli_support.h"
 #include "core/disk_space.h"
 #include "core/error.h"
-#include "core/memory_limits.h"
 #include "relight/formats/stack_file.h"
 #include "relight/render/relight.h"
 #include "relight/render/streamed_relight.h"
@@ -55,11 +54,8 @@ void AddRelightCommand(CLI::App& app) {
   command->add_option("--format", options->format,
                       "png8 (sRGB, default for .png), png16 (linear) or exr (default for .exr)");
   command->add_flag("--clamp", options->clamp, "Clamp negative values (attached shadows) to 0");
-  command->add_option("--memory", options->memory_mb,
-                      fmt::format("Memory in MB for the bands of a streamed .exr stack "
-                                  "(default: half the physical memory or of this process's "
-                                  "memory limits, here {} MB)",
-                                  DefaultMemoryBudget(kMinimumRelightMemory) >> 20));
+  AddBandMemoryOption(*command, options->memory_mb, "the bands of a streamed .exr stack",
+                      kMinimumRelightMemory);
   command->callback([options] {
     if (options->light.empty() && options->lights.empty() && options->sweep.empty()) {
       throw Error("give the light(s): --light SLANT,TILT, --lights FILE or --sweep COUNT[,SLANT]");

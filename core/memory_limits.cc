@@ -94,4 +94,8 @@ std::size_t DefaultMemoryBudget(std::size_t minimum) {
   return std::max(budget, minimum);
 }
 
+std::size_t DefaultBandBudget(std::size_t minimum, std::size_t fixed_bytes) {
+  return std::min(DefaultMemoryBudget(minimum), fixed_bytes + kFastBandMemory);
+}
+
 }  // namespace photomat

@@ -57,6 +57,19 @@ std::size_t WorkerThreadsAddressSpace();
 // (WorkerThreadsAddressSpace); never below `minimum`.
 std::size_t DefaultMemoryBudget(std::size_t minimum);
 
+// IMPLEMENTER CHOICE: without an explicit budget a streamed step's bands hold at most this much
+// (beyond its fixed buffers), even where DefaultMemoryBudget allows more. Bands are for memory,
+// but they are faster too: a whole-image band of DiLiGenT cat (96 x 612 x 512 x 3) allocates and
+// first touches 0.9 GB per fit, and the kernel's page faults cost as much CPU as the fit (README,
+// "Streamed fitting": CPU time per band size); bands this small are reused by malloc from one to
+// the next (KeepFreedMemoryForReuse), and there are enough of them for reading to overlap work.
+inline constexpr std::size_t kFastBandMemory = std::size_t{64} << 20;
+
+// The budget a streamed step (fit, relight, export, evaluation) gives its bands when the caller
+// gives none: `fixed_bytes` (buffers whatever the band height, e.g. the decoders' chunks) plus
+// kFastBandMemory, at most DefaultMemoryBudget(minimum).
+std::size_t DefaultBandBudget(std::size_t minimum, std::size_t fixed_bytes = 0);
+
 }  // namespace photomat
 
 #endif  // PHOTOMAT_CORE_MEMORY_LIMITS_H_

@@ -99,6 +99,34 @@ TEST(MemoryLimitsTest, WorkerThreadsReserveAStackPerThreadAndTheArenas) {
   EXPECT_GE(WorkerThreadsAddressSpace(), (3 * cores * 8 + 64) << 20);
 }
 
+// Without a limit the machine allows far more than the fast band size: the bands get
+// kFastBandMemory beyond their fixed buffers.
+TEST(MemoryLimitsTest, BandsGetTheFastBandSizeWhereMemoryAllowsMore) {
+  const std::size_t fixed = std::size_t{3} << 20, minimum = std::size_t{16} << 20;
+  if (DefaultMemoryBudget(minimum) < fixed + kFastBandMemory) {
+    GTEST_SKIP() << "SKIPPED: this process may use less than " << (kFastBandMemory >> 20) << " MB";
+  }
+  EXPECT_EQ(DefaultBandBudget(minimum, fixed), fixed + kFastBandMemory);
+  EXPECT_EQ(DefaultBandBudget(minimum), kFastBandMemory);
+}
+
+// Under an address-space limit that leaves less than the fast band size, the bands get what the
+// limit allows (DefaultMemoryBudget), never below the step's minimum.
+void ExitIfTightLimitBoundsTheBands() {
+  const std::size_t minimum = std::size_t{1} << 20;
+  LimitAddressSpaceTo(WorkerThreadsAddressSpace() + (std::size_t{40} << 20));
+  const std::size_t bands = DefaultBandBudget(minimum, std::size_t{8} << 20);
+  const bool right =
+      bands == DefaultMemoryBudget(minimum) && bands < kFastBandMemory && bands >= minimum;
+  if (!right) std::fprintf(stderr, "bands %zu under the limit\n", bands);
+  std::exit(right ? 0 : 1);
+}
+
+TEST(MemoryLimitsTest, UnderATightLimitBandsGetWhatTheLimitAllows) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(ExitIfTightLimitBoundsTheBands(), ::testing::ExitedWithCode(0), "");
+}
+
 // Minor page faults of 20 rounds of allocating, touching and freeing 12 buffers of 8 MiB (a band
 // of images), as a streamed fit does band after band.
 long FaultsOfRepeatedBandAllocations() {

@@ -316,7 +316,7 @@ std::vector<std::string> SurfaceChannels(int albedo_channels) {
 int StreamedBandRows(const StackBandReader& stack, const StreamedExportOptions& options) {
   if (options.band_rows > 0) return std::min(options.band_rows, stack.height());
   const std::size_t memory =
-      options.memory_bytes > 0 ? options.memory_bytes : DefaultMemoryBudget(kMinimumExportMemory);
+      options.memory_bytes > 0 ? options.memory_bytes : DefaultBandBudget(kMinimumExportMemory);
   const std::size_t row =
       static_cast<std::size_t>(stack.width()) * StreamedExportBytesPerPixel(stack);
   return static_cast<int>(std::clamp<std::size_t>(memory / std::max<std::size_t>(row, 1), 1,

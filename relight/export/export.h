@@ -46,7 +46,7 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const std::filesystem::path&
 struct StreamedExportOptions {
   ExportOptions maps;
   TiledPoissonOptions poisson;
-  // Bytes the bands may hold; 0: DefaultMemoryBudget(kMinimumExportMemory). The tiled Poisson's
+  // Bytes the bands may hold; 0: DefaultBandBudget(kMinimumExportMemory). The tiled Poisson's
   // window (16 bytes per pixel of tile + 2 overlap rows) comes on top.
   std::size_t memory_bytes = 0;
   // > 0: exactly this many rows per band (tests).

@@ -83,7 +83,7 @@ void RelightPass(StackBandReader& stack, const std::vector<LightDirection>& ligh
 int BandRows(const StackBandReader& stack, int lights, const StreamedRelightOptions& options) {
   if (options.band_rows > 0) return std::min(options.band_rows, stack.height());
   const std::size_t memory =
-      options.memory_bytes > 0 ? options.memory_bytes : DefaultMemoryBudget(kMinimumRelightMemory);
+      options.memory_bytes > 0 ? options.memory_bytes : DefaultBandBudget(kMinimumRelightMemory);
   return RelightBandRows(memory, stack, lights);
 }
 

@@ -21,7 +21,8 @@ namespace photomat {
 struct StreamedRelightOptions {
   RelitOutputOptions output;
   // Bytes the bands may hold (the stack's band, its maps, the relit bands being written); 0:
-  // DefaultMemoryBudget(kMinimumRelightMemory). Sets the band height (RelightBandRows).
+  // DefaultBandBudget(kMinimumRelightMemory) (core/memory_limits.h). Sets the band height
+  // (RelightBandRows).
   std::size_t memory_bytes = 0;
   // > 0: exactly this many rows per band, whatever the budget (tests of band independence).
   int band_rows = 0;

@@ -33,9 +33,8 @@ struct ImageSums {
 int BandRows(const StreamedSet& set, const StackBandReader& stack,
              const StreamedEvaluationOptions& options) {
   if (options.band_rows > 0) return std::min(options.band_rows, set.height());
-  const std::size_t memory = options.memory_bytes > 0
-                                 ? options.memory_bytes
-                                 : DefaultMemoryBudget(kMinimumEvaluationMemory);
+  const std::size_t memory =
+      options.memory_bytes > 0 ? options.memory_bytes : DefaultBandBudget(kMinimumEvaluationMemory);
   // Per pixel: the set's band and its observation matrix (4 bytes x images x channels each), the
   // stack's band as stored and gathered, and one image's relit values.
   const std::size_t pixel =

@@ -18,7 +18,7 @@ namespace photomat {
 // lights) needs fits and stays in memory (EvaluateMethod).
 struct StreamedEvaluationOptions {
   // Bytes the bands may hold (the set's band and its observation matrix, the stack's band and
-  // the relit values); 0: DefaultMemoryBudget(kMinimumEvaluationMemory).
+  // the relit values); 0: DefaultBandBudget(kMinimumEvaluationMemory).
   std::size_t memory_bytes = 0;
   // > 0: exactly this many rows per band (tests).
   int band_rows = 0;

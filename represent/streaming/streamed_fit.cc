@@ -236,7 +236,7 @@ std::size_t DecoderChunkBytes(const StreamedSet& set) {
 }  // namespace
 
 std::size_t DefaultStreamedBudget(const StreamedSet& set) {
-  return std::min(DefaultFitMemory(), DecoderChunkBytes(set) + kFastBandMemory);
+  return DefaultBandBudget(kMinimumFitMemory, DecoderChunkBytes(set));
 }
 
 std::size_t DefaultFitMemory() { return DefaultMemoryBudget(kMinimumFitMemory); }

@@ -34,7 +34,7 @@ namespace photomat {
 
 struct StreamedFitOptions {
   // Bytes the bands may hold (images, their copy for fitting, the robust weights, one method's
-  // maps); 0: DefaultFitMemory(). Sets the band height (StreamedBandRows).
+  // maps); 0: DefaultStreamedBudget(set). Sets the band height (StreamedBandRows).
   std::size_t memory_bytes = 0;
   // > 0: exactly this many rows per band, whatever the budget (tests of band independence).
   int band_rows = 0;
@@ -72,16 +72,8 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
 std::size_t DefaultFitMemory();
 inline constexpr std::size_t kMinimumFitMemory = std::size_t{16} << 20;
 
-// IMPLEMENTER CHOICE: without an explicit budget the bands hold at most this much (beyond the
-// decoders' chunks), even where DefaultFitMemory() allows more. Bands are for memory, but they
-// are faster too: a whole-image band of DiLiGenT cat (96 x 612 x 512 x 3) allocates and
-// first touches 0.9 GB per fit, and the kernel's page faults cost as much CPU as the fit
-// (README, "Streamed fitting": CPU time per band size); bands this small are reused by malloc
-// from one to the next, and there are enough of them for decoding to overlap fitting.
-inline constexpr std::size_t kFastBandMemory = std::size_t{64} << 20;
-
-// The budget a fit of `set` uses when none is given: DefaultFitMemory(), at most
-// kFastBandMemory plus the decoders' chunks.
+// The budget a fit of `set` uses when none is given: DefaultBandBudget (core/memory_limits.h:
+// kFastBandMemory, at most DefaultFitMemory()) beyond the decoders' chunks.
 std::size_t DefaultStreamedBudget(const StreamedSet& set);
 
 // The rows per band that `memory_bytes` allows for `methods` on `set` (at least 1, at most the
