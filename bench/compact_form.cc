@@ -30,6 +30,7 @@
 #include "relight/formats/interchange.h"
 #include "relight/formats/relight_web_format.h"
 #include "relight/formats/stack_file.h"
+#include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
 
@@ -116,26 +117,16 @@ struct HeldOut {
   Mask mask;
 };
 
-// Mean PSNR (peak 1) over the held-out lights; `encoded` results are decoded to linear first.
+// Mean PSNR (peak 1, MaskedPsnr) over the held-out lights; `encoded` results are decoded to
+// linear first.
 double Psnr(const Representation& r, const HeldOut& held_out, bool encoded) {
   double total = 0;
   for (int i : held_out.lights) {
-    const Image relit = r.Relight(held_out.set->light(i));
-    const Image& photo = held_out.set->images()[i];
-    double sum = 0;
-    std::size_t count = 0;
-    for (int c = 0; c < photo.channels(); ++c) {
-      const auto a = relit.plane(c);
-      const auto b = photo.plane(c);
-      for (std::size_t p = 0; p < photo.pixel_count(); ++p) {
-        if (!held_out.mask[p]) continue;
-        const double v = encoded ? SrgbToLinear(a[p]) : a[p];
-        const double d = std::clamp(v, 0.0, 1.0) - std::clamp(double{b[p]}, 0.0, 1.0);
-        sum += d * d;
-        ++count;
-      }
+    Image relit = r.Relight(held_out.set->light(i));
+    if (encoded) {
+      for (float& v : relit.values()) v = SrgbToLinear(v);
     }
-    total += 10.0 * std::log10(static_cast<double>(count) / sum);
+    total += MaskedPsnr(relit, held_out.set->images()[i], held_out.mask, 1.0);
   }
   return total / held_out.lights.size();
 }
