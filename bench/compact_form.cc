@@ -9,7 +9,10 @@
 // materials.png is counted separately).
 //
 //   compact_form [SET] [--every K] [--methods ptm,hsh,rbf,bilinear] [--relight-cli PATH]
+//                [--quality Q] [--relight-planes K] [--resolution R]
 //
+// (--quality, --relight-planes and --resolution change photomat's folders only, relight-cli runs
+// with its defaults.)
 // (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10; relight-cli from $PHOTOMAT_RELIGHT_CLI
 // or
 // ~/.cache/photomat-peers/relight-build.)
@@ -44,6 +47,7 @@ struct Arguments {
   int every = 10;
   std::vector<std::string> methods = {"ptm", "hsh", "rbf", "bilinear"};
   std::optional<fs::path> relight_cli;
+  RelightWebOptions web;  // --quality, --relight-planes, --resolution (photomat's folders only)
 };
 
 Arguments Parse(int argc, char** argv) {
@@ -76,6 +80,12 @@ Arguments Parse(int argc, char** argv) {
       }
     } else if (a == "--relight-cli") {
       arguments.relight_cli = value();
+    } else if (a == "--quality") {
+      arguments.web.quality = std::stoi(value());
+    } else if (a == "--relight-planes") {
+      arguments.web.planes = std::stoi(value());
+    } else if (a == "--resolution") {
+      arguments.web.resolution = std::stoi(value());
     } else {
       arguments.set = a;
     }
@@ -210,7 +220,7 @@ int Run(int argc, char** argv) {
           {fit, StackProvenance(train_lights, "linear")}, Method::Parse(FloatMethod(basis)));
       refit = fmt::format("{:.2f}", Psnr(encoded, held_out, true));
     }
-    RelightWebOptions options;
+    RelightWebOptions options = arguments.web;
     options.basis = BasisNamed(basis);
     const fs::path from_stack = work / (basis + "-stack");
     WriteRelightWeb(from_stack,

@@ -15,11 +15,12 @@
 // --float: photomat alone on the original 16-bit images with the light intensities divided out,
 // peak = the capture's largest value (the README's first held-out table).
 //
-//   held_out_lights [SET ...] [--every K] [--methods ptm,hsh9,rbf,bilinear,rbf:18,...]
+//   held_out_lights [SET ...] [--every K] [--methods ptm,hsh9,rbf,bilinear,rbf:-1,...]
 //                   [--float] [--relight-cli PATH|none] [--planes N] [--grid-size G]
 //                   [--rbf-width DEG] [--rbf-regularisation R]
 //
-// A method NAME:K fits with K PCA planes per channel (0: uncompressed); the other options apply
+// A method NAME:K fits with K PCA planes per channel (0: uncompressed, -1: chosen by leave-one-out
+// on the training lights); the other options apply
 // to every light-profile method. relight-cli: --relight-cli, else $PHOTOMAT_RELIGHT_CLI, else the
 // build bench/peer_table leaves in ~/.cache/photomat-peers/relight-build.
 #include <OpenImageIO/imageio.h>
@@ -126,12 +127,14 @@ std::vector<Method> ParseMethods(const std::string& list, const LightProfileOpti
   return methods;
 }
 
+// The method's name; with `:K` for rbf and bilinear (K = -1: planes chosen by leave-one-out, 0: no
+// PCA). The planes a fit took are printed from its details.
 std::string MethodLabel(const Method& method) {
   const bool profile = method.kind == Method::Kind::kRbf || method.kind == Method::Kind::kBilinear;
-  if (!profile) return method.Name();
-  return fmt::format(
-      "{} ({} planes)", method.Name(),
-      method.profile.planes == 0 ? std::string("no PCA") : std::to_string(method.profile.planes));
+  if (!profile || method.profile.planes == LightProfileOptions::kDefaultPlanes) {
+    return method.Name();
+  }
+  return fmt::format("{}:{}", method.Name(), method.profile.planes);
 }
 
 struct HoldOut {
@@ -271,10 +274,18 @@ void PrintTable(const std::string& title, const std::vector<Row>& rows) {
   }
   if (ours && theirs) {
     const double margin = ours->psnr - theirs->psnr;
-    fmt::print("best: photomat {} {:.2f} dB, relight-cli {} {:.2f} dB: {:+.2f} dB ({})\n",
-               ours->method, ours->psnr, theirs->method, theirs->psnr, margin,
-               margin >= 1.0 ? "target +1 dB met"
-                             : fmt::format("target +1 dB NOT MET, {:.2f} dB short", 1.0 - margin));
+    fmt::print("best: photomat {} {:.2f} dB, relight-cli {} {:.2f} dB: {:+.2f} dB\n", ours->method,
+               ours->psnr, theirs->method, theirs->psnr, margin);
+    if (margin >= 1.0) {
+      fmt::print("target met: at least 1 dB above relight-cli's best\n");
+    } else {
+      fmt::print(
+          "EXPECTED FAILURE: target \"photomat's best at least 1 dB PSNR above relight-cli's "
+          "best\" not met (measured {:+.2f} dB, {:.2f} dB short) because no method photomat "
+          "chooses on the training lights predicts these held-out lights better (README \"Against "
+          "the peers\")\n",
+          margin, 1.0 - margin);
+    }
   }
 }
 
@@ -299,6 +310,13 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
           FitObservations(observations, set.lights(), method, hold_out.selected, path);
       rows.push_back({"photomat", MethodLabel(method), r.maps().channels(),
                       MeanPsnr(r, set, hold_out.held_out, peak)});
+      if (r.details().contains("pca")) {
+        rows.back().method += fmt::format(" [planes {}]", r.details()["pca"]["planes"].dump());
+      }
+      if (r.details().contains("bilinear")) {
+        rows.back().method += fmt::format(" [smoothness {:.3g}]",
+                                          r.details()["bilinear"]["smoothness"].get<double>());
+      }
       if (r.details().contains("rbf")) {
         rows.back().method += fmt::format(" [width {:.3g} deg, regularisation {:.3g}]",
                                           r.details()["rbf"]["width_deg"].get<double>(),
