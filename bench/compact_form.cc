@@ -9,12 +9,11 @@
 // materials.png is counted separately).
 //
 //   compact_form [SET] [--every K] [--methods ptm,hsh,rbf,bilinear] [--relight-cli PATH]
-//                [--quality Q] [--relight-planes K] [--resolution R]
+//                [--quality Q] [--relight-planes K] [--resolution R] [--range-quantile Q]
 //
-// (--quality, --relight-planes and --resolution change photomat's folders only, relight-cli runs
-// with its defaults.)
-// (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10; relight-cli from $PHOTOMAT_RELIGHT_CLI
-// or
+// (--quality, --relight-planes, --resolution and --range-quantile change photomat's folders only,
+// relight-cli runs with its defaults.) (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10;
+// relight-cli from $PHOTOMAT_RELIGHT_CLI or
 // ~/.cache/photomat-peers/relight-build.)
 #include <fmt/format.h>
 
@@ -84,6 +83,8 @@ Arguments Parse(int argc, char** argv) {
       arguments.web.quality = std::stoi(value());
     } else if (a == "--relight-planes") {
       arguments.web.planes = std::stoi(value());
+    } else if (a == "--range-quantile") {
+      arguments.web.range_quantile = std::stod(value());
     } else if (a == "--resolution") {
       arguments.web.resolution = std::stoi(value());
     } else {
