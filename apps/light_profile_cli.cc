@@ -15,9 +15,10 @@ void AddLightProfileOptions(CLI::App& command, LightProfileCli& options) {
       ->check(CLI::Range(0.0, 1e6));
   command
       .add_option("--planes", options.planes,
-                  "rbf, bilinear: PCA planes per colour channel (0: no PCA)")
+                  "rbf, bilinear: PCA planes per colour channel (0: no PCA; -1: chosen by "
+                  "leave-one-out on the capture, 1 to 16)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 1024));
+      ->check(CLI::Range(-1, 1024));
   command
       .add_option("--grid-size", options.grid_size,
                   "bilinear: nodes per side of the light grid over (lx, ly) in [-1, 1]^2")

@@ -9,9 +9,11 @@
 // materials.png is counted separately).
 //
 //   compact_form [SET] [--every K] [--methods ptm,hsh,rbf,bilinear] [--relight-cli PATH]
+//                [--quality Q] [--relight-planes K] [--resolution R] [--range-quantile Q]
 //
-// (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10; relight-cli from $PHOTOMAT_RELIGHT_CLI
-// or
+// (--quality, --relight-planes, --resolution and --range-quantile change photomat's folders only,
+// relight-cli runs with its defaults.) (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10;
+// relight-cli from $PHOTOMAT_RELIGHT_CLI or
 // ~/.cache/photomat-peers/relight-build.)
 #include <fmt/format.h>
 
@@ -30,6 +32,7 @@
 #include "relight/formats/interchange.h"
 #include "relight/formats/relight_web_format.h"
 #include "relight/formats/stack_file.h"
+#include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
 
@@ -43,6 +46,7 @@ struct Arguments {
   int every = 10;
   std::vector<std::string> methods = {"ptm", "hsh", "rbf", "bilinear"};
   std::optional<fs::path> relight_cli;
+  RelightWebOptions web;  // --quality, --relight-planes, --resolution (photomat's folders only)
 };
 
 Arguments Parse(int argc, char** argv) {
@@ -75,6 +79,14 @@ Arguments Parse(int argc, char** argv) {
       }
     } else if (a == "--relight-cli") {
       arguments.relight_cli = value();
+    } else if (a == "--quality") {
+      arguments.web.quality = std::stoi(value());
+    } else if (a == "--relight-planes") {
+      arguments.web.planes = std::stoi(value());
+    } else if (a == "--range-quantile") {
+      arguments.web.range_quantile = std::stod(value());
+    } else if (a == "--resolution") {
+      arguments.web.resolution = std::stoi(value());
     } else {
       arguments.set = a;
     }
@@ -116,26 +128,16 @@ struct HeldOut {
   Mask mask;
 };
 
-// Mean PSNR (peak 1) over the held-out lights; `encoded` results are decoded to linear first.
+// Mean PSNR (peak 1, MaskedPsnr) over the held-out lights; `encoded` results are decoded to
+// linear first.
 double Psnr(const Representation& r, const HeldOut& held_out, bool encoded) {
   double total = 0;
   for (int i : held_out.lights) {
-    const Image relit = r.Relight(held_out.set->light(i));
-    const Image& photo = held_out.set->images()[i];
-    double sum = 0;
-    std::size_t count = 0;
-    for (int c = 0; c < photo.channels(); ++c) {
-      const auto a = relit.plane(c);
-      const auto b = photo.plane(c);
-      for (std::size_t p = 0; p < photo.pixel_count(); ++p) {
-        if (!held_out.mask[p]) continue;
-        const double v = encoded ? SrgbToLinear(a[p]) : a[p];
-        const double d = std::clamp(v, 0.0, 1.0) - std::clamp(double{b[p]}, 0.0, 1.0);
-        sum += d * d;
-        ++count;
-      }
+    Image relit = r.Relight(held_out.set->light(i));
+    if (encoded) {
+      for (float& v : relit.values()) v = SrgbToLinear(v);
     }
-    total += 10.0 * std::log10(static_cast<double>(count) / sum);
+    total += MaskedPsnr(relit, held_out.set->images()[i], held_out.mask, 1.0);
   }
   return total / held_out.lights.size();
 }
@@ -219,7 +221,7 @@ int Run(int argc, char** argv) {
           {fit, StackProvenance(train_lights, "linear")}, Method::Parse(FloatMethod(basis)));
       refit = fmt::format("{:.2f}", Psnr(encoded, held_out, true));
     }
-    RelightWebOptions options;
+    RelightWebOptions options = arguments.web;
     options.basis = BasisNamed(basis);
     const fs::path from_stack = work / (basis + "-stack");
     WriteRelightWeb(from_stack,

@@ -460,16 +460,31 @@ Representation RepresentationFromRelightWeb(const RelightWebStack& stack) {
 namespace {
 
 // Per plane over all pixels: scale = (max - min) / 255, bias = -min / (max - min), bytes rounded,
-// so every value is within scale / 2 of its byte's.
-void QuantisePlanes(const std::vector<std::vector<float>>& values, RelightWebStack& stack) {
+// so every value is within scale / 2 of its byte's; with `quantile` < 1, min and max are the
+// plane's (1 - quantile) and quantile quantiles and the values outside are clipped.
+std::pair<double, double> PlaneRange(const std::vector<float>& values, double quantile) {
+  if (quantile >= 1.0 || values.empty()) {
+    const auto [low, high] = std::minmax_element(values.begin(), values.end());
+    return {*low, *high};
+  }
+  std::vector<float> sorted = values;
+  const auto at = [&](double q) {
+    const auto index = static_cast<std::ptrdiff_t>(q * static_cast<double>(sorted.size() - 1));
+    std::nth_element(sorted.begin(), sorted.begin() + index, sorted.end());
+    return static_cast<double>(sorted[static_cast<std::size_t>(index)]);
+  };
+  return {at(1.0 - quantile), at(quantile)};
+}
+
+void QuantisePlanes(const std::vector<std::vector<float>>& values, double quantile,
+                    RelightWebStack& stack) {
   const int planes = static_cast<int>(values.size());
   stack.planes.assign(planes, {});
   stack.scale.assign(planes, 1.0);
   stack.bias.assign(planes, 0.0);
   for (int p = 0; p < planes; ++p) {
-    const auto [low, high] = std::minmax_element(values[p].begin(), values[p].end());
-    const double min = *low;
-    const double span = std::max(static_cast<double>(*high) - min, 1e-6);
+    const auto [min, max] = PlaneRange(values[p], quantile);
+    const double span = std::max(max - min, 1e-6);
     stack.scale[p] = static_cast<float>(span / 255.0);
     stack.bias[p] = static_cast<float>(-min / span);
     auto& bytes = stack.planes[p];
@@ -513,7 +528,7 @@ RelightWebStack PolynomialFromStack(const LoadedStack& loaded, const RelightWebO
   stack.height = encoded.height();
   stack.quality = options.quality;
   for (const auto& light : loaded.provenance.capture_lights) stack.lights.push_back(light.vector());
-  QuantisePlanes(values, stack);
+  QuantisePlanes(values, options.range_quantile, stack);
   return stack;
 }
 
@@ -623,7 +638,7 @@ RelightWebStack MrgbFromImages(int width, int height, const std::vector<LightDir
       for (int k = 0; k < planes; ++k) values[k][p] = c[k];
     }
   });
-  QuantisePlanes(values, stack);
+  QuantisePlanes(values, options.range_quantile, stack);
   return stack;
 }
 
@@ -665,6 +680,9 @@ RelightWebStack MrgbFromStack(const LoadedStack& loaded, const RelightWebOptions
 void CheckOptions(const RelightWebOptions& options) {
   if (options.quality < 1 || options.quality > 100) {
     throw Error(fmt::format("JPEG quality {} is not in 1..100", options.quality));
+  }
+  if (!(options.range_quantile > 0.5 && options.range_quantile <= 1.0)) {
+    throw Error(fmt::format("range quantile {} is not in (0.5, 1]", options.range_quantile));
   }
 }
 

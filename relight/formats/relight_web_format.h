@@ -127,6 +127,10 @@ struct RelightWebOptions {
   int hsh_terms = 9;     // hsh: 4 or 9 (relight has no 16-term HSH)
   double sigma = 0.125;  // rbf (relight-cli's default)
   int resolution = 8;    // bilinear grid side (relight-cli's default)
+  // Each plane is quantised over the range from its (1 - q) to its q quantile over the pixels,
+  // values outside clipped (relight-cli's -Q, default 0.995); 1 (the default): min to max, no
+  // value clipped.
+  double range_quantile = 1.0;
 };
 
 // The stack in relight's web format. ptm/hsh: ConvertToEncoded (relight/formats/interchange.h;

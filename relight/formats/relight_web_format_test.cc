@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -106,6 +107,33 @@ TEST(RelightWebFormatTest, QuantisedPlanesRelightWithinTheirBound) {
       EXPECT_LE(error, bound + 1e-3) << method;
     }
   }
+}
+
+// A range quantile below 1 narrows each plane's step to its central values' range (relight-cli's
+// -Q) and clips the rest to the ends of that range.
+TEST(RelightWebFormatTest, RangeQuantileNarrowsTheStepsAndClipsTheTails) {
+  const LoadedStack stack = EncodedFit("hsh9");
+  RelightWebOptions whole;
+  whole.basis = RelightWebBasis::kHsh;
+  RelightWebOptions central = whole;
+  central.range_quantile = 0.99;
+  const RelightWebStack a = RelightWebFromStack(stack, whole);
+  const RelightWebStack b = RelightWebFromStack(stack, central);
+  ASSERT_EQ(a.scale.size(), b.scale.size());
+  int narrower = 0;
+  for (std::size_t p = 0; p < a.scale.size(); ++p) {
+    EXPECT_LE(b.scale[p], a.scale[p] * (1.0 + 1e-6)) << p;
+    if (b.scale[p] < a.scale[p] * 0.999) ++narrower;
+    // At most 1 % of the pixels lie below the low end and 1 % above the high end: clipped to
+    // bytes 0 and 255 (others may round there too).
+    const auto& bytes = b.planes[p];
+    const auto ends =
+        std::count(bytes.begin(), bytes.end(), 0) + std::count(bytes.begin(), bytes.end(), 255);
+    EXPECT_GE(ends, 2) << p;
+  }
+  EXPECT_GT(narrower, 0);
+  central.range_quantile = 0.4;
+  EXPECT_THROW(RelightWebFromStack(stack, central), Error);
 }
 
 // Must show: PTM and HSH written -> read back -> relit within the quantisation, here with the JPEG

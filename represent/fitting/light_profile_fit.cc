@@ -16,8 +16,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::array<double, 7> kWidthFactors = {0.5, 0.7071, 1.0, 1.4142, 2.0, 2.8284, 4.0};
-constexpr std::array<double, 6> kRegularisations = {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1};
+constexpr std::array<double, 9> kWidthFactors = {0.25,   0.3536, 0.5,    0.7071, 1.0,
+                                                 1.4142, 2.0,    2.8284, 4.0};
+constexpr std::array<double, 7> kRegularisations = {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
+constexpr std::array<double, 6> kBilinearSmoothnesses = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
 
 double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights) {
   std::vector<double> nearest;
@@ -32,25 +34,87 @@ double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights) 
   return nearest[nearest.size() / 2];
 }
 
-// sum over profile rows of the squared leave-one-out residuals, over trace G; NaN if the system
-// is singular.
-double LeaveOneOutError(const std::vector<LightDirection>& lights, const Eigen::MatrixXd& gram,
-                        double width, double regularisation) {
+// The position in LeaveOneOutFolds::Scores of `planes` (0: every axis).
+Eigen::Index ScoreIndex(int planes, Eigen::Index fold_size) {
+  return (planes == 0 ? fold_size : std::min<Eigen::Index>(planes, fold_size)) - 1;
+}
+
+// Rippa's leave-one-out weights of an RBF interpolation, e_i - B_i / B_ii; empty when a diagonal
+// entry vanishes or the system cannot be solved.
+Eigen::MatrixXd RbfLeaveOneOutWeights(const std::vector<LightDirection>& lights, double width,
+                                      double regularisation) {
   try {
     const RbfInterpolation interpolation(lights, width, regularisation);
     const Eigen::MatrixXd& block = interpolation.InverseBlock();
-    const Eigen::MatrixXd bg = block * gram;
-    double sum = 0.0;
+    Eigen::MatrixXd weights = -block;
     for (Eigen::Index i = 0; i < block.rows(); ++i) {
       const double diagonal = block(i, i);
-      if (!(std::abs(diagonal) > 0.0)) return std::numeric_limits<double>::quiet_NaN();
-      sum += bg.row(i).dot(block.col(i)) / (diagonal * diagonal);
+      if (!(std::abs(diagonal) > 0.0)) return {};
+      weights.row(i) /= diagonal;
+      weights(i, i) = 0.0;
     }
-    const double trace = gram.trace();
-    return trace > 0.0 ? std::sqrt(std::max(0.0, sum) / trace) : 0.0;
+    return weights;
   } catch (const Error&) {
-    return std::numeric_limits<double>::quiet_NaN();
+    return {};
   }
+}
+
+// The leave-one-out weights of a penalised least-squares resampling, (H_i - H_ii e_i) /
+// (1 - H_ii) with H = b(L) R; empty when a light is fitted alone (H_ii = 1).
+Eigen::MatrixXd BilinearLeaveOneOutWeights(const std::vector<LightDirection>& lights, int grid_size,
+                                           double smoothness) {
+  const Eigen::MatrixXd resampling = BilinearResampling(lights, grid_size, smoothness);
+  const auto n = static_cast<Eigen::Index>(lights.size());
+  Eigen::MatrixXd hat(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
+    for (const auto& [node, w] :
+         BilinearLightBasis::GridWeights(grid_size, lights[i].x(), lights[i].y())) {
+      row += w * resampling.row(node).transpose();
+    }
+    hat.row(i) = row.transpose();
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double rest = 1.0 - hat(i, i);
+    if (!(std::abs(rest) > 1e-12)) return {};
+    hat(i, i) = 0.0;
+    hat.row(i) /= rest;
+  }
+  return hat;
+}
+
+nlohmann::json Number(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
+}
+
+// One candidate's best plane count: the largest mean_snr_db among `planes` (NaN scores never win).
+struct PlaneChoice {
+  int planes = 0;
+  double relative_error = std::numeric_limits<double>::quiet_NaN();
+  double mean_snr_db = -std::numeric_limits<double>::infinity();
+};
+PlaneChoice BestPlanes(const LeaveOneOutFolds::Scores& scores, const std::vector<int>& planes) {
+  PlaneChoice best;
+  best.planes = planes.front();
+  for (int k : planes) {
+    const Eigen::Index index = ScoreIndex(k, scores.mean_snr_db.size());
+    if (scores.mean_snr_db[index] > best.mean_snr_db) {
+      best = {k, scores.relative_error[index], scores.mean_snr_db[index]};
+    }
+  }
+  return best;
+}
+
+nlohmann::json ScoresByPlanes(const LeaveOneOutFolds::Scores& scores,
+                              const std::vector<int>& planes) {
+  nlohmann::json table = nlohmann::json::array();
+  for (int k : planes) {
+    const Eigen::Index index = ScoreIndex(k, scores.mean_snr_db.size());
+    table.push_back({{"planes", k},
+                     {"relative_error", Number(scores.relative_error[index])},
+                     {"mean_snr_db", Number(scores.mean_snr_db[index])}});
+  }
+  return table;
 }
 
 struct PrincipalAxes {
@@ -117,9 +181,14 @@ nlohmann::json PlanesJson(int planes, const PrincipalAxes& axes) {
           {"cumulative_information", CumulativeInformation(axes.singular_values)}};
 }
 
+std::string PlanesFrom(const LightProfileOptions& options) {
+  return options.planes == LightProfileOptions::kChoosePlanes ? "leave-one-out" : "fixed";
+}
+
 void CheckPlanes(const LightProfileOptions& options, const std::string& method,
                  const fs::path& source) {
-  if (options.planes < 0 || options.planes > 1024) {
+  if ((options.planes < 0 && options.planes != LightProfileOptions::kChoosePlanes) ||
+      options.planes > 1024) {
     throw Error(source,
                 fmt::format("{}: {} planes; expected 0 (no PCA) to 1024", method, options.planes));
   }
@@ -131,7 +200,7 @@ LightProfileModel RbfModel(const Eigen::MatrixXd& gram, const Eigen::VectorXd& c
                            nlohmann::json details) {
   const RbfParameters chosen = ChooseRbfParameters(lights, gram, options, source);
   PrincipalAxes axes =
-      FindPrincipalAxes(gram, options.planes, static_cast<int>(lights.size()), "rbf", source);
+      FindPrincipalAxes(gram, chosen.planes, static_cast<int>(lights.size()), "rbf", source);
   const auto n = static_cast<Eigen::Index>(lights.size());
   LightProfileModel model;
   model.method = "rbf";
@@ -141,8 +210,12 @@ LightProfileModel RbfModel(const Eigen::MatrixXd& gram, const Eigen::VectorXd& c
       {"regularisation", chosen.regularisation},
       {"width_from", options.rbf_width_degrees ? "option" : "leave-one-out"},
       {"regularisation_from", options.rbf_regularisation ? "option" : "leave-one-out"},
+      {"relative_error", Number(chosen.relative_error)},
+      {"mean_snr_db", Number(chosen.mean_snr_db)},
       {"leave_one_out", chosen.leave_one_out}};
-  details["pca"] = PlanesJson(options.planes, axes);
+  details["pca"] = PlanesJson(chosen.planes, axes);
+  details["pca"]["planes_from"] = PlanesFrom(options);
+  details["pca"]["leave_one_out"] = chosen.by_planes;
   model.basis = std::make_shared<RbfLightBasis>(
       RbfInterpolation(lights, chosen.width_degrees, chosen.regularisation), axes.basis);
   model.details = std::move(details);
@@ -157,14 +230,15 @@ LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::Vector
   if (g < 2 || g > 32) {
     throw Error(source, fmt::format("bilinear: grid size {} is outside 2..32", g));
   }
-  const Eigen::MatrixXd resampling = BilinearResampling(lights, g);  // G^2 x n
+  const BilinearParameters chosen = ChooseBilinearParameters(lights, gram, options, source);
+  const Eigen::MatrixXd resampling = BilinearResampling(lights, g, chosen.smoothness);  // G^2 x n
   const auto n = static_cast<Eigen::Index>(lights.size());
   LightProfileModel model;
   model.method = "bilinear";
   Eigen::MatrixXd grid_basis;  // G^2 x k: the grid values of each plane's profile
   PrincipalAxes axes =
-      FindPrincipalAxes(gram, options.planes, static_cast<int>(n), "bilinear", source);
-  if (options.planes == 0) {
+      FindPrincipalAxes(gram, chosen.planes, static_cast<int>(n), "bilinear", source);
+  if (chosen.planes == 0) {
     // Uncompressed: every grid node is a plane, the maps are the grid profiles R p.
     grid_basis = Eigen::MatrixXd::Identity(g * g, g * g);
     model.projection = SignedProjection(column_sums, resampling.transpose(), grid_basis);
@@ -176,14 +250,85 @@ LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::Vector
     model.projection = SignedProjection(column_sums, Eigen::MatrixXd::Identity(n, n), axes.basis);
     grid_basis = resampling * axes.basis;
   }
-  details["pca"] = PlanesJson(options.planes, axes);
-  details["bilinear"] = {{"grid_size", g}, {"smoothness", kBilinearSmoothness}};
+  details["pca"] = PlanesJson(chosen.planes, axes);
+  details["pca"]["planes_from"] = PlanesFrom(options);
+  details["pca"]["leave_one_out"] = chosen.by_planes;
+  details["bilinear"] = {
+      {"grid_size", g},
+      {"smoothness", chosen.smoothness},
+      {"smoothness_from", options.bilinear_smoothness ? "option" : "leave-one-out"},
+      {"relative_error", Number(chosen.relative_error)},
+      {"mean_snr_db", Number(chosen.mean_snr_db)},
+      {"leave_one_out", chosen.leave_one_out}};
   model.basis = std::make_shared<BilinearLightBasis>(g, grid_basis);
   model.details = std::move(details);
   return model;
 }
 
 }  // namespace
+
+LeaveOneOutFolds::LeaveOneOutFolds(const Eigen::MatrixXd& gram) : diagonal_(gram.diagonal()) {
+  const auto n = static_cast<int>(gram.rows());
+  const int stride = (n + kMaxFolds - 1) / kMaxFolds;
+  for (int i = 0; i < n; i += stride) {
+    Fold fold;
+    fold.light = i;
+    for (int j = 0; j < n; ++j) {
+      if (j != i) fold.others.push_back(j);
+    }
+    const Eigen::MatrixXd rest = gram(fold.others, fold.others);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(rest);
+    if (solver.info() != Eigen::Success) continue;  // leaves this fold out
+    fold.axes = solver.eigenvectors().rowwise().reverse();
+    fold.eigenvalues = solver.eigenvalues().reverse();
+    const Eigen::VectorXd column = gram(fold.others, i);
+    fold.cross = fold.axes.transpose() * column;
+    folds_.push_back(std::move(fold));
+  }
+}
+
+LeaveOneOutFolds::Scores LeaveOneOutFolds::Score(const Eigen::MatrixXd& weights) const {
+  const Eigen::Index size = std::max<Eigen::Index>(1, diagonal_.size() - 1);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Scores scores{Eigen::VectorXd::Zero(size), Eigen::VectorXd::Zero(size)};
+  if (weights.rows() != diagonal_.size() || folds_.empty()) {
+    return {Eigen::VectorXd::Constant(size, nan), Eigen::VectorXd::Constant(size, nan)};
+  }
+  double total = 0.0;
+  for (const Fold& fold : folds_) {
+    const Eigen::VectorXd w = weights(fold.light, fold.others).transpose();
+    if (!w.allFinite()) {
+      return {Eigen::VectorXd::Constant(size, nan), Eigen::VectorXd::Constant(size, nan)};
+    }
+    const Eigen::VectorXd a = fold.axes.transpose() * w;
+    const double signal = diagonal_[fold.light];
+    double error = signal;
+    for (Eigen::Index j = 0; j < size; ++j) {
+      error += fold.eigenvalues[j] * a[j] * a[j] - 2.0 * a[j] * fold.cross[j];
+      const double positive = std::max(error, 1e-300);
+      scores.relative_error[j] += positive;
+      // An empty image (signal 0) predicted exactly carries no information: 0 dB.
+      scores.mean_snr_db[j] += signal > 0.0 ? 10.0 * std::log10(signal / positive) : 0.0;
+    }
+    total += signal;
+  }
+  if (total > 0.0) {
+    scores.relative_error = (scores.relative_error / total).cwiseSqrt();
+  } else {
+    scores.relative_error.setZero();
+  }
+  scores.mean_snr_db /= static_cast<double>(folds_.size());
+  return scores;
+}
+
+std::vector<int> CandidatePlanes(const LightProfileOptions& options, int lights) {
+  if (options.planes >= 0) return {options.planes};
+  std::vector<int> planes;
+  for (int k = 1; k <= std::min(LightProfileOptions::kMaxChosenPlanes, lights - 1); ++k) {
+    planes.push_back(k);
+  }
+  return planes;
+}
 
 RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
                                   const Eigen::MatrixXd& gram, const LightProfileOptions& options,
@@ -203,24 +348,35 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
   } else {
     regularisations.assign(kRegularisations.begin(), kRegularisations.end());
   }
+  const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));
+  const LeaveOneOutFolds folds(gram);
   RbfParameters best;
+  best.mean_snr_db = -std::numeric_limits<double>::infinity();
   best.leave_one_out = nlohmann::json::array();
-  double best_error = std::numeric_limits<double>::infinity();
   for (double width : widths) {
     for (double regularisation : regularisations) {
-      const double error = LeaveOneOutError(lights, gram, width, regularisation);
-      best.leave_one_out.push_back(
-          {{"width_deg", width},
-           {"regularisation", regularisation},
-           {"relative_error", std::isnan(error) ? nlohmann::json() : nlohmann::json(error)}});
-      if (error < best_error) {
-        best_error = error;
+      const PlaneChoice choice =
+          BestPlanes(folds.Score(RbfLeaveOneOutWeights(lights, width, regularisation)), planes);
+      best.leave_one_out.push_back({{"width_deg", width},
+                                    {"regularisation", regularisation},
+                                    {"planes", choice.planes},
+                                    {"relative_error", Number(choice.relative_error)},
+                                    {"mean_snr_db", Number(choice.mean_snr_db)}});
+      if (choice.mean_snr_db > best.mean_snr_db) {
         best.width_degrees = width;
         best.regularisation = regularisation;
+        best.planes = choice.planes;
+        best.relative_error = choice.relative_error;
+        best.mean_snr_db = choice.mean_snr_db;
       }
     }
   }
-  if (!std::isfinite(best_error)) {
+  if (std::isfinite(best.mean_snr_db)) {
+    best.by_planes = ScoresByPlanes(
+        folds.Score(RbfLeaveOneOutWeights(lights, best.width_degrees, best.regularisation)),
+        planes);
+  }
+  if (!std::isfinite(best.mean_snr_db)) {
     // Rebuild the first candidate to report why it fails (or the options' fault).
     try {
       RbfInterpolation(lights, widths.front(), regularisations.front());
@@ -232,7 +388,49 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
   return best;
 }
 
-Eigen::MatrixXd BilinearResampling(const std::vector<LightDirection>& lights, int grid_size) {
+BilinearParameters ChooseBilinearParameters(const std::vector<LightDirection>& lights,
+                                            const Eigen::MatrixXd& gram,
+                                            const LightProfileOptions& options,
+                                            const fs::path& source) {
+  if (lights.size() < 2) {
+    throw Error(source, fmt::format("bilinear: {} lights; at least 2 are needed", lights.size()));
+  }
+  const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));
+  const LeaveOneOutFolds folds(gram);
+  BilinearParameters best;
+  best.mean_snr_db = -std::numeric_limits<double>::infinity();
+  best.planes = planes.front();
+  best.leave_one_out = nlohmann::json::array();
+  std::vector<double> smoothnesses(kBilinearSmoothnesses.begin(), kBilinearSmoothnesses.end());
+  if (options.bilinear_smoothness) smoothnesses = {*options.bilinear_smoothness};
+  for (double smoothness : smoothnesses) {
+    const LeaveOneOutFolds::Scores scores =
+        folds.Score(BilinearLeaveOneOutWeights(lights, options.grid_size, smoothness));
+    const PlaneChoice choice = BestPlanes(scores, planes);
+    best.leave_one_out.push_back({{"smoothness", smoothness},
+                                  {"planes", choice.planes},
+                                  {"relative_error", Number(choice.relative_error)},
+                                  {"mean_snr_db", Number(choice.mean_snr_db)}});
+    if (choice.mean_snr_db > best.mean_snr_db) {
+      best.smoothness = smoothness;
+      best.planes = choice.planes;
+      best.relative_error = choice.relative_error;
+      best.mean_snr_db = choice.mean_snr_db;
+      best.by_planes = ScoresByPlanes(scores, planes);
+    }
+  }
+  if (!std::isfinite(best.mean_snr_db)) {
+    // No candidate scores (e.g. a light alone in its grid cells at smoothness 0): the first
+    // candidate still fits; the choice is recorded without scores.
+    best.smoothness = smoothnesses.front();
+    best.relative_error = std::numeric_limits<double>::quiet_NaN();
+    best.by_planes = nlohmann::json::array();
+  }
+  return best;
+}
+
+Eigen::MatrixXd BilinearResampling(const std::vector<LightDirection>& lights, int grid_size,
+                                   double smoothness) {
   const int g = grid_size;
   const Eigen::Index nodes = static_cast<Eigen::Index>(g) * g;
   const auto n = static_cast<Eigen::Index>(lights.size());
@@ -249,7 +447,7 @@ Eigen::MatrixXd BilinearResampling(const std::vector<LightDirection>& lights, in
     const std::array<double, 3> coefficient = {1.0, -2.0, 1.0};
     for (int r = 0; r < 3; ++r) {
       for (int s = 0; s < 3; ++s) {
-        normal(index[r], index[s]) += kBilinearSmoothness * coefficient[r] * coefficient[s];
+        normal(index[r], index[s]) += smoothness * coefficient[r] * coefficient[s];
       }
     }
   };

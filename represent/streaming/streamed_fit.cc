@@ -44,7 +44,7 @@ int MapPlanes(const Method& method, int images, int channels) {
       return method.eigen_k * channels;
     case Method::Kind::kRbf:
       return (method.profile.planes > 0 ? std::min(method.profile.planes, images) : images) *
-             channels;
+             channels;  // kChoosePlanes: at most images, as no PCA
     case Method::Kind::kBilinear:
       return (method.profile.planes > 0 ? std::min(method.profile.planes, images)
                                         : method.profile.grid_size * method.profile.grid_size) *
