@@ -122,6 +122,8 @@ class Streamer {
       RobustFitOptions robust = options_.robust_options;
       robust.measured = band.measured;
       robust.progress = nullptr;
+      // The band's lamps (their frame the whole image's, from its first row) for pbr.
+      if (band.set->near_lighting()) robust.near_lighting = &*band.set->near_lighting();
       band.robust.emplace(*band.observations, band.set->lights(), all_, robust, set_.source());
     }
   }
