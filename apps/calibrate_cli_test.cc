@@ -176,6 +176,13 @@ TEST(CalibrateCliTest, ApplyNearLightsThenFitImprovesNormals) {
       RunPhotomat("calibrate apply " + (dir / "near").string() + " --near-lights " +
                   (dir / "lamps.txt").string() + " --out " + (dir / "corrected").string());
   ASSERT_EQ(apply.exit_code, 0) << apply.output;
+  // The lamps travel with the corrected capture (its manifest's "lamp"s), for the pbr fit.
+  const CaptureManifest corrected = ReadCaptureManifest(dir / "corrected" / "manifest.json");
+  ASSERT_EQ(corrected.images.size(), lamps.size());
+  for (std::size_t i = 0; i < lamps.size(); ++i) {
+    ASSERT_TRUE(corrected.images[i].lamp);
+    EXPECT_LT((*corrected.images[i].lamp - lamps[i].position).norm(), 1e-9 * 96.0);
+  }
   const auto error = [&](const fs::path& set) {
     const RunResult run =
         RunPhotomat("evaluate " + set.string() + " --methods gradient --no-prediction --json " +

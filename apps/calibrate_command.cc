@@ -248,7 +248,7 @@ void AddLightsCommand(CLI::App& calibrate) {
     manifest_path.replace_extension(".json");
     CaptureManifest manifest;
     for (std::size_t i = 0; i < names.size(); ++i) {
-      manifest.images.push_back({names[i], result.lights[i], {}});
+      manifest.images.push_back({names[i], result.lights[i], {}, {}});
     }
     manifest.provenance = {{"calibration", "mirror sphere"},
                            {"sphere_images", fs::absolute(options->input).generic_string()},
@@ -516,6 +516,9 @@ void AddApplyCommand(CLI::App& calibrate) {
       }
       set = ApplyFlatField(
           set, FlatFieldFromNearLights(lamps, set.width(), set.height(), set.channels()));
+      // The lamps travel with the corrected capture (its manifest's "lamp"s): the pbr fit lights
+      // each pixel from its own lamp direction (core/near_light.h).
+      set.set_near_lighting({lamps, set.width(), set.height(), 0});
       steps.push_back({{"near_lights", fs::absolute(options->near_lights).generic_string()}});
     }
     if (!options->intensities.empty()) {

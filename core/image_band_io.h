@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -91,7 +92,9 @@ class ImageBandWriter {
   // Writes band.rows() rows after those written so far (width and channels as opened).
   void WriteNext(ConstImageView band);
   // Every row written: closes the file and renames it into place. Throws Error naming path().
-  void Commit();
+  // `before_rename`, if given, is called with the closed temporary file first (to patch a header
+  // value that only the last band decides; an Error it throws leaves nothing at path()).
+  void Commit(const std::function<void(const std::filesystem::path& temp)>& before_rename = {});
 
  private:
   struct Encoder;

@@ -482,7 +482,7 @@ void ImageBandWriter::WriteNext(ConstImageView image) {
   next_row_ += image.height();
 }
 
-void ImageBandWriter::Commit() {
+void ImageBandWriter::Commit(const std::function<void(const fs::path& temp)>& before_rename) {
   const fs::path& path = file_.path();
   if (next_row_ != height_) {
     throw Error(path, fmt::format("cannot finish: {} of {} rows written", next_row_, height_));
@@ -491,6 +491,7 @@ void ImageBandWriter::Commit() {
   const std::string error = closed ? std::string() : OiioError(encoder_->output->geterror());
   encoder_->output.reset();
   if (!closed) throw Error(path, fmt::format("cannot write: {}", error));
+  if (before_rename) before_rename(file_.temp());
   file_.Commit();
 }
 

@@ -49,6 +49,24 @@ void PhotometricSet::set_mask(Mask mask) {
   mask_ = std::move(mask);
 }
 
+void PhotometricSet::set_near_lighting(NearLighting lighting) {
+  if (lighting.lamps.size() != images_.size()) {
+    Fail(fmt::format("{} near lamps for {} images", lighting.lamps.size(), images_.size()));
+  }
+  for (const NearLight& lamp : lighting.lamps) {
+    if (!(lamp.position.z() > 0.0) || !lamp.position.allFinite()) {
+      Fail("a near lamp must be above the sample plane (z > 0)");
+    }
+  }
+  if (lighting.width != width() || lighting.first_row < 0 ||
+      lighting.first_row + height() > lighting.height) {
+    Fail(fmt::format("the near lamps' frame is {}x{} but the images are rows {}-{} of {} columns",
+                     lighting.width, lighting.height, lighting.first_row,
+                     lighting.first_row + height() - 1, width()));
+  }
+  near_lighting_ = std::move(lighting);
+}
+
 Mask PhotometricSet::MaskOrAll() const { return mask_ ? *mask_ : Mask(width(), height(), true); }
 
 void PhotometricSet::set_intensities(std::vector<std::vector<float>> intensities) {
@@ -98,6 +116,12 @@ PhotometricSet PhotometricSet::Subset(std::span<const int> indices) const {
   PhotometricSet subset(std::move(images), std::move(lights), std::move(names), source_);
   subset.mask_ = mask_;
   subset.intensities_ = std::move(intensities);
+  if (near_lighting_) {
+    NearLighting lighting = *near_lighting_;
+    lighting.lamps.clear();
+    for (int i : indices) lighting.lamps.push_back(near_lighting_->lamps[i]);
+    subset.near_lighting_ = std::move(lighting);
+  }
   return subset;
 }
 

@@ -8,6 +8,7 @@
 
 #include "core/image.h"
 #include "core/light_direction.h"
+#include "core/near_light.h"
 
 namespace photomat {
 
@@ -51,7 +52,16 @@ class PhotometricSet {
   // 1: afterwards the images are what equal lights would have given.
   void ApplyIntensities();
 
-  // The images at `indices`, in that order (lights, names, intensities follow; mask kept).
+  // The near lamps of a capture that `calibrate apply --near-lights` divided by their fall-off
+  // (core/near_light.h; read from its manifest): the pbr fit uses them per pixel. Absent: the
+  // lights are distant (or their nearness unknown).
+  const std::optional<NearLighting>& near_lighting() const { return near_lighting_; }
+  // Throws Error naming source() unless there is one lamp per image, each above the sample plane,
+  // and this set's rows lie inside the lamps' frame.
+  void set_near_lighting(NearLighting lighting);
+
+  // The images at `indices`, in that order (lights, names, intensities, near lamps follow; mask
+  // kept).
   PhotometricSet Subset(std::span<const int> indices) const;
 
   // Error about this set, attributed to its source (or to nothing for an in-memory set).
@@ -64,6 +74,7 @@ class PhotometricSet {
   std::filesystem::path source_;
   std::optional<Mask> mask_;
   std::vector<std::vector<float>> intensities_;
+  std::optional<NearLighting> near_lighting_;
 };
 
 }  // namespace photomat

@@ -88,5 +88,33 @@ TEST(PhotometricSetTest, SubsetKeepsLightsNamesAndMask) {
   EXPECT_TRUE(subset.mask().has_value());
 }
 
+TEST(PhotometricSetTest, NearLampsAreCheckedAndFollowSubsets) {
+  PhotometricSet set({Filled(4, 2, 1, 1), Filled(4, 2, 1, 2)},
+                     {LightDirection::FromSlantTilt(10, 0), LightDirection::FromSlantTilt(20, 0)});
+  NearLighting lighting;
+  lighting.lamps = {NearLight{{1, 2, 30}, 1.0}, NearLight{{3, 4, 40}, 1.0}};
+  lighting.width = 4;
+  lighting.height = 6;
+  lighting.first_row = 4;  // rows 4-5 of a 4 x 6 capture
+  NearLighting one_lamp = lighting;
+  one_lamp.lamps.pop_back();
+  EXPECT_THAT([&] { set.set_near_lighting(one_lamp); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("1 near lamps for 2 images")));
+  NearLighting past_the_end = lighting;
+  past_the_end.first_row = 5;
+  EXPECT_THAT([&] { set.set_near_lighting(past_the_end); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("frame is 4x6")));
+  NearLighting below = lighting;
+  below.lamps[1].position.z() = 0.0;
+  EXPECT_THROW(set.set_near_lighting(below), Error);
+  set.set_near_lighting(lighting);
+  const std::vector<int> second = {1};
+  const PhotometricSet subset = set.Subset(second);
+  ASSERT_TRUE(subset.near_lighting());
+  ASSERT_EQ(subset.near_lighting()->lamps.size(), 1u);
+  EXPECT_EQ(subset.near_lighting()->lamps[0].position, Eigen::Vector3d(3, 4, 40));
+  EXPECT_EQ(subset.near_lighting()->first_row, 4);
+}
+
 }  // namespace
 }  // namespace photomat

@@ -7,20 +7,6 @@
 
 namespace photomat {
 
-Eigen::Vector3d SamplePoint(int width, int height, int column, int row, double surface_height) {
-  return {column + 0.5 - width / 2.0, height / 2.0 - row - 0.5, surface_height};
-}
-
-LightDirection NominalDirection(const NearLight& light) {
-  return LightDirection::FromVector(light.position);
-}
-
-std::vector<LightDirection> NominalDirections(const std::vector<NearLight>& lights) {
-  std::vector<LightDirection> directions;
-  for (const NearLight& light : lights) directions.push_back(NominalDirection(light));
-  return directions;
-}
-
 std::vector<NearLight> ReadNearLights(const std::filesystem::path& path) {
   std::vector<NearLight> lights;
   std::optional<std::size_t> count;

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/microfacet_brdf.h"
 #include "core/random.h"
 
 namespace photomat {
@@ -207,7 +208,7 @@ AngleStats CompareLights(const std::vector<LightDirection>& a,
 }
 
 PhotometricSet RenderNearLightCapture(const SyntheticMaterial& material,
-                                      const std::vector<NearLight>& lights) {
+                                      const std::vector<NearLight>& lights, bool microfacet) {
   if (lights.empty()) throw Error("no lights to render");
   const int w = material.normals.width(), h = material.normals.height();
   std::vector<Image> images(lights.size());
@@ -220,6 +221,17 @@ PhotometricSet RenderNearLightCapture(const SyntheticMaterial& material,
         const Eigen::Vector3d to_light =
             lights[i].position - SamplePoint(w, h, x, y, material.height.at(x, y, 0));
         const double distance = to_light.norm();
+        if (microfacet) {
+          const Eigen::Vector3d l = to_light / distance;
+          const MicrofacetResponse<double> response = MicrofacetRadiance<double>(
+              n.data(), l.data(), material.roughness.at(x, y, 0), material.f0.at(x, y, 0));
+          const double irradiance = lights[i].intensity / (distance * distance);
+          for (int c = 0; c < 3; ++c) {
+            image.at(x, y, c) = static_cast<float>(
+                irradiance * (response.diffuse * material.albedo.at(x, y, c) + response.specular));
+          }
+          continue;
+        }
         const double irradiance =
             lights[i].intensity * std::max(0.0, n.dot(to_light / distance)) / (distance * distance);
         for (int c = 0; c < 3; ++c) {

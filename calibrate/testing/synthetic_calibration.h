@@ -77,10 +77,13 @@ AngleStats CompareLights(const std::vector<LightDirection>& a,
                          const std::vector<LightDirection>& b);
 
 // `material` under near point lights with inverse-square fall-off (Lambertian, attached shadows
-// clamped to 0), in the sample frame of near_light.h (surface height included). The set's lights
-// are the nominal directions from the sample's centre.
+// clamped to 0; or, `microfacet`, the GGX material of core/microfacet_brdf.h with the material's
+// roughness and F0 maps, each light of irradiance intensity / d^2 from its direction at the
+// point), in the sample frame of near_light.h (surface height included). The set's lights are
+// the nominal directions from the sample's centre.
 PhotometricSet RenderNearLightCapture(const SyntheticMaterial& material,
-                                      const std::vector<NearLight>& lights);
+                                      const std::vector<NearLight>& lights,
+                                      bool microfacet = false);
 
 // A flat matte target of uniform `albedo` under the same lights (what EstimateFlatField reads),
 // with optional Gaussian noise.

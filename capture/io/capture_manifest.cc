@@ -57,6 +57,18 @@ std::vector<float> ReadIntensity(const JsonReader& entry) {
   return intensity;
 }
 
+std::optional<Eigen::Vector3d> ReadLamp(const JsonReader& entry) {
+  if (!entry.Has("lamp")) return std::nullopt;
+  const JsonReader value = entry["lamp"];
+  const std::vector<double> v = value.Numbers();
+  if (v.size() != 3) value.Fail("expected 3 numbers [x, y, z] (sample frame, pixels)");
+  const Eigen::Vector3d lamp(v[0], v[1], v[2]);
+  if (!lamp.allFinite() || !(lamp.z() > 0.0)) {
+    value.Fail("the lamp must be above the sample plane (z > 0)");
+  }
+  return lamp;
+}
+
 std::optional<std::string> OptionalString(const JsonReader& reader, const std::string& key) {
   return reader.Has(key) ? std::optional(reader[key].String()) : std::nullopt;
 }
@@ -84,7 +96,11 @@ CaptureManifest ReadCaptureManifest(const fs::path& path) {
   if (images.ArraySize() == 0) images.Fail("no images");
   for (std::size_t i = 0; i < images.ArraySize(); ++i) {
     const JsonReader entry = images[i];
-    manifest.images.push_back({entry["file"].String(), ReadLight(entry), ReadIntensity(entry)});
+    manifest.images.push_back(
+        {entry["file"].String(), ReadLight(entry), ReadIntensity(entry), ReadLamp(entry)});
+    if (manifest.images.back().lamp.has_value() != manifest.images.front().lamp.has_value()) {
+      entry.Fail("\"lamp\" is given for some images but not for others: give it for all or none");
+    }
   }
   if (root.Has("ground_truth")) {
     const JsonReader truth = root["ground_truth"];
@@ -109,6 +125,7 @@ void WriteCaptureManifest(const fs::path& path, const CaptureManifest& manifest)
         {"tilt_deg", image.light.TiltDegrees()},
     };
     if (!image.intensity.empty()) entry["intensity"] = image.intensity;
+    if (image.lamp) entry["lamp"] = {image.lamp->x(), image.lamp->y(), image.lamp->z()};
     images.push_back(std::move(entry));
   }
   document["images"] = std::move(images);
@@ -135,11 +152,16 @@ CaptureManifest SavePhotometricSet(const fs::path& folder, const PhotometricSet&
   write.encoding = *manifest.colour_space;
   NullProgress no_progress;
   Progress& report = OrNull(progress, no_progress);
+  const std::optional<NearLighting>& near = set.near_lighting();
+  if (near && (near->first_row != 0 || near->height != set.height())) {
+    set.Fail("cannot save rows of a capture with near lamps as a capture of its own");
+  }
   report.Start("write", set.size());
   for (int i = 0; i < set.size(); ++i) {
     CaptureManifestImage entry{
-        fmt::format("{}_{:03}.{}", options.prefix, i, exr ? "exr" : "png"), set.light(i), {}};
+        fmt::format("{}_{:03}.{}", options.prefix, i, exr ? "exr" : "png"), set.light(i), {}, {}};
     if (!set.intensities().empty()) entry.intensity = set.intensities()[i];
+    if (near) entry.lamp = near->lamps[static_cast<std::size_t>(i)].position;
     WriteImage(folder / entry.file, set.image(i), write);
     manifest.images.push_back(std::move(entry));
     report.Advance();

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -26,6 +27,9 @@ namespace photomat {
 //       {"file": "img_000.png", "light": [x, y, z]},              vector (normalised on read)
 //       {"file": "img_001.png", "slant_deg": 30, "tilt_deg": 30},  or slant/tilt in degrees
 //       ... each may add "intensity": v or [r, g, b]
+//       ... and "lamp": [x, y, z], all images or none: the near lamp's position in the sample
+//       frame (core/near_light.h: pixels, origin at the image centre, y up), written by
+//       `calibrate apply --near-lights`, whose images are divided by the lamps' fall-off
 //     ],
 //     "ground_truth": {"normals": "...exr", "albedo": "...exr", "height": "...exr"},  optional
 //     "provenance": {...}                     optional, free-form, ignored on read
@@ -35,6 +39,8 @@ struct CaptureManifestImage {
   std::string file;
   LightDirection light;
   std::vector<float> intensity;  // empty, one value, or one per channel
+  // The near lamp of a capture divided by its fall-off (PhotometricSet::near_lighting).
+  std::optional<Eigen::Vector3d> lamp;
 };
 
 struct CaptureManifest {
@@ -66,7 +72,8 @@ struct SaveSetOptions {
 };
 
 // Writes the images of `set` (named img_000.png, ...; negative values clamp to 0 in integer
-// files), its mask, and manifest.json into `folder` (created if needed). Returns the manifest.
+// files), its mask, its near lamps, and manifest.json into `folder` (created if needed). Returns
+// the manifest.
 // Reports each image to `progress` when given.
 CaptureManifest SavePhotometricSet(const std::filesystem::path& folder, const PhotometricSet& set,
                                    const SaveSetOptions& options = {},

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "capture/io/load_photometric_set.h"
+#include "capture/io/streamed_set.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 
@@ -94,6 +95,51 @@ TEST(CaptureManifestTest, SaveThenLoadKeepsSixteenBitDataLightsAndMask) {
       ASSERT_EQ(loaded.set.image(i).values()[v], images[i].values()[v]);
     }
   }
+}
+
+TEST(CaptureManifestTest, NearLampsTravelWithTheCaptureIntoEveryBand) {
+  testing::TempDir dir;
+  std::vector<Image> images(2, Image(6, 5, 3));
+  PhotometricSet set(
+      images, {LightDirection::FromSlantTilt(30, 0), LightDirection::FromSlantTilt(30, 180)});
+  NearLighting lighting;
+  lighting.lamps = {NearLight{{40, 0, 70}, 1.0}, NearLight{{-40, 0.5, 70.25}, 1.0}};
+  lighting.width = 6;
+  lighting.height = 5;
+  set.set_near_lighting(lighting);
+  SavePhotometricSet(dir.path(), set);
+  const CaptureManifest manifest = ReadCaptureManifest(dir / "manifest.json");
+  ASSERT_TRUE(manifest.images[1].lamp);
+  EXPECT_EQ(*manifest.images[1].lamp, Eigen::Vector3d(-40, 0.5, 70.25));
+  const LoadedSet loaded = LoadPhotometricSet(dir.path());
+  ASSERT_TRUE(loaded.set.near_lighting());
+  EXPECT_EQ(loaded.set.near_lighting()->lamps[0].position, Eigen::Vector3d(40, 0, 70));
+  EXPECT_EQ(loaded.set.near_lighting()->height, 5);
+  // A streamed band of rows 2-4 keeps the whole frame and knows where it starts.
+  StreamedSet streamed = OpenStreamedSet(dir.path());
+  streamed.ReadBand(2);
+  const PhotometricSet band = streamed.ReadBand(3);
+  ASSERT_TRUE(band.near_lighting());
+  EXPECT_EQ(band.near_lighting()->first_row, 2);
+  EXPECT_EQ(band.near_lighting()->height, 5);
+  EXPECT_EQ(band.near_lighting()->lamps[1].position, Eigen::Vector3d(-40, 0.5, 70.25));
+}
+
+TEST(CaptureManifestTest, LampsForSomeImagesOnlyOrBelowThePlaneAreRejected) {
+  testing::TempDir dir;
+  EXPECT_THAT(
+      [&] {
+        ReadCaptureManifest(
+            WriteManifest(dir, R"({"file": "a.png", "light": [0, 0, 1], "lamp": [0, 0, 90]},
+                    {"file": "b.png", "light": [0, 1, 1]})"));
+      },
+      ThrowsMessage<Error>(HasSubstr("for all or none")));
+  EXPECT_THAT(
+      [&] {
+        ReadCaptureManifest(
+            WriteManifest(dir, R"({"file": "a.png", "light": [0, 0, 1], "lamp": [0, 0, -5]})"));
+      },
+      ThrowsMessage<Error>(HasSubstr("above the sample plane")));
 }
 
 }  // namespace

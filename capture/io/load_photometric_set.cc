@@ -26,6 +26,7 @@ struct SetDescription {
   std::optional<fs::path> mask;
   std::optional<ColourSpace> colour_space;
   std::optional<fs::path> ground_truth_normals;
+  std::vector<NearLight> near_lamps;  // empty: distant lights
 };
 
 SetDescription DescribeLpSet(const fs::path& lp) {
@@ -54,6 +55,8 @@ SetDescription DescribeManifestSet(const fs::path& path) {
     description.intensities.push_back(image.intensity.empty() ? std::vector<float>{1.0f}
                                                               : image.intensity);
     any_intensity |= !image.intensity.empty();
+    // The lamps' intensities were divided out with their fall-off: position alone matters.
+    if (image.lamp) description.near_lamps.push_back(NearLight{*image.lamp, 1.0});
   }
   if (!any_intensity) description.intensities.clear();
   if (manifest.mask) description.mask = folder / *manifest.mask;
@@ -213,6 +216,7 @@ StreamedSet OpenStreamedSet(const fs::path& path, const LoadOptions& options) {
   set.intensities_ = std::move(description.intensities);
   set.apply_intensities_ = options.apply_intensities;
   set.ground_truth_normals_ = description.ground_truth_normals;
+  set.near_lamps_ = std::move(description.near_lamps);
   return set;
 }
 
@@ -246,6 +250,7 @@ PhotometricSet StreamedSet::ReadBand(int rows, bool raw, Progress* progress) {
     // A band outside the mask selects no pixel (SelectedPixels: callers skip its fit).
     if (mask.CountSet() > 0) band.set_mask(std::move(mask));
   }
+  if (!near_lamps_.empty()) band.set_near_lighting({near_lamps_, width(), height(), first});
   if (!intensities_.empty()) {
     band.set_intensities(intensities_);
     if (apply_intensities_ && !raw) band.ApplyIntensities();

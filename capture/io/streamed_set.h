@@ -40,7 +40,8 @@ class StreamedSet {
   std::vector<ImageEncodingRecord> encodings() const;
 
   // The next `rows` rows of every image, decoded in parallel: a set of band images with the
-  // lights, names, the band of the mask and the intensities (applied if the options said so,
+  // lights, names, near lamps (their frame the whole image's), the band of the mask and the
+  // intensities (applied if the options said so,
   // unless `raw`: then attached, for callers that look at the values as captured first). Throws
   // Error naming the image for a truncated or corrupt band. `progress` advances once per image.
   PhotometricSet ReadBand(int rows, bool raw = false, Progress* progress = nullptr);
@@ -66,6 +67,7 @@ class StreamedSet {
   std::vector<std::vector<float>> intensities_;
   bool apply_intensities_ = true;
   std::optional<std::filesystem::path> ground_truth_normals_;
+  std::vector<NearLight> near_lamps_;  // the manifest's "lamp"s; each band gets them
 };
 
 // Opens the set at `path` for streaming (DetectInput, then every image's header). Throws Error

@@ -306,7 +306,7 @@ class Session {
     CaptureManifest manifest;
     manifest.colour_space = ColourSpace::kLinear;
     for (const CapturedLight& taken : state_.captured) {
-      manifest.images.push_back({taken.file, state_.plan.lights[taken.number - 1], {}});
+      manifest.images.push_back({taken.file, state_.plan.lights[taken.number - 1], {}, {}});
     }
     json bracket = json::array();
     for (double f : state_.settings.bracket) bracket.push_back(f);

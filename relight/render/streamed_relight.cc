@@ -133,7 +133,7 @@ StreamedRelightReport WriteRelitSetStreamed(const fs::path& folder, StackBandRea
       options.output.format == RelitFormat::kPng8 ? ColourSpace::kSrgb : ColourSpace::kLinear;
   for (std::size_t i = 0; i < lights.size(); ++i) {
     manifest.images.push_back(
-        {fmt::format("relit_{:03}.{}", i, exr ? "exr" : "png"), lights[i], {}});
+        {fmt::format("relit_{:03}.{}", i, exr ? "exr" : "png"), lights[i], {}, {}});
   }
   manifest.provenance = {{"relit_from", stack.header().representation.method()}};
 

@@ -80,8 +80,8 @@ void GridStart(const PbrPixelData& data, const PbrFitOptions& options, double lo
     for (double f0 : kGridF0) {
       for (std::size_t i = 0; i < n; ++i) {
         const double fresnel = f0 + (1.0 - f0) * data.lights[i].schlick;
-        diffuse[i] = (1.0 - fresnel) * n_dot_l[i];
-        specular[i] = fresnel * unit_specular[i];
+        diffuse[i] = (1.0 - fresnel) * n_dot_l[i] * data.irradiance[i];
+        specular[i] = fresnel * unit_specular[i] * data.irradiance[i];
       }
       PixelParameters candidate = p;
       candidate.roughness = roughness;
@@ -241,10 +241,11 @@ double SolvePixel(const PbrPixelData& data, const PbrFitOptions& options, double
 }  // namespace
 
 Representation FitPbr(const Observations& observations, const std::vector<LightDirection>& lights,
-                      std::span<const int> selected, const Eigen::Matrix3Xf& start_normals,
-                      const Eigen::MatrixXf& start_albedo, std::span<const Mask> measured,
-                      const PbrFitOptions& options, nlohmann::json details,
-                      const std::filesystem::path& source, Progress* progress) {
+                      const NearLighting* near_lighting, std::span<const int> selected,
+                      const Eigen::Matrix3Xf& start_normals, const Eigen::MatrixXf& start_albedo,
+                      std::span<const Mask> measured, const PbrFitOptions& options,
+                      nlohmann::json details, const std::filesystem::path& source,
+                      Progress* progress) {
   if (observations.channels() != 3) {
     throw Error(source, fmt::format("pbr fits RGB images; these have {} channel(s)",
                                     observations.channels()));
@@ -261,11 +262,16 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
   const auto shading = std::make_shared<MicrofacetShading>();
   Image maps(observations.width(), observations.height(), shading->MapNames());
   tbb::enumerable_thread_specific<PbrFitSummary> tallies;
-  std::vector<MicrofacetLight> light_terms;  // once per image, not per pixel
+  if (near_lighting && near_lighting->lamps.size() != lights.size()) {
+    throw Error(source, fmt::format("{} near lamps for {} lights", near_lighting->lamps.size(),
+                                    lights.size()));
+  }
+  std::vector<MicrofacetLight> light_terms;  // distant: once per image, not per pixel
   for (const LightDirection& light : lights) {
     const Eigen::Vector3d l = light.vector();
     light_terms.emplace_back(l.data());
   }
+  const int width = observations.width();
   NullProgress no_progress;
   Progress& bar = OrNull(progress, no_progress);
   bar.Start("pbr fit", static_cast<std::size_t>((m + kPixelGrain - 1) / kPixelGrain));
@@ -278,10 +284,21 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
     for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
       const std::size_t pixel = observations.pixel_indices()[k];
       data.lights.clear();
+      data.irradiance.clear();
       data.observed.clear();
+      const int column = static_cast<int>(pixel % static_cast<std::size_t>(width));
+      const int row = static_cast<int>(pixel / static_cast<std::size_t>(width));
       for (int image : selected) {
         if (!measured.empty() && !measured[image][pixel]) continue;
-        data.lights.push_back(light_terms[image]);
+        if (near_lighting) {
+          // The lamp as this pixel sees it: its own direction and relative irradiance.
+          const LampAtPixel lamp = near_lighting->At(image, column, row);
+          data.lights.emplace_back(lamp.direction.data());
+          data.irradiance.push_back(lamp.irradiance);
+        } else {
+          data.lights.push_back(light_terms[image]);
+          data.irradiance.push_back(1.0);
+        }
         data.observed.push_back({matrix(k, image), matrix(m + k, image), matrix(2 * m + k, image)});
       }
       PixelParameters start;
@@ -337,6 +354,7 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
   if (!details.is_object()) details = nlohmann::json::object();
   details["pbr"] = options.ToJson();
   details["pbr_summary"] = total.ToJson();
+  details["pbr_light_model"] = near_lighting ? "near" : "distant";
   return Representation("pbr", std::move(maps), shading, std::move(details));
 }
 

@@ -8,6 +8,7 @@
 
 #include "core/image.h"
 #include "core/light_direction.h"
+#include "core/near_light.h"
 #include "core/progress.h"
 #include "represent/fitting/observations.h"
 #include "represent/model/representation.h"
@@ -23,7 +24,8 @@ namespace photomat {
 // bound held there (pbr_fit.cc, PinOnBound); the normal lives on the unit sphere (Ceres'
 // SphereManifold). Start: the robust photometric-stereo normal and albedo (RobustFit), roughness
 // and F0 from a grid (grid_start) or start_roughness and start_f0. Lights: the capture's distant
-// directions (photomat's observations carry no per-pixel near-light directions). Pixels in
+// directions, or, for a capture with near lamps (`calibrate apply --near-lights`), each pixel's
+// own direction to each lamp and its relative irradiance (core/near_light.h). Pixels in
 // parallel (TBB), each solved alone on one thread: the result does not depend on the schedule.
 struct PbrFitOptions {
   // The start of roughness and F0: the best pair of a grid (pbr_fit.cc, GridStart) at the start
@@ -54,13 +56,16 @@ bool InSpecularLobe(const Eigen::Vector3d& normal, const Eigen::Vector3d& light,
 
 // Fits the images in `selected` of `observations` (3 channels); `start_normals` (3 x pixels) and
 // `start_albedo` (3 x pixels) per observation row; `measured` as RobustFitOptions::measured.
-// `details` are kept (the robust fit's), with "pbr" (the options) and "pbr_summary" (pixels,
-// lobe_sampled, lobe_unsampled, regularised, mean_final_cost) added. Throws Error naming `source`
-// for grey images or a build without Ceres.
+// `near_lighting` (null: distant `lights`) gives the lamps of the observations' images, its frame
+// the observations' (their rows from its first_row). `details` are kept (the robust fit's), with
+// "pbr" (the options), "pbr_summary" (pixels, lobe_sampled, lobe_unsampled, regularised,
+// mean_final_cost) and "pbr_light_model" ("near" or "distant") added. Throws Error naming
+// `source` for grey images, lamps not one per light, or a build without Ceres.
 Representation FitPbr(const Observations& observations, const std::vector<LightDirection>& lights,
-                      std::span<const int> selected, const Eigen::Matrix3Xf& start_normals,
-                      const Eigen::MatrixXf& start_albedo, std::span<const Mask> measured,
-                      const PbrFitOptions& options, nlohmann::json details,
-                      const std::filesystem::path& source = {}, Progress* progress = nullptr);
+                      const NearLighting* near_lighting, std::span<const int> selected,
+                      const Eigen::Matrix3Xf& start_normals, const Eigen::MatrixXf& start_albedo,
+                      std::span<const Mask> measured, const PbrFitOptions& options,
+                      nlohmann::json details, const std::filesystem::path& source = {},
+                      Progress* progress = nullptr);
 
 }  // namespace photomat

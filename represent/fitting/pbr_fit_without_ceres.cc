@@ -7,10 +7,10 @@
 
 namespace photomat {
 
-Representation FitPbr(const Observations&, const std::vector<LightDirection>&, std::span<const int>,
-                      const Eigen::Matrix3Xf&, const Eigen::MatrixXf&, std::span<const Mask>,
-                      const PbrFitOptions&, nlohmann::json, const std::filesystem::path& source,
-                      Progress*) {
+Representation FitPbr(const Observations&, const std::vector<LightDirection>&, const NearLighting*,
+                      std::span<const int>, const Eigen::Matrix3Xf&, const Eigen::MatrixXf&,
+                      std::span<const Mask>, const PbrFitOptions&, nlohmann::json,
+                      const std::filesystem::path& source, Progress*) {
   // PHOTOMAT_WITHOUT_CERES: "the Ceres ... (PHOTOMAT_WITH_CERES=OFF: why)", from CMake.
   throw Error(source, std::string("pbr needs Ceres: this photomat was built without ") +
                           PHOTOMAT_WITHOUT_CERES);

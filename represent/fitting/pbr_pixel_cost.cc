@@ -27,11 +27,29 @@ double CauchyShrink(double squared, double b, double* derivative) {
   return shrink;
 }
 
+namespace {
+
+// The response (and its derivatives) of a light of irradiance `factor`: all linear in it.
+void ScaleResponse(double factor, MicrofacetDerivatives& d) {
+  d.value.diffuse *= factor;
+  d.value.specular *= factor;
+  d.diffuse_f0 *= factor;
+  d.specular_roughness *= factor;
+  d.specular_f0 *= factor;
+  for (int k = 0; k < 3; ++k) {
+    d.diffuse_normal[k] *= factor;
+    d.specular_normal[k] *= factor;
+  }
+}
+
+}  // namespace
+
 double PbrLightResiduals(const MicrofacetSurface& surface, const double* base,
-                         const MicrofacetLight& light, const std::array<double, 3>& observed,
-                         double squared_scale, double* residuals, double* jacobian) {
-  const MicrofacetDerivatives d =
-      MicrofacetRadianceDerivatives(surface, light, jacobian != nullptr);
+                         const MicrofacetLight& light, double irradiance,
+                         const std::array<double, 3>& observed, double squared_scale,
+                         double* residuals, double* jacobian) {
+  MicrofacetDerivatives d = MicrofacetRadianceDerivatives(surface, light, jacobian != nullptr);
+  if (irradiance != 1.0) ScaleResponse(irradiance, d);
   double e[3];
   for (int c = 0; c < 3; ++c) e[c] = d.value.diffuse * base[c] + d.value.specular - observed[c];
   const double squared = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
@@ -77,8 +95,8 @@ bool PbrPixelCost::Evaluate(double const* const* parameters, double* residuals,
   double squared = 0.0;  // |r|^2
   if (!jacobians) {
     for (std::size_t i = 0; i < data_.lights.size(); ++i) {
-      squared += PbrLightResiduals(surface, base, data_.lights[i], data_.observed[i],
-                                   squared_scale_, nullptr, nullptr);
+      squared += PbrLightResiduals(surface, base, data_.lights[i], data_.irradiance[i],
+                                   data_.observed[i], squared_scale_, nullptr, nullptr);
     }
     std::fill(residuals, residuals + kPbrParameters + 1, 0.0);
     residuals[0] = std::sqrt(squared);
@@ -91,8 +109,8 @@ bool PbrPixelCost::Evaluate(double const* const* parameters, double* residuals,
   for (std::size_t i = 0; i < data_.lights.size(); ++i) {
     double r[3];
     double rows[3 * kPbrParameters];
-    squared += PbrLightResiduals(surface, base, data_.lights[i], data_.observed[i], squared_scale_,
-                                 r, rows);
+    squared += PbrLightResiduals(surface, base, data_.lights[i], data_.irradiance[i],
+                                 data_.observed[i], squared_scale_, r, rows);
     const double* g0 = rows;
     const double* g1 = rows + kPbrParameters;
     const double* g2 = rows + 2 * kPbrParameters;

@@ -13,6 +13,7 @@ namespace photomat {
 
 struct PbrPixelData {
   std::vector<MicrofacetLight> lights;          // each light's own terms (its direction, unit)
+  std::vector<double> irradiance;               // each light's at the pixel (near lamps), else 1
   std::vector<std::array<double, 3>> observed;  // RGB per light
 };
 
@@ -21,14 +22,16 @@ struct PbrPixelData {
 inline constexpr int kPbrParameters = 8;
 
 // The three residuals of one light (red, green, blue): the microfacet model's channels
-// (core/microfacet_brdf.h) minus the measured ones, scaled by sqrt(rho(s) / s) so that their
-// squared norm is Cauchy's rho(s) = b log(1 + s / b) of their unscaled squared norm s (a loss per
-// observation, as ceres::CauchyLoss on one residual block per light would give). Returns rho(s).
-// `residuals` (3 values) may be null: rho alone, for a trial step's cost. `jacobian`, if given,
-// gets the residuals' derivatives by the parameters (3 x kPbrParameters, row-major).
+// (core/microfacet_brdf.h) times the light's `irradiance` at the pixel minus the measured ones,
+// scaled by sqrt(rho(s) / s) so that their squared norm is Cauchy's rho(s) = b log(1 + s / b) of
+// their unscaled squared norm s (a loss per observation, as ceres::CauchyLoss on one residual block
+// per light would give). Returns rho(s). `residuals` (3 values) may be null: rho alone, for a trial
+// step's cost. `jacobian`, if given, gets the residuals' derivatives by the parameters (3 x
+// kPbrParameters, row-major).
 double PbrLightResiduals(const MicrofacetSurface& surface, const double* base,
-                         const MicrofacetLight& light, const std::array<double, 3>& observed,
-                         double squared_scale, double* residuals, double* jacobian);
+                         const MicrofacetLight& light, double irradiance,
+                         const std::array<double, 3>& observed, double squared_scale,
+                         double* residuals, double* jacobian);
 
 // All observations of one pixel as one residual block of kPbrParameters + 1 residuals: the 3 x
 // lights residuals r of PbrLightResiduals (Jacobian J) compressed to a square root of their normal

@@ -23,6 +23,10 @@ PbrPixelData RandomPixel(Random& random, double offset) {
     const double norm = std::sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
     for (double& v : l) v /= norm;
     data.lights.push_back(MicrofacetLight(l.data()));
+    // Near lamps' relative irradiance (core/near_light.h), 0.7 to 1.27, and distant lights' 1
+    // (not drawn from `random`: the pixels are those the bounds below were measured on).
+    const std::size_t i = data.lights.size();
+    data.irradiance.push_back(i % 2 ? 1.0 : 0.7 + 0.03 * static_cast<double>(i % 20));
     data.observed.push_back(
         {random.Uniform(0.0, offset), random.Uniform(0.0, offset), random.Uniform(0.0, offset)});
   }
@@ -64,8 +68,8 @@ void PixelResiduals(const PbrPixelData& data, double b, const std::array<double,
   residuals.resize(3 * data.lights.size());
   if (jacobian) jacobian->resize(3 * kPbrParameters * data.lights.size());
   for (std::size_t i = 0; i < data.lights.size(); ++i) {
-    PbrLightResiduals(surface, x.data(), data.lights[i], data.observed[i], b, &residuals[3 * i],
-                      jacobian ? &(*jacobian)[3 * kPbrParameters * i] : nullptr);
+    PbrLightResiduals(surface, x.data(), data.lights[i], data.irradiance[i], data.observed[i], b,
+                      &residuals[3 * i], jacobian ? &(*jacobian)[3 * kPbrParameters * i] : nullptr);
   }
 }
 

@@ -366,8 +366,8 @@ Representation RobustFit::Fit(const Method& method) const {
     case Method::Kind::kBilinear:
       return FitLightProfileMethod(method);
     case Method::Kind::kPbr:
-      return FitPbr(observations_, lights_, selected_, normals_, albedo_, options_.measured,
-                    options_.pbr,
+      return FitPbr(observations_, lights_, options_.near_lighting, selected_, normals_, albedo_,
+                    options_.measured, options_.pbr,
                     {{"robust", options_.ToJson()}, {"robust_summary", summary_.ToJson()}}, source_,
                     options_.progress);
     case Method::Kind::kNeural:
@@ -573,7 +573,11 @@ Representation FitRobust(const PhotometricSet& set, const Method& method,
   std::vector<int> all(set.size());
   std::iota(all.begin(), all.end(), 0);
   const Observations observations(set);
-  const RobustFit fit(observations, set.lights(), all, options, set.source());
+  RobustFitOptions with_lamps = options;
+  if (!with_lamps.near_lighting && set.near_lighting()) {
+    with_lamps.near_lighting = &*set.near_lighting();
+  }
+  const RobustFit fit(observations, set.lights(), all, with_lamps, set.source());
   return fit.Fit(method);
 }
 

@@ -85,6 +85,10 @@ struct RobustFitOptions {
   Progress* progress = nullptr;
   // The `pbr` method's fit, started from this robust fit's normals and albedo.
   PbrFitOptions pbr;
+  // The set's near lamps (PhotometricSet::near_lighting), for the pbr fit only (every other
+  // method uses the lights' distant directions); null: distant lights. Not owned: must outlive
+  // Fit(pbr). FitRobust takes the set's.
+  const NearLighting* near_lighting = nullptr;
 
   nlohmann::json ToJson() const;
 };

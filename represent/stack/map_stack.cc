@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
-#include "represent/stack/stack_band_writer.h"
+#include "represent/stack/stack_band_writer.h"  // StackDescription
 
 namespace photomat {
 namespace {
@@ -64,16 +64,6 @@ nlohmann::json StackDescription(const Representation& representation,
   }
   return description;
 }
-
-StackBandWriter::StackBandWriter(const fs::path& path, const nlohmann::json& description,
-                                 std::vector<std::string> channel_names, int width, int height,
-                                 ExrCompression compression)
-    : writer_(path, width, height, std::move(channel_names), [&] {
-        ImageWriteOptions options;
-        options.exr_compression = compression;
-        options.attributes[kStackAttribute] = description.dump();
-        return options;
-      }()) {}
 
 void SaveRepresentation(const fs::path& path, const Representation& representation,
                         const StackProvenance& provenance, ExrCompression compression) {

@@ -122,6 +122,8 @@ class Streamer {
       RobustFitOptions robust = options_.robust_options;
       robust.measured = band.measured;
       robust.progress = nullptr;
+      // The band's lamps (their frame the whole image's, from its first row) for pbr.
+      if (band.set->near_lighting()) robust.near_lighting = &*band.set->near_lighting();
       band.robust.emplace(*band.observations, band.set->lights(), all_, robust, set_.source());
     }
   }
@@ -180,23 +182,35 @@ void AddSummary(const RobustFitSummary& band, RobustFitSummary& total, double& w
 }
 
 // The stack of one method: opened at its first band with maps (whose representation describes
-// the whole stack), with the rows of earlier empty bands written as zeros then.
+// the whole stack), with the rows of earlier empty bands written as zeros then. The data
+// summaries of its details ("robust_summary", "pbr_summary") are the whole set's, not the first
+// band's: late details of the stack (StackBandWriter), written at Commit.
 class MethodStack {
  public:
   MethodStack(fs::path path, int width, int height, const StreamedFitOptions& options)
       : path_(std::move(path)), width_(width), height_(height), options_(options) {}
 
   void Write(const Representation& band) {
+    const nlohmann::json& band_details = band.details();
+    const auto pbr =
+        band_details.is_object() ? band_details.find("pbr_summary") : band_details.end();
     if (!writer_) {
-      nlohmann::json description = StackDescription(band, options_.provenance);
-      // Data summaries of one band would be wrong for the stack (StreamedFitReport).
-      if (nlohmann::json& details = description["details"]; details.is_object()) {
-        details.erase("robust_summary");
-        details.erase("pbr_summary");
+      const nlohmann::json description = StackDescription(band, options_.provenance);
+      std::vector<std::string> late;
+      for (const char* summary : {"robust_summary", "pbr_summary"}) {
+        if (const nlohmann::json& details = description["details"];
+            details.is_object() && details.contains(summary)) {
+          late.emplace_back(summary);
+        }
       }
       names_ = band.maps().channel_names();
-      writer_.emplace(path_, description, names_, width_, height_, options_.compression);
+      writer_.emplace(path_, description, names_, width_, height_, options_.compression,
+                      std::move(late));
       WriteZeros(pending_zero_rows_);
+    }
+    if (pbr != band_details.end()) {
+      if (!pbr_summary_) pbr_summary_.emplace();
+      pbr_summary_->Add(PbrFitSummary::FromJson(*pbr));
     }
     writer_->Write(band.maps());
   }
@@ -208,9 +222,13 @@ class MethodStack {
     }
     WriteZeros(rows);
   }
-  void Commit() {
+  // `robust_summary`: the whole set's, for a robust fit.
+  void Commit(const std::optional<RobustFitSummary>& robust_summary) {
     if (!writer_) throw Error(path_, "no band of the set was fitted");
-    writer_->Commit();
+    nlohmann::json late = nlohmann::json::object();
+    if (robust_summary) late["robust_summary"] = robust_summary->ToJson();
+    if (pbr_summary_) late["pbr_summary"] = pbr_summary_->ToJson();
+    writer_->Commit(late);
   }
   int maps() const { return static_cast<int>(names_.size()); }
 
@@ -224,6 +242,7 @@ class MethodStack {
   const StreamedFitOptions& options_;
   std::vector<std::string> names_;
   std::optional<StackBandWriter> writer_;
+  std::optional<PbrFitSummary> pbr_summary_;  // the bands' summed
   int pending_zero_rows_ = 0;
 };
 
@@ -384,16 +403,16 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
       outputs[i]->Write(representation);
     }
   });
-  for (auto& output : outputs) output->Commit();
-  report.band_rows = streamer.band_rows();
-  report.passes = streamer.passes();
-  for (const auto& output : outputs) report.map_counts.push_back(output->maps());
   if (options.robust) {
     const double count = static_cast<double>(std::max<std::size_t>(summary.observations, 1));
     summary.mean_weight = weight_sum / count;
     summary.normal_inlier_fraction = inlier_sum / count;
     report.robust_summary = summary;
   }
+  for (auto& output : outputs) output->Commit(report.robust_summary);
+  report.band_rows = streamer.band_rows();
+  report.passes = streamer.passes();
+  for (const auto& output : outputs) report.map_counts.push_back(output->maps());
   report.saturated_pixels = set.SaturatedPixels();
   return report;
 }

@@ -52,9 +52,9 @@ struct StreamedFitReport {
   int band_rows = 0;
   int passes = 0;               // streamed passes over the images (the global ones, then maps)
   std::vector<int> map_counts;  // per method, the maps of its stack
-  // Robust fits: the weights' summary over the whole set. A streamed stack's description is
-  // written before the data, so its details hold no data summaries ("robust_summary",
-  // "pbr_summary"): the summary is here instead.
+  // Robust fits: the weights' summary over the whole set. Each stack's details hold it too
+  // ("robust_summary", and a pbr stack its "pbr_summary"), written into its description when the
+  // last band is (StackBandWriter's late details).
   std::optional<RobustFitSummary> robust_summary;
   // A pbr fit's summary over the whole set: its bands' summed.
   std::optional<PbrFitSummary> pbr_summary;

@@ -140,7 +140,7 @@ TEST(StreamedFitTest, RobustBandsOfThreeRowsEqualTheInMemoryFit) {
 }
 
 // pbr streams as the other robust fits do (every pixel solved alone from the band's robust
-// start), and the report holds the whole set's pbr summary: the bands' summed.
+// start), and the report and the stack hold the whole set's pbr summary: the bands' summed.
 TEST(StreamedFitTest, PbrBandsSumToTheWholeSetsSummary) {
   const testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
@@ -173,9 +173,22 @@ TEST(StreamedFitTest, PbrBandsSumToTheWholeSetsSummary) {
   EXPECT_EQ(banded.lobe_unsampled, whole.lobe_unsampled);
   EXPECT_EQ(banded.regularised, whole.regularised);
   EXPECT_NEAR(banded.total_cost, whole.total_cost, 1e-9 * whole.total_cost);
-  EXPECT_LE(testing::LargestDifferenceOverLargestValue(
-                LoadRepresentation(paths[0]).representation.maps(), memory.maps()),
-            1e-6);
+  const Representation stored = LoadRepresentation(paths[0]).representation;
+  EXPECT_LE(testing::LargestDifferenceOverLargestValue(stored.maps(), memory.maps()), 1e-6);
+  // The stack carries the whole set's summaries, as the in-memory fit's details do.
+  const PbrFitSummary kept = PbrFitSummary::FromJson(stored.details().at("pbr_summary"));
+  EXPECT_EQ(kept.pixels, whole.pixels);
+  EXPECT_EQ(kept.lobe_sampled, whole.lobe_sampled);
+  EXPECT_EQ(kept.lobe_unsampled, whole.lobe_unsampled);
+  EXPECT_EQ(kept.regularised, whole.regularised);
+  EXPECT_NEAR(kept.total_cost, whole.total_cost, 1e-9 * whole.total_cost);
+  const nlohmann::json& robust = stored.details().at("robust_summary");
+  const nlohmann::json& robust_in_memory = memory.details().at("robust_summary");
+  for (const char* count : {"observations", "not_measured", "attached_shadow", "down_weighted"}) {
+    EXPECT_EQ(robust.at(count), robust_in_memory.at(count)) << count;
+  }
+  EXPECT_NEAR(robust.at("mean_weight").get<double>(),
+              robust_in_memory.at("mean_weight").get<double>(), 1e-9);
 }
 
 // The streamed stack records how each image was decoded, as the in-memory load decides it
