@@ -4,6 +4,7 @@
 //  irregular/  a capture under irregular lights (Eigen-k: Delaunay triangulation)
 //  table/      the grid's PTM and Gradient with their coefficients from the (slant, tilt) table
 //  files/      a .ptm and an HSH .rti exported from the grid's fits (values are display codes)
+//  deepzoom/   a viewer written as deep-zoom tiles (--viewer-tiles always)
 // and, for each viewer, method and test light, photomat's CPU relighting
 // (`photomat relight STACK --light S,T --out X.png`), which the viewer's canvas must reproduce.
 // Writes OUT/fixtures.json describing it all.
@@ -123,6 +124,29 @@ if (all.includes('hsh9')) {
   run(photomat, ['export', path.join(grid, 'stacks'), '--method', 'hsh9', '--rti', path.join(files, 'grid.rti')]);
   addViewer('rti-file', path.join(files, 'grid.rti'));
 }
+
+// deepzoom: a 256 x 192 capture whose viewer is forced into deep-zoom tiles of 32 px (4 levels;
+// a stack small enough for a fast test), and photomat's relighting of it as 8-bit sRGB (level 0
+// is compared with it) and as 16-bit linear PNG (box-averaged, for level 1).
+const deep = path.join(out, 'deepzoom');
+run(photomat, ['generate', '--out', path.join(deep, 'capture'), '--size', '256x192', '--pattern', 'bricks',
+  '--relief', '45', '--seed', '7']);
+run(photomat, ['fit', path.join(deep, 'capture'), '--method', 'gradient,ptm', '--out', path.join(deep, 'stacks')]);
+run(photomat, ['export', path.join(deep, 'stacks'), '--viewer', path.join(deep, 'viewer'), '--viewer-tiles', 'always',
+  '--viewer-tile-size', '32']);
+const deepReferences = [];
+for (const method of ['gradient', 'ptm']) {
+  for (const [slant, tilt] of [[30, 0], [52.5, 77]]) {
+    const reference = path.join(deep, 'reference', `${method}_${slant}_${tilt}`);
+    mkdirSync(path.dirname(reference), { recursive: true });
+    for (const format of ['png8', 'png16']) {
+      run(photomat, ['relight', path.join(deep, 'stacks'), '--method', method, '--light', `${slant},${tilt}`,
+        '--format', format, '--out', `${reference}.${format}.png`]);
+    }
+    deepReferences.push({ method, slant, tilt, png8: `${reference}.png8.png`, png16: `${reference}.png16.png` });
+  }
+}
+fixtures.deepzoom = { url: 'deepzoom/viewer/index.html', folder: path.join(deep, 'viewer'), references: deepReferences };
 
 writeFileSync(path.join(out, 'fixtures.json'), `${JSON.stringify(fixtures, null, 2)}\n`);
 console.log(`fixtures in ${out}: ${fixtures.viewers.map((v) => `${v.name} (${v.comparisons.length} references)`).join(', ')}`);
