@@ -432,7 +432,8 @@ void AddExportCommand(CLI::App& app) {
                    "Pixels a side of the viewer's tiles")
       ->capture_default_str();
   command->add_option("--memory", options->memory_mb,
-                      fmt::format("Memory in MB for the maps of a stack; a stack whose export does "
+                      fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); "
+                                  "a stack whose export does "
                                   "not fit is exported streamed, in bands (default: half the "
                                   "physical memory or of this process's memory limits, here {} MB)",
                                   DefaultMemoryBudget(kMinimumExportMemory) >> 20));
