@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "core/atomic_file.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -514,7 +515,13 @@ void ExportViewerStreamed(const fs::path& folder, const std::vector<fs::path>& s
                              options.tile_size);
   // Every stack's bands are sized before anything is written.
   std::vector<int> band_rows;
-  for (const auto& reader : readers) band_rows.push_back(ViewerBandRows(budget, *reader, layout));
+  std::size_t tile_bytes = 0;
+  for (const auto& reader : readers) {
+    band_rows.push_back(ViewerBandRows(budget, *reader, layout));
+    tile_bytes += layout.FileBytes(reader->header().representation.maps().channels());
+  }
+  CheckDiskSpace(folder.parent_path().empty() ? fs::path(".") : folder.parent_path(), tile_bytes,
+                 "the viewer's tiles");
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   WriteFolderAtomically(folder, kViewerManifest, kViewerFormat, [&](const fs::path& temp) {

@@ -83,6 +83,19 @@ std::size_t PyramidLayout::TileCount() const {
   return count;
 }
 
+std::size_t PyramidLayout::FileBytes(int maps) const {
+  std::size_t texels = 0;
+  for (int level = 0; level < levels(); ++level) {
+    for (int row = 0; row < Rows(level); ++row) {
+      for (int column = 0; column < Columns(level); ++column) {
+        const TileRect t = Tile(level, column, row);
+        texels += static_cast<std::size_t>(t.width) * t.height;
+      }
+    }
+  }
+  return texels * 16 * static_cast<std::size_t>((maps + 3) / 4);
+}
+
 TileRect PyramidLayout::Tile(int level, int column, int row) const {
   const int x0 = std::max(column * tile_size_ - overlap_, 0);
   const int y0 = std::max(row * tile_size_ - overlap_, 0);

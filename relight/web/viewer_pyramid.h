@@ -81,6 +81,8 @@ class PyramidLayout {
   int Columns(int level) const;
   int Rows(int level) const;
   std::size_t TileCount() const;
+  // The bytes of every tile file of a pyramid of `maps` maps (for the disk space check).
+  std::size_t FileBytes(int maps) const;
   TileRect Tile(int level, int column, int row) const;
   // "<level>/<column>_<row>.f32", relative to the pyramid's folder.
   static std::string TilePath(int level, int column, int row);

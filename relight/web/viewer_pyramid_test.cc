@@ -191,10 +191,14 @@ TEST(ViewerPyramidTest, TilesReassembleToTheMapsAndCoarserLevelsAreBoxAverages) 
       SCOPED_TRACE(level);
       ExpectSameValues(levels[level], BoxHalf(levels[level - 1]));
     }
-    std::size_t files = 0;
-    for (const auto& entry : fs::recursive_directory_iterator(folder))
-      files += entry.is_regular_file();
+    std::size_t files = 0, bytes = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+      if (!entry.is_regular_file()) continue;
+      ++files;
+      bytes += entry.file_size();
+    }
     EXPECT_EQ(files, layout.TileCount());
+    EXPECT_EQ(bytes, layout.FileBytes(maps.channels()));
   }
 }
 

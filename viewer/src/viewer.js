@@ -142,7 +142,6 @@ const tiles = {
   loading: new Map(), // key -> promise
   wanted: [], // [{method, level, column, row, key}] for the view, in order of need
   bytes: 0,
-  requested: [], // every tile URL fetched, for the browser test
 };
 
 function setStatus(text, kind = '') {
@@ -277,7 +276,6 @@ function loadTile(method, level, column, row) {
   if (!tiles.loading.has(key)) {
     const pyramid = method.json.data.pyramid;
     const url = `${pyramid.folder}/${level}/${column}_${row}.f32`;
-    tiles.requested.push(url);
     const promise = (async () => {
       const rect = tileRect(pyramid, level, column, row);
       const { layers } = method.json.data;
@@ -903,9 +901,8 @@ window.photomatViewer = {
     updateWantedTiles();
     requestDraw();
   },
-  // Deep-zoom: the tiles wanted for the view and not loaded yet, and every tile URL fetched.
+  // Deep-zoom: the tiles the view wants that have not loaded yet.
   tilesPending: () => tilesPending(),
-  tileRequests: () => [...tiles.requested],
   level: () => {
     const pyramid = state.methods.get(state.method)?.json.data.pyramid;
     return pyramid ? levelForZoom(pyramid) : 0;
