@@ -83,12 +83,6 @@ std::string FileStem(const std::string& method) {
   return stem.empty() ? "method" : stem;
 }
 
-void AppendFloat(std::string& bytes, float value) {
-  const auto bits = std::bit_cast<std::uint32_t>(value);
-  for (int b = 0; b < 4; ++b)
-    bytes += static_cast<char>((bits >> (8 * b)) & 0xff);  // little-endian
-}
-
 // The maps as ceil(n / 4) RGBA layers, layer-major, rows from the top (the texture's layout).
 std::string MapLayers(const Image& maps) {
   const int n = maps.channels();
@@ -100,7 +94,7 @@ std::string MapLayers(const Image& maps) {
       const auto values = maps.pixel(p);
       for (int c = 0; c < 4; ++c) {
         const int map = 4 * layer + c;
-        AppendFloat(bytes, map < n ? values[map] : 0.0f);
+        AppendFloat32(bytes, map < n ? values[map] : 0.0f);
       }
     }
   }
@@ -282,7 +276,7 @@ nlohmann::json MethodJson(const fs::path& temp, const Representation& r,
     coefficient_table.emplace(r.basis());
     const std::string file = fmt::format("maps/{}.coefficients.f32", stem);
     std::string bytes;
-    for (float v : coefficient_table->values()) AppendFloat(bytes, v);
+    for (float v : coefficient_table->values()) AppendFloat32(bytes, v);
     WriteTextFileAtomically(temp / file, bytes);
     basis = coefficient_table->ToJson();
     basis["source_kind"] = r.basis().kind();

@@ -16,13 +16,13 @@ namespace fs = std::filesystem;
 
 int HalfUp(int n) { return (n + 1) / 2; }
 
-void AppendFloat(std::string& bytes, float value) {
+}  // namespace
+
+void AppendFloat32(std::string& bytes, float value) {
   const auto bits = std::bit_cast<std::uint32_t>(value);
   for (int b = 0; b < 4; ++b)
     bytes += static_cast<char>((bits >> (8 * b)) & 0xff);  // little-endian
 }
-
-}  // namespace
 
 ViewerTiling ParseViewerTiling(const std::string& text) {
   if (text == "auto") return ViewerTiling::kAuto;
@@ -237,8 +237,8 @@ void PyramidWriter::WriteTileRow(int level) {
         for (int x = tile.x; x < tile.x + tile.width; ++x) {
           for (int c = 0; c < 4; ++c) {
             const int map = 4 * layer + c;
-            AppendFloat(bytes,
-                        map < maps_ ? row[static_cast<std::size_t>(map) * l.width + x] : 0.0f);
+            AppendFloat32(bytes,
+                          map < maps_ ? row[static_cast<std::size_t>(map) * l.width + x] : 0.0f);
           }
         }
       }

@@ -37,6 +37,9 @@ namespace photomat {
 // block's relit values (exactly for methods without a gain, and for gain methods to the product
 // of averages). Nonlinear shadings (pbr, neural) are refused by the viewer anyway.
 
+// Appends `value` as float32 little-endian: the number format of every viewer data file.
+void AppendFloat32(std::string& bytes, float value);
+
 // When `photomat export --viewer` writes tiles (--viewer-tiles).
 enum class ViewerTiling { kAuto, kAlways, kNever };
 ViewerTiling ParseViewerTiling(const std::string& text);
