@@ -125,28 +125,41 @@ if (all.includes('hsh9')) {
   addViewer('rti-file', path.join(files, 'grid.rti'));
 }
 
+// Exports `stacks` (a fit folder or one .exr) with `photomat export --viewer ... exportArgs` and
+// relights each method under two lights as 8-bit sRGB (the level-0 comparison) and 16-bit linear
+// PNG (box-averaged for level 1).
+function addDeepZoom(name, stacks, methods, exportArgs) {
+  const folder = path.join(out, name);
+  run(photomat, ['export', stacks, '--viewer', path.join(folder, 'viewer'), ...exportArgs]);
+  const references = [];
+  for (const method of methods) {
+    for (const [slant, tilt] of [[30, 0], [52.5, 77]]) {
+      const reference = path.join(folder, 'reference', `${method}_${slant}_${tilt}`);
+      mkdirSync(path.dirname(reference), { recursive: true });
+      for (const format of ['png8', 'png16']) {
+        run(photomat, ['relight', stacks, ...(stacks.endsWith('.exr') ? [] : ['--method', method]),
+          '--light', `${slant},${tilt}`, '--format', format, '--out', `${reference}.${format}.png`]);
+      }
+      references.push({ method, slant, tilt, png8: `${reference}.png8.png`, png16: `${reference}.png16.png` });
+    }
+  }
+  fixtures.deepzoom.push({ name, url: `${name}/viewer/index.html`, folder: path.join(folder, 'viewer'), methods, references });
+}
+
 // deepzoom: a 256 x 192 capture whose viewer is forced into deep-zoom tiles of 32 px (4 levels;
-// a stack small enough for a fast test), and photomat's relighting of it as 8-bit sRGB (level 0
-// is compared with it) and as 16-bit linear PNG (box-averaged, for level 1).
+// a stack small enough for a fast test).
+fixtures.deepzoom = [];
 const deep = path.join(out, 'deepzoom');
 run(photomat, ['generate', '--out', path.join(deep, 'capture'), '--size', '256x192', '--pattern', 'bricks',
   '--relief', '45', '--seed', '7']);
 run(photomat, ['fit', path.join(deep, 'capture'), '--method', 'gradient,ptm', '--out', path.join(deep, 'stacks')]);
-run(photomat, ['export', path.join(deep, 'stacks'), '--viewer', path.join(deep, 'viewer'), '--viewer-tiles', 'always',
-  '--viewer-tile-size', '32']);
-const deepReferences = [];
-for (const method of ['gradient', 'ptm']) {
-  for (const [slant, tilt] of [[30, 0], [52.5, 77]]) {
-    const reference = path.join(deep, 'reference', `${method}_${slant}_${tilt}`);
-    mkdirSync(path.dirname(reference), { recursive: true });
-    for (const format of ['png8', 'png16']) {
-      run(photomat, ['relight', path.join(deep, 'stacks'), '--method', method, '--light', `${slant},${tilt}`,
-        '--format', format, '--out', `${reference}.${format}.png`]);
-    }
-    deepReferences.push({ method, slant, tilt, png8: `${reference}.png8.png`, png16: `${reference}.png16.png` });
-  }
+addDeepZoom('deepzoom', path.join(deep, 'stacks'), ['gradient', 'ptm'], ['--viewer-tiles', 'always', '--viewer-tile-size', '32']);
+// PHOTOMAT_DEEPZOOM_STACK=STACK.exr METHOD: a large stack (the benchmark's), exported as
+// `photomat export --viewer` does by default (tiled above 4096 x 4096 pixels).
+if (process.env.PHOTOMAT_DEEPZOOM_STACK) {
+  const [stack, method] = process.env.PHOTOMAT_DEEPZOOM_STACK.split(' ');
+  addDeepZoom('deepzoom-large', path.resolve(stack), [method], []);
 }
-fixtures.deepzoom = { url: 'deepzoom/viewer/index.html', folder: path.join(deep, 'viewer'), references: deepReferences };
 
 writeFileSync(path.join(out, 'fixtures.json'), `${JSON.stringify(fixtures, null, 2)}\n`);
 console.log(`fixtures in ${out}: ${fixtures.viewers.map((v) => `${v.name} (${v.comparisons.length} references)`).join(', ')}`);
