@@ -40,6 +40,8 @@ struct ExportCommandOptions {
   std::string colour_space;
   bool raw_intensities = false;
   std::filesystem::path viewer;
+  std::string viewer_tiles = "auto";
+  int viewer_tile_size = kViewerTileSize;
   std::size_t memory_mb = 0;
   bool stream = false;
   std::filesystem::path relight_web;
@@ -196,11 +198,27 @@ void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
              description["normals"]["source"].get<std::string>());
 }
 
-// The web viewer of `stacks` (relight/viewer_export.h).
-void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedStack>& stacks) {
-  std::vector<Representation> representations;
+ViewerExportOptions ViewerOptions(const ExportCommandOptions& options) {
   ViewerExportOptions viewer;
   viewer.title = PublishedName(options.input);
+  viewer.tiling = ParseViewerTiling(options.viewer_tiles);
+  viewer.tile_size = options.viewer_tile_size;
+  viewer.memory_bytes = options.memory_mb << 20;
+  return viewer;
+}
+
+void PrintViewerWritten(const ExportCommandOptions& options, std::size_t methods, bool tiled) {
+  fmt::print(
+      "wrote the web viewer ({} method(s){}) to {}: serve that folder with any static file "
+      "server (e.g. python3 -m http.server --directory {} 8000) and open it\n",
+      methods, tiled ? ", as deep-zoom tiles" : "", options.viewer.string(),
+      options.viewer.string());
+}
+
+// The web viewer of `stacks` (relight/viewer_export.h), loaded whole.
+void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedStack>& stacks) {
+  std::vector<Representation> representations;
+  ViewerExportOptions viewer = ViewerOptions(options);
   for (const LoadedStack& stack : stacks) {
     representations.push_back(stack.representation);
     viewer.value_encodings[stack.representation.method()] = StackValueEncoding(stack.provenance);
@@ -209,19 +227,15 @@ void WriteViewer(const ExportCommandOptions& options, const std::vector<LoadedSt
   TerminalProgressBar bar;
   viewer.progress = &bar;
   ExportViewer(options.viewer, representations, viewer);
-  fmt::print(
-      "wrote the web viewer ({} method(s)) to {}: serve that folder with any static file "
-      "server (e.g. python3 -m http.server --directory {} 8000) and open it\n",
-      representations.size(), options.viewer.string(), options.viewer.string());
+  PrintViewerWritten(
+      options, representations.size(),
+      !representations.empty() && UsesViewerTiles(viewer.tiling, representations.front().width(),
+                                                  representations.front().height()));
 }
 
-// Every stack of a fit folder (in photomat's method order), or the one `method` or the file names.
-std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
-                                      const std::optional<std::string>& method) {
-  if (method || !std::filesystem::is_directory(input) || IsRelightWebFolder(input)) {
-    return {LoadStackFile(input, method)};
-  }
-  const auto files = ReadFitManifest(input);
+// A fit folder's methods in photomat's method order, others after.
+std::vector<std::string> ViewerMethodOrder(const std::filesystem::path& folder) {
+  const auto files = ReadFitManifest(folder);
   std::vector<std::string> order;
   for (const Method& m : AllMethods()) {
     if (files.contains(m.Name())) order.push_back(m.Name());
@@ -229,9 +243,69 @@ std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
   for (const auto& [name, file] : files) {
     if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
   }
+  return order;
+}
+
+bool ShowsEveryMethod(const std::filesystem::path& input,
+                      const std::optional<std::string>& method) {
+  return !method && std::filesystem::is_directory(input) && !IsRelightWebFolder(input);
+}
+
+// Every stack of a fit folder (in photomat's method order), or the one `method` or the file names.
+std::vector<LoadedStack> ViewerStacks(const std::filesystem::path& input,
+                                      const std::optional<std::string>& method) {
+  if (!ShowsEveryMethod(input, method)) return {LoadStackFile(input, method)};
   std::vector<LoadedStack> stacks;
-  for (const std::string& name : order) stacks.push_back(LoadStackFile(input, name));
+  for (const std::string& name : ViewerMethodOrder(input)) {
+    stacks.push_back(LoadStackFile(input, name));
+  }
   return stacks;
+}
+
+// The stack files of ViewerStacks, when every one is a map stack read in bands; else none.
+std::vector<std::filesystem::path> StreamableViewerStacks(
+    const std::filesystem::path& input, const std::optional<std::string>& method) {
+  if (IsReadWholeStackInput(input)) return {};
+  std::vector<std::filesystem::path> paths;
+  if (!ShowsEveryMethod(input, method)) {
+    paths.push_back(ResolveStack(input, method));
+  } else {
+    for (const std::string& name : ViewerMethodOrder(input)) {
+      paths.push_back(ResolveStack(input, name));
+    }
+  }
+  for (const auto& path : paths) {
+    if (!IsStreamableStack(path)) return {};
+  }
+  return paths;
+}
+
+// IMPLEMENTER CHOICE: a stack that is tiled (--viewer-tiles, viewer_pyramid.h) is read in bands
+// when it is a map stack (.exr, fit folder), never whole; a .ptm, .rti or relight web folder, and
+// a photometric set's fits, are in memory anyway and tile from there.
+void WriteViewerOfStacks(const ExportCommandOptions& options,
+                         const std::optional<std::string>& method) {
+  const std::vector<std::filesystem::path> paths = StreamableViewerStacks(options.input, method);
+  if (!paths.empty()) {
+    ViewerExportOptions viewer = ViewerOptions(options);
+    bool tiled = false;
+    for (const auto& path : paths) {
+      const StackBandReader stack(path);
+      tiled = UsesViewerTiles(viewer.tiling, stack.width(), stack.height());
+      const Representation& r = stack.header().representation;
+      viewer.value_encodings[r.method()] = StackValueEncoding(stack.header().provenance);
+      if (viewer.capture_lights.empty())
+        viewer.capture_lights = stack.header().provenance.capture_lights;
+    }
+    if (tiled) {
+      TerminalProgressBar bar;
+      viewer.progress = &bar;
+      ExportViewerStreamed(options.viewer, paths, viewer);
+      PrintViewerWritten(options, paths.size(), true);
+      return;
+    }
+  }
+  WriteViewer(options, ViewerStacks(options.input, method));
 }
 
 void RunExport(const ExportCommandOptions& options) {
@@ -244,7 +318,7 @@ void RunExport(const ExportCommandOptions& options) {
   const std::optional<std::string> method =
       options.method.empty() ? std::nullopt : std::optional(options.method);
   if (!options.viewer.empty() && IsStackInput(options.input)) {
-    WriteViewer(options, ViewerStacks(options.input, method));
+    WriteViewerOfStacks(options, method);
     if (options.out.empty() && options.ptm.empty() && options.rti.empty() &&
         options.relight_web.empty()) {
       return;
@@ -349,6 +423,7 @@ void AddExportCommand(CLI::App& app) {
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "
                       "folder (or --method's), or for a photometric set every method's fit");
+<<<<<<< HEAD
   command->add_option(
       "--memory", options->memory_mb,
       fmt::format("Memory in MB for the maps of a stack; a stack whose export does "
@@ -356,6 +431,23 @@ void AddExportCommand(CLI::App& app) {
                   "physical memory or of this process's memory limits, here {} "
                   "MB, of which streamed bands take {} MB)",
                   DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
+=======
+  command
+      ->add_option("--viewer-tiles", options->viewer_tiles,
+                   "auto: the viewer gets stacks of more than 4096 x 4096 pixels as deep-zoom "
+                   "tiles (read in bands, never whole); always; never")
+      ->capture_default_str();
+  command
+      ->add_option("--viewer-tile-size", options->viewer_tile_size,
+                   "Pixels a side of the viewer's tiles")
+      ->capture_default_str();
+  command->add_option("--memory", options->memory_mb,
+                      fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); "
+                                  "a stack whose export does "
+                                  "not fit is exported streamed, in bands (default: half the "
+                                  "physical memory or of this process's memory limits, here {} MB)",
+                                  DefaultMemoryBudget(kMinimumExportMemory) >> 20));
+>>>>>>> deepzoom
   command->add_flag("--stream", options->stream,
                     "Export a stack's maps streamed, in bands, whatever its size (height by "
                     "tiled Poisson; not for pbr stacks, --height fc, --ptm or --rti)");

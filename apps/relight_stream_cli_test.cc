@@ -1,12 +1,16 @@
 // `photomat relight` and `photomat export` stream a stack (README, "Streamed relighting and
 // export"): these run the built executable.
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <string>
 
+#include "core/atomic_file.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/light_direction.h"
@@ -95,6 +99,55 @@ TEST(RelightStreamCliTest, EvaluateAStackStreamedGivesTheInMemoryEta) {
   const double b = ReadJsonFile(dir / "whole.json")["ptm"]["eta_reconstruction"].get<double>();
   EXPECT_GT(b, 0.0);
   EXPECT_NEAR(a, b, 1e-9 * b);
+}
+
+// `export --viewer` of a stack the limit does not let load whole: the deep-zoom tiles are written
+// from bands (README "Web viewer and evaluation report"), and the level-0 tiles hold the stack's
+// maps bit for bit (tiles of 256 pixels with 1 of overlap, float32 RGBA layers).
+TEST(RelightStreamCliTest, ViewerTilesUnderAnAddressSpaceLimitBelowTheWholeStackMatch) {
+  const TempDir dir;
+  const fs::path stack = WriteLargePtmStack(dir, 1536);
+  const std::size_t limit = std::size_t{900} << 20;
+  // The limit binds: the whole-texture viewer loads the stack whole and runs out of memory.
+  const RunResult whole =
+      RunPhotomat("export " + stack.string() + " --viewer " + (dir / "whole").string(), {limit});
+  EXPECT_NE(whole.exit_code, 0) << whole.output;
+  EXPECT_THAT(whole.output, HasSubstr("bad_alloc"));
+  EXPECT_FALSE(fs::exists(dir / "whole"));
+  const RunResult tiled = RunPhotomat("export " + stack.string() + " --viewer " +
+                                          (dir / "viewer").string() + " --viewer-tiles always",
+                                      {limit});
+  ASSERT_EQ(tiled.exit_code, 0) << tiled.output;
+  EXPECT_THAT(tiled.output, HasSubstr("as deep-zoom tiles"));
+  const nlohmann::json pyramid =
+      ReadJsonFile(dir / "viewer" / "viewer.json")["methods"][0]["data"]["pyramid"];
+  EXPECT_EQ(pyramid["levels"], 4);  // 1536, 768, 384, 192
+  EXPECT_EQ(pyramid["tile_size"], 256);
+  const Image maps = LoadRepresentation(stack).representation.maps();
+  const int layers = (maps.channels() + 3) / 4;
+  for (const auto& [column, row] : {std::pair{0, 0}, std::pair{2, 3}, std::pair{5, 5}}) {
+    const std::string bytes = ReadTextFile(dir / "viewer" / pyramid["folder"].get<std::string>() /
+                                           fmt::format("0/{}_{}.f32", column, row));
+    const int x0 = std::max(column * 256 - 1, 0), y0 = std::max(row * 256 - 1, 0);
+    const int width = std::min((column + 1) * 256 + 1, 1536) - x0;
+    const int height = std::min((row + 1) * 256 + 1, 1536) - y0;
+    ASSERT_EQ(bytes.size(), static_cast<std::size_t>(layers) * width * height * 16);
+    std::size_t mismatches = 0;
+    for (int map = 0; map < maps.channels(); ++map) {
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+          float value = 0.0f;
+          std::memcpy(&value,
+                      bytes.data() +
+                          ((static_cast<std::size_t>(map / 4) * height + y) * width + x) * 16 +
+                          4 * (map % 4),
+                      4);  // the file is little-endian, as the hosts photomat builds on
+          mismatches += value != maps.at(x0 + x, y0 + y, map);
+        }
+      }
+    }
+    EXPECT_EQ(mismatches, 0u) << column << "_" << row;
+  }
 }
 
 }  // namespace

@@ -7,15 +7,19 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <numbers>
 
 #include "core/atomic_file.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/memory_limits.h"
 #include "relight/render/display_image.h"
 #include "relight/render/output_folder.h"
 #include "relight/web/viewer_assets.h"
+#include "represent/stack/stack_band_reader.h"
 #include "represent/surface/surface_integration.h"
 
 namespace photomat {
@@ -79,12 +83,6 @@ std::string FileStem(const std::string& method) {
   return stem.empty() ? "method" : stem;
 }
 
-void AppendFloat(std::string& bytes, float value) {
-  const auto bits = std::bit_cast<std::uint32_t>(value);
-  for (int b = 0; b < 4; ++b)
-    bytes += static_cast<char>((bits >> (8 * b)) & 0xff);  // little-endian
-}
-
 // The maps as ceil(n / 4) RGBA layers, layer-major, rows from the top (the texture's layout).
 std::string MapLayers(const Image& maps) {
   const int n = maps.channels();
@@ -96,7 +94,7 @@ std::string MapLayers(const Image& maps) {
       const auto values = maps.pixel(p);
       for (int c = 0; c < 4; ++c) {
         const int map = 4 * layer + c;
-        AppendFloat(bytes, map < n ? values[map] : 0.0f);
+        AppendFloat32(bytes, map < n ? values[map] : 0.0f);
       }
     }
   }
@@ -206,7 +204,8 @@ nlohmann::json CheckJson(const LightBasis& basis, const std::optional<Coefficien
           {"tolerance", table ? 1e-7 : kExactTolerance}};
 }
 
-void CheckSameSample(const std::vector<Representation>& representations) {
+// `tiled`: the whole-texture limit does not apply.
+void CheckSameSample(const std::vector<Representation>& representations, bool tiled) {
   if (representations.empty()) throw Error("no representation to export to the viewer");
   const Representation& first = representations.front();
   for (const Representation& r : representations) {
@@ -215,9 +214,11 @@ void CheckSameSample(const std::vector<Representation>& representations) {
                               r.width(), r.height(), first.method(), first.width(),
                               first.height()));
     }
-    if (r.width() > 8192 || r.height() > 8192) {
-      throw Error(fmt::format("{} is {}x{}: the viewer's textures hold at most 8192 pixels a side",
-                              r.method(), r.width(), r.height()));
+    if (!tiled && (r.width() > 8192 || r.height() > 8192)) {
+      throw Error(
+          fmt::format("{} is {}x{}: the viewer's whole-image textures hold at most 8192 "
+                      "pixels a side (export it as tiles: --viewer-tiles always)",
+                      r.method(), r.width(), r.height()));
     }
   }
   for (std::size_t i = 0; i < representations.size(); ++i) {
@@ -227,6 +228,107 @@ void CheckSameSample(const std::vector<Representation>& representations) {
       }
     }
   }
+}
+
+// Stacks with a nonlinear shading (pbr, neural) have no place in the viewer's shader.
+void CheckViewable(const Representation& r) {
+  if (r.shading()) {
+    throw Error(
+        fmt::format("the viewer has no {} shading: leave {} out of the viewer (its "
+                    "maps export with `photomat export`)",
+                    r.shading()->kind(), r.method()));
+  }
+}
+
+void WriteViewerFiles(const fs::path& temp) {
+  for (const ViewerAsset& asset : ViewerAssets()) {
+    WriteTextFileAtomically(temp / asset.path, asset.contents);
+  }
+  fs::create_directories(temp / "maps");
+}
+
+std::string PyramidFolder(const std::string& stem) { return fmt::format("maps/{}/levels", stem); }
+
+nlohmann::json PyramidJson(const std::string& stem, const PyramidLayout& layout) {
+  nlohmann::json json = layout.ToJson();
+  json["folder"] = PyramidFolder(stem);
+  return json;
+}
+
+// The capture's lights, when the options give none: an interpolated basis's nodes.
+void AddCaptureLights(std::vector<LightDirection>& capture_lights, const Representation& r) {
+  if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&r.basis());
+      interpolated && capture_lights.empty()) {
+    capture_lights = interpolated->interpolator().nodes();
+  }
+}
+
+// viewer.json's description of method `r` whose maps are `data`; writes the coefficient table
+// into `temp` when the method reads one.
+nlohmann::json MethodJson(const fs::path& temp, const Representation& r,
+                          const ViewerExportOptions& options, nlohmann::json data) {
+  const std::string stem = FileStem(r.method());
+  const bool table =
+      options.table_methods.contains(r.method()) || !ViewerEvaluatesExactly(r.basis());
+  nlohmann::json basis;
+  std::optional<CoefficientTable> coefficient_table;
+  if (table) {
+    coefficient_table.emplace(r.basis());
+    const std::string file = fmt::format("maps/{}.coefficients.f32", stem);
+    std::string bytes;
+    for (float v : coefficient_table->values()) AppendFloat32(bytes, v);
+    WriteTextFileAtomically(temp / file, bytes);
+    basis = coefficient_table->ToJson();
+    basis["source_kind"] = r.basis().kind();
+    basis["file"] = file;
+  } else {
+    basis = ViewerBasisJson(r.basis());
+  }
+  const auto encoding = options.value_encodings.find(r.method());
+  return {{"name", r.method()},
+          {"label", MethodLabel(r.method())},
+          {"layout", r.layout().ToJson()},
+          {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
+                                                                        : encoding->second)},
+          {"channels", r.maps().channel_names()},
+          {"data", std::move(data)},
+          {"basis", std::move(basis)},
+          {"check", CheckJson(r.basis(), coefficient_table)}};
+}
+
+void WriteManifest(const fs::path& temp, const ViewerExportOptions& options, int width, int height,
+                   const std::vector<LightDirection>& capture_lights, nlohmann::json methods,
+                   nlohmann::json views) {
+  nlohmann::json lights = nlohmann::json::array();
+  for (const LightDirection& l : capture_lights) lights.push_back({l.x(), l.y(), l.z()});
+  WriteJsonFile(temp / kViewerManifest, {{"format", kViewerFormat},
+                                         {"version", 1},
+                                         {"title", options.title},
+                                         {"width", width},
+                                         {"height", height},
+                                         {"capture_lights", std::move(lights)},
+                                         {"methods", std::move(methods)},
+                                         {"views", std::move(views)}});
+}
+
+// Rows per band of `stack` the budget leaves beside the pyramid's buffers: per row, the decoded
+// stored channels and the gathered maps (4 bytes each). Throws Error naming the stack when not
+// even one row fits.
+int ViewerBandRows(std::size_t budget, const StackBandReader& stack, const PyramidLayout& layout) {
+  const int maps = stack.header().representation.maps().channels();
+  const std::size_t pyramid = PyramidWriter::BufferBytes(layout, maps);
+  const std::size_t row_bytes = static_cast<std::size_t>(stack.width()) * 4 *
+                                (static_cast<std::size_t>(stack.stored_channels()) + maps);
+  if (budget < pyramid + row_bytes) {
+    throw Error(
+        stack.path(),
+        fmt::format("the viewer's tile pyramid needs at least {:.1f} MB of memory ({:.1f} MB "
+                    "given): raise --memory or make the tiles smaller",
+                    static_cast<double>(pyramid + row_bytes) / (1 << 20),
+                    static_cast<double>(budget) / (1 << 20)));
+  }
+  return static_cast<int>(std::min<std::size_t>((budget - pyramid) / row_bytes,
+                                                static_cast<std::size_t>(stack.height())));
 }
 
 }  // namespace
@@ -342,84 +444,106 @@ nlohmann::json ViewerBasisJson(const LightBasis& basis) {
 
 void ExportViewer(const fs::path& folder, const std::vector<Representation>& representations,
                   const ViewerExportOptions& options) {
-  CheckSameSample(representations);
-  for (const Representation& r : representations) {
-    // The viewer evaluates linear bases (exactly or by a coefficient table) in the browser.
-    if (r.shading()) {
-      throw Error(
-          fmt::format("the viewer has no {} shading: leave {} out of the viewer (its "
-                      "maps export with `photomat export`)",
-                      r.shading()->kind(), r.method()));
-    }
-  }
+  const bool tiled =
+      !representations.empty() && UsesViewerTiles(options.tiling, representations.front().width(),
+                                                  representations.front().height());
+  CheckSameSample(representations, tiled);
+  for (const Representation& r : representations) CheckViewable(r);
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   WriteFolderAtomically(folder, kViewerManifest, kViewerFormat, [&](const fs::path& temp) {
     progress.Start("viewer", representations.size() + 1);
-    for (const ViewerAsset& asset : ViewerAssets()) {
-      WriteTextFileAtomically(temp / asset.path, asset.contents);
-    }
-    fs::create_directories(temp / "maps");
-
+    WriteViewerFiles(temp);
     nlohmann::json methods = nlohmann::json::array();
     std::vector<LightDirection> capture_lights = options.capture_lights;
     for (const Representation& r : representations) {
       const std::string stem = FileStem(r.method());
-      const bool table =
-          options.table_methods.contains(r.method()) || !ViewerEvaluatesExactly(r.basis());
-      nlohmann::json basis;
-      std::optional<CoefficientTable> coefficient_table;
-      if (table) {
-        coefficient_table.emplace(r.basis());
-        const std::string file = fmt::format("maps/{}.coefficients.f32", stem);
-        std::string bytes;
-        for (float v : coefficient_table->values()) AppendFloat(bytes, v);
-        WriteTextFileAtomically(temp / file, bytes);
-        basis = coefficient_table->ToJson();
-        basis["source_kind"] = r.basis().kind();
-        basis["file"] = file;
+      const int layers = (r.maps().channels() + 3) / 4;
+      nlohmann::json data = {{"type", "float32"}, {"layers", layers}};
+      if (tiled) {
+        const PyramidLayout layout(r.width(), r.height(), options.tile_size);
+        PyramidWriter writer(temp / PyramidFolder(stem), layout, r.maps().channels());
+        writer.AddRows(r.maps());
+        writer.Finish();
+        data["pyramid"] = PyramidJson(stem, layout);
       } else {
-        basis = ViewerBasisJson(r.basis());
+        data["file"] = fmt::format("maps/{}.f32", stem);
+        WriteTextFileAtomically(temp / data["file"].get<std::string>(), MapLayers(r.maps()));
       }
-      if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&r.basis());
-          interpolated && capture_lights.empty()) {
-        capture_lights = interpolated->interpolator().nodes();
-      }
-      const std::string data = fmt::format("maps/{}.f32", stem);
-      WriteTextFileAtomically(temp / data, MapLayers(r.maps()));
-      const auto encoding = options.value_encodings.find(r.method());
-      methods.push_back(
-          {{"name", r.method()},
-           {"label", MethodLabel(r.method())},
-           {"layout", r.layout().ToJson()},
-           {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
-                                                                         : encoding->second)},
-           {"channels", r.maps().channel_names()},
-           {"data",
-            {{"file", data}, {"type", "float32"}, {"layers", (r.maps().channels() + 3) / 4}}},
-           {"basis", std::move(basis)},
-           {"check", CheckJson(r.basis(), coefficient_table)}});
+      methods.push_back(MethodJson(temp, r, options, std::move(data)));
+      AddCaptureLights(capture_lights, r);
       progress.Advance();
     }
-
     nlohmann::json views = nlohmann::json::array();
-    if (options.display_maps) {
+    if (options.display_maps && !tiled) {
       if (const Representation* source = DisplayMapSource(representations)) {
         views = WriteDisplayMaps(temp, *source);
       }
     }
-    nlohmann::json lights = nlohmann::json::array();
-    for (const LightDirection& l : capture_lights) lights.push_back({l.x(), l.y(), l.z()});
-    WriteJsonFile(temp / kViewerManifest, {{"format", kViewerFormat},
-                                           {"version", 1},
-                                           {"title", options.title},
-                                           {"width", representations.front().width()},
-                                           {"height", representations.front().height()},
-                                           {"capture_lights", std::move(lights)},
-                                           {"methods", std::move(methods)},
-                                           {"views", std::move(views)}});
+    WriteManifest(temp, options, representations.front().width(), representations.front().height(),
+                  capture_lights, std::move(methods), std::move(views));
     progress.Advance();
     progress.Finish();
+  });
+}
+
+void ExportViewerStreamed(const fs::path& folder, const std::vector<fs::path>& stacks,
+                          const ViewerExportOptions& options) {
+  if (stacks.empty()) throw Error(folder, "no stack to export to the viewer");
+  // Opened (and their descriptions checked) before anything is written.
+  std::vector<std::unique_ptr<StackBandReader>> readers;
+  for (const fs::path& path : stacks) {
+    readers.push_back(std::make_unique<StackBandReader>(path));
+    const StackBandReader& first = *readers.front();
+    const StackBandReader& reader = *readers.back();
+    if (reader.width() != first.width() || reader.height() != first.height()) {
+      throw Error(
+          path, fmt::format("is {}x{} but {} is {}x{}: a viewer shows one sample", reader.width(),
+                            reader.height(), first.path().string(), first.width(), first.height()));
+    }
+    CheckViewable(reader.header().representation);
+  }
+  const std::size_t budget =
+      options.memory_bytes > 0 ? options.memory_bytes : DefaultMemoryBudget(kMinimumViewerMemory);
+  const PyramidLayout layout(readers.front()->width(), readers.front()->height(),
+                             options.tile_size);
+  // Every stack's bands are sized before anything is written.
+  std::vector<int> band_rows;
+  std::size_t tile_bytes = 0;
+  for (const auto& reader : readers) {
+    band_rows.push_back(ViewerBandRows(budget, *reader, layout));
+    tile_bytes += layout.FileBytes(reader->header().representation.maps().channels());
+  }
+  CheckDiskSpace(folder.parent_path().empty() ? fs::path(".") : folder.parent_path(), tile_bytes,
+                 "the viewer's tiles");
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  WriteFolderAtomically(folder, kViewerManifest, kViewerFormat, [&](const fs::path& temp) {
+    WriteViewerFiles(temp);
+    nlohmann::json methods = nlohmann::json::array();
+    std::vector<LightDirection> capture_lights = options.capture_lights;
+    for (std::size_t i = 0; i < readers.size(); ++i) {
+      StackBandReader& reader = *readers[i];
+      const Representation& r = reader.header().representation;
+      const std::string stem = FileStem(r.method());
+      const int maps = r.maps().channels();
+      PyramidWriter writer(temp / PyramidFolder(stem), layout, maps);
+      const int bands = (reader.height() + band_rows[i] - 1) / band_rows[i];
+      progress.Start(fmt::format("viewer tiles: {}", r.method()), static_cast<std::size_t>(bands));
+      for (int b = 0; b < bands; ++b) {
+        writer.AddRows(reader.ReadNext(band_rows[i]).representation.maps());
+        progress.Advance();
+      }
+      progress.Finish();
+      writer.Finish();
+      methods.push_back(MethodJson(temp, r, options,
+                                   {{"type", "float32"},
+                                    {"layers", (maps + 3) / 4},
+                                    {"pyramid", PyramidJson(stem, layout)}}));
+      AddCaptureLights(capture_lights, r);
+    }
+    WriteManifest(temp, options, readers.front()->width(), readers.front()->height(),
+                  capture_lights, std::move(methods), nlohmann::json::array());
   });
 }
 

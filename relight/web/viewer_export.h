@@ -12,6 +12,7 @@
 #include "core/colour.h"
 #include "core/light_direction.h"
 #include "core/progress.h"
+#include "relight/web/viewer_pyramid.h"
 #include "represent/model/light_basis.h"
 #include "represent/model/representation.h"
 
@@ -27,10 +28,15 @@ namespace photomat {
 //   viewer.json                                    what to show ("format": "photomat-viewer")
 //   maps/<method>.f32                              the maps, float32 little-endian
 //   maps/normal.png, albedo.png, height.png       display maps, when a method gives normals
+//   maps/<method>/levels/<L>/<column>_<row>.f32   a tiled method's pyramid (viewer_pyramid.h)
 //
 // A method's maps are stored as ceil(n / 4) RGBA layers of width x height texels (layer-major,
 // rows from the top, map 4 * layer + component; unused components 0), uploaded as one RGBA32F
 // 2D-array texture: float32 is what Relight computes in, so the viewer's pixels match the CPU's.
+// A tiled method (large stacks, ViewerExportOptions::tiling) has instead a deep-zoom pyramid of
+// such tiles, described in viewer.json by its "data": {"type": "float32", "layers": n,
+// "pyramid": PyramidLayout::ToJson() + {"folder": "maps/<method>/levels"}}; the viewer loads the
+// tiles in view at the level the zoom asks for.
 //
 // The light basis is exported so that basis.js computes the coefficients of any light as
 // represent/light_basis.h does (ViewerBasisJson below), and each method carries check lights with
@@ -51,9 +57,17 @@ struct ViewerExportOptions {
   // StackValueEncoding). The viewer decodes them as `photomat relight` does.
   std::map<std::string, ColourSpace> value_encodings;
   // Write normal, albedo and height display maps (from the first method that gives normals).
+  // (Whole-image display maps are not made for tiled exports, which may not fit in memory.)
   bool display_maps = true;
+  // Whether methods are written as tile pyramids (viewer_pyramid.h), and their tiles' size.
+  ViewerTiling tiling = ViewerTiling::kAuto;
+  int tile_size = kViewerTileSize;
+  // ExportViewerStreamed: bytes its bands and pyramid buffers may hold; 0:
+  // DefaultMemoryBudget(kMinimumViewerMemory).
+  std::size_t memory_bytes = 0;
   Progress* progress = nullptr;
 };
+inline constexpr std::size_t kMinimumViewerMemory = std::size_t{64} << 20;
 
 // Writes the viewer for `representations` (one or more methods of the same sample, hence the same
 // size) into `folder`, whole or not at all (an existing folder is replaced only if it is empty or
@@ -61,6 +75,15 @@ struct ViewerExportOptions {
 void ExportViewer(const std::filesystem::path& folder,
                   const std::vector<Representation>& representations,
                   const ViewerExportOptions& options = {});
+
+// The viewer of the map stacks at `stacks` (photomat .exr stacks of one sample), every method
+// written as a tile pyramid from the stack read in bands of rows (StackBandReader), never whole:
+// memory is the pyramid's buffers (PyramidWriter::BufferBytes) plus a band, within
+// options.memory_bytes. No display maps. Throws Error naming the stack or folder at fault (also
+// when the budget cannot hold the pyramid's buffers and one row), leaving `folder` as it was.
+void ExportViewerStreamed(const std::filesystem::path& folder,
+                          const std::vector<std::filesystem::path>& stacks,
+                          const ViewerExportOptions& options = {});
 
 // True when basis.js has the basis's formula: linear, PTM, interpolated (Eigen-k) and
 // hemispherical harmonics (kind "hsh", {"terms": 4, 9 or 16}). Others go through the table.

@@ -2,6 +2,9 @@
 // relights each method with one WebGL2 fragment shader: out_c = gain_c * sum_j c_j(l) B_j,c, the
 // rule of represent/representation.h, with the maps as float32 texels and c(l) from basis.js.
 // No network access beyond the folder it is served from; no libraries.
+// Large stacks come as deep-zoom pyramids (relight/web/viewer_pyramid.h): the tiles in view (and
+// a margin of one tile) of the level the zoom asks for are fetched, kept in a bounded LRU cache
+// and relit one texture per tile by the same shader, clipped to the tile's pixels.
 
 import { checkBasis, lightFromSlantTilt, makeBasis, slantDegrees, tiltDegrees } from './basis.js';
 
@@ -52,6 +55,11 @@ ${COMMON_GLSL}
 uniform sampler2DArray u_maps;     // map 4 * layer + component
 uniform float u_coefficients[TERMS];
 uniform float u_exposure;          // linear scale
+// The texture is a tile of a pyramid level (the whole image: level 0, one tile of it all).
+uniform float u_level_scale;       // image pixels per level pixel, 2^level
+uniform ivec2 u_tile_origin;       // the level pixel of texel (0, 0)
+uniform ivec2 u_core_min;          // the level pixels this tile draws: [min, max)
+uniform ivec2 u_core_max;
 
 // The sRGB transfer function, as photomat writes 8-bit images (core/colour.cc LinearToSrgb).
 float Srgb(float v) {
@@ -66,8 +74,11 @@ float Linear(float v) {
 }
 
 void main() {
-  ivec2 p = ImagePixel();
-  if (Outside(p)) { o_colour = kBackground; return; }
+  vec2 canvas = vec2(gl_FragCoord.x, u_canvas_height - gl_FragCoord.y);
+  ivec2 q = ivec2(floor((canvas - u_origin) / (u_zoom * u_level_scale)));
+  // Outside the tile (or the image) the cleared background shows.
+  if (any(lessThan(q, u_core_min)) || any(greaterThanEqual(q, u_core_max))) discard;
+  ivec2 p = q - u_tile_origin;
   float maps[LAYERS * 4];
   for (int layer = 0; layer < LAYERS; ++layer) {
     vec4 t = texelFetch(u_maps, ivec3(p, layer), 0);
@@ -118,6 +129,20 @@ const state = {
 let gl = null;
 let canvas = null;
 let mapProgram = null;
+
+// IMPLEMENTER CHOICE: tiles of the level in view and one tile around it are fetched (the margin
+// hides the edges while panning), at most 6 at once (a browser's connections per server); the
+// cache keeps at most 384 MB of tiles (texture and CPU copy for the pixel readout), least
+// recently drawn evicted first, never the coarsest level's (the backdrop while tiles load).
+const TILE_MARGIN = 1;
+const TILE_FETCHES = 6;
+const TILE_CACHE_BYTES = 384 * 2 ** 20;
+const tiles = {
+  cache: new Map(), // key -> {texture, values, rect, bytes}; Map order: least recently used first
+  loading: new Map(), // key -> promise
+  wanted: [], // [{method, level, column, row, key}] for the view, in order of need
+  bytes: 0,
+};
 
 function setStatus(text, kind = '') {
   const status = $('status');
@@ -171,6 +196,7 @@ function program(fragmentSource) {
 }
 
 async function loadMethodData(method) {
+  if (method.json.data.pyramid) return loadPyramid(method);
   if (method.texture) return;
   if (!method.loading) {
     method.loading = (async () => {
@@ -196,6 +222,184 @@ async function loadMethodData(method) {
     })();
   }
   await method.loading;
+}
+
+// ---- deep-zoom tiles ----------------------------------------------------------------------
+
+// A tile's pixels in its level, overlap included (PyramidLayout::Tile), and the pixels it draws.
+function tileRect(pyramid, level, column, row) {
+  const [width, height] = pyramid.level_sizes[level];
+  const t = pyramid.tile_size;
+  const o = pyramid.overlap;
+  const x = Math.max(column * t - o, 0);
+  const y = Math.max(row * t - o, 0);
+  return {
+    x, y, width: Math.min((column + 1) * t + o, width) - x, height: Math.min((row + 1) * t + o, height) - y,
+    core: [column * t, row * t, Math.min((column + 1) * t, width), Math.min((row + 1) * t, height)],
+  };
+}
+
+function tileKey(method, level, column, row) {
+  return `${method.json.name}/${level}/${column}_${row}`;
+}
+
+// The level whose pixels are at least as fine as the screen's: level L for zooms down to 2^-L.
+function levelForZoom(pyramid) {
+  const level = Math.floor(Math.log2(1 / state.zoom) + 1e-9);
+  return Math.min(Math.max(level, 0), pyramid.levels - 1);
+}
+
+// The tiles of `level` that the canvas shows, widened by `margin` tiles on every side.
+function tilesInView(pyramid, level, margin) {
+  const [width, height] = pyramid.level_sizes[level];
+  const scale = state.zoom * 2 ** level;
+  const x0 = Math.max(Math.floor(-state.origin[0] / scale), 0);
+  const y0 = Math.max(Math.floor(-state.origin[1] / scale), 0);
+  const x1 = Math.min(Math.ceil((canvas.width - state.origin[0]) / scale), width);
+  const y1 = Math.min(Math.ceil((canvas.height - state.origin[1]) / scale), height);
+  if (x1 <= x0 || y1 <= y0) return [];
+  const t = pyramid.tile_size;
+  const columns = Math.ceil(width / t);
+  const rows = Math.ceil(height / t);
+  const list = [];
+  for (let row = Math.max(Math.floor(y0 / t) - margin, 0); row <= Math.min(Math.floor((y1 - 1) / t) + margin, rows - 1); ++row) {
+    for (let column = Math.max(Math.floor(x0 / t) - margin, 0); column <= Math.min(Math.floor((x1 - 1) / t) + margin, columns - 1); ++column) {
+      list.push({ level, column, row });
+    }
+  }
+  return list;
+}
+
+function loadTile(method, level, column, row) {
+  const key = tileKey(method, level, column, row);
+  if (tiles.cache.has(key)) return Promise.resolve();
+  if (!tiles.loading.has(key)) {
+    const pyramid = method.json.data.pyramid;
+    const url = `${pyramid.folder}/${level}/${column}_${row}.f32`;
+    const promise = (async () => {
+      const rect = tileRect(pyramid, level, column, row);
+      const { layers } = method.json.data;
+      const values = float32s(await fetchChecked(url, 'buffer'), url);
+      if (values.length !== layers * rect.width * rect.height * 4) {
+        throw new Error(`${url}: ${values.length} values, expected ${layers * rect.width * rect.height * 4}`);
+      }
+      const texture = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D_ARRAY, texture);
+      gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+      gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, gl.RGBA32F, rect.width, rect.height, layers, 0, gl.RGBA, gl.FLOAT, values);
+      gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+      gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+      const pinned = level === pyramid.levels - 1;
+      tiles.cache.set(key, { texture, values, rect, level, pinned, bytes: 2 * values.byteLength });
+      tiles.bytes += 2 * values.byteLength;
+      evictTiles();
+    })().finally(() => {
+      tiles.loading.delete(key);
+      pumpTiles();
+      requestDraw();
+    });
+    tiles.loading.set(key, promise);
+  }
+  return tiles.loading.get(key);
+}
+
+// Least recently used first, sparing the backdrop and the tiles the view wants.
+function evictTiles() {
+  if (tiles.bytes <= TILE_CACHE_BYTES) return;
+  const wanted = new Set(tiles.wanted.map((w) => w.key));
+  for (const [key, tile] of tiles.cache) {
+    if (tiles.bytes <= TILE_CACHE_BYTES) break;
+    if (tile.pinned || wanted.has(key)) continue;
+    gl.deleteTexture(tile.texture);
+    tiles.cache.delete(key);
+    tiles.bytes -= tile.bytes;
+  }
+}
+
+// Starts fetching wanted tiles, up to TILE_FETCHES at once.
+function pumpTiles() {
+  for (const w of tiles.wanted) {
+    if (tiles.loading.size >= TILE_FETCHES) break;
+    if (!tiles.cache.has(w.key) && !tiles.loading.has(w.key)) {
+      loadTile(w.method, w.level, w.column, w.row).catch((e) => fail(e.message));
+    }
+  }
+}
+
+// What the view needs of the current method: its level's tiles in view and the margin.
+function updateWantedTiles() {
+  const method = state.methods.get(state.method);
+  if (state.view !== 'relit' || !method?.json.data.pyramid || !canvas.width) {
+    tiles.wanted = [];
+    return;
+  }
+  const pyramid = method.json.data.pyramid;
+  const level = levelForZoom(pyramid);
+  // The tiles in view first, then the margin.
+  const inView = tilesInView(pyramid, level, 0);
+  const seen = new Set();
+  tiles.wanted = [];
+  for (const t of [...inView, ...tilesInView(pyramid, level, TILE_MARGIN)]) {
+    const key = tileKey(method, t.level, t.column, t.row);
+    if (!seen.has(key)) {
+      seen.add(key);
+      tiles.wanted.push({ method, key, ...t });
+    }
+  }
+  pumpTiles();
+}
+
+// The pyramid's coarsest level (one tile): the backdrop every view starts from.
+async function loadPyramid(method) {
+  const { pyramid, layers } = method.json.data;
+  if (layers > gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS)) {
+    throw new Error(`${method.json.name}: ${layers} texture layers exceed this browser's limit`);
+  }
+  if (!method.program) {
+    method.program = program(relightShader(method.json.layout, layers, method.json.values === 'srgb'));
+  }
+  await loadTile(method, pyramid.levels - 1, 0, 0);
+  method.ready = true;
+}
+
+function drawTile(p, tile, scale) {
+  const [cx0, cy0, cx1, cy1] = tile.rect.core;
+  // The canvas pixels of the tile's core, widened to whole pixels (the shader clips exactly).
+  const left = Math.max(Math.floor(state.origin[0] + cx0 * scale), 0);
+  const top = Math.max(Math.floor(state.origin[1] + cy0 * scale), 0);
+  const right = Math.min(Math.ceil(state.origin[0] + cx1 * scale), canvas.width);
+  const bottom = Math.min(Math.ceil(state.origin[1] + cy1 * scale), canvas.height);
+  if (right <= left || bottom <= top) return;
+  gl.scissor(left, canvas.height - bottom, right - left, bottom - top);
+  gl.bindTexture(gl.TEXTURE_2D_ARRAY, tile.texture);
+  gl.uniform1f(p.uniforms.u_level_scale, 2 ** tile.level);
+  gl.uniform2i(p.uniforms.u_tile_origin, tile.rect.x, tile.rect.y);
+  gl.uniform2i(p.uniforms.u_core_min, cx0, cy0);
+  gl.uniform2i(p.uniforms.u_core_max, cx1, cy1);
+  gl.drawArrays(gl.TRIANGLES, 0, 3);
+}
+
+// The backdrop (coarsest level), then the loaded tiles of the level in view over it.
+function drawPyramid(method, p) {
+  const pyramid = method.json.data.pyramid;
+  updateWantedTiles();
+  gl.enable(gl.SCISSOR_TEST);
+  const top = tiles.cache.get(tileKey(method, pyramid.levels - 1, 0, 0));
+  if (top) drawTile(p, top, state.zoom * 2 ** top.level);
+  for (const w of tiles.wanted) {
+    const tile = tiles.cache.get(w.key);
+    if (!tile || tile === top) continue;
+    tiles.cache.delete(w.key); // most recently used: to the end of the Map's order
+    tiles.cache.set(w.key, tile);
+    drawTile(p, tile, state.zoom * 2 ** tile.level);
+  }
+  gl.disable(gl.SCISSOR_TEST);
+}
+
+// Wanted tiles not yet in the cache (and fetches under way).
+function tilesPending() {
+  updateWantedTiles();
+  return tiles.wanted.filter((w) => !tiles.cache.has(w.key)).length + tiles.loading.size;
 }
 
 async function loadView(view) {
@@ -251,14 +455,24 @@ function draw() {
   let p = null;
   if (state.view === 'relit') {
     const method = state.methods.get(state.method);
-    if (!method || !method.texture) return;
+    if (!method || !(method.texture || method.ready)) return;
     p = method.program;
     gl.useProgram(p.program);
     gl.activeTexture(gl.TEXTURE0);
-    gl.bindTexture(gl.TEXTURE_2D_ARRAY, method.texture);
     gl.uniform1i(p.uniforms.u_maps, 0);
     gl.uniform1fv(p.uniforms.u_coefficients, Float32Array.from(method.basis.coefficients(state.light)));
     gl.uniform1f(p.uniforms.u_exposure, 2 ** state.exposure);
+    if (method.json.data.pyramid) {
+      setViewUniforms(p);
+      drawPyramid(method, p);
+      return;
+    }
+    // The whole image: one tile of level 0.
+    gl.bindTexture(gl.TEXTURE_2D_ARRAY, method.texture);
+    gl.uniform1f(p.uniforms.u_level_scale, 1);
+    gl.uniform2i(p.uniforms.u_tile_origin, 0, 0);
+    gl.uniform2i(p.uniforms.u_core_min, 0, 0);
+    gl.uniform2i(p.uniforms.u_core_max, state.manifest.width, state.manifest.height);
   } else {
     const view = state.views.get(state.view);
     if (!view || !view.texture) return;
@@ -268,11 +482,16 @@ function draw() {
     gl.bindTexture(gl.TEXTURE_2D, view.texture);
     gl.uniform1i(p.uniforms.u_image, 0);
   }
+  setViewUniforms(p);
+  gl.drawArrays(gl.TRIANGLES, 0, 3);
+}
+
+// Where the image is on the canvas.
+function setViewUniforms(p) {
   gl.uniform2f(p.uniforms.u_origin, state.origin[0], state.origin[1]);
   gl.uniform1f(p.uniforms.u_zoom, state.zoom);
   gl.uniform1f(p.uniforms.u_canvas_height, canvas.height);
   gl.uniform2i(p.uniforms.u_size, state.manifest.width, state.manifest.height);
-  gl.drawArrays(gl.TRIANGLES, 0, 3);
 }
 
 function requestDraw() {
@@ -436,6 +655,21 @@ function centreImage() {
 
 // ---- pixel readout -------------------------------------------------------------------------
 
+// Map i of image pixel (x, y), from the whole maps or a loaded level-0 tile; null when not loaded.
+function mapsAt(method, x, y) {
+  const pyramid = method.json.data.pyramid;
+  if (!pyramid) {
+    if (!method.values) return null;
+    const { width, height } = state.manifest;
+    return (i) => method.values[((Math.floor(i / 4) * height + y) * width + x) * 4 + (i % 4)];
+  }
+  const t = pyramid.tile_size;
+  const tile = tiles.cache.get(tileKey(method, 0, Math.floor(x / t), Math.floor(y / t)));
+  if (!tile) return null;
+  const { rect, values } = tile;
+  return (i) => values[((Math.floor(i / 4) * rect.height + y - rect.y) * rect.width + x - rect.x) * 4 + (i % 4)];
+}
+
 function showPixel(event) {
   const box = canvas.getBoundingClientRect();
   const ratio = canvas.width / box.width;
@@ -443,12 +677,12 @@ function showPixel(event) {
   const y = Math.floor(((event.clientY - box.top) * ratio - state.origin[1]) / state.zoom);
   const { width, height } = state.manifest;
   const method = state.methods.get(state.method);
-  if (x < 0 || y < 0 || x >= width || y >= height || !method?.values) {
+  const maps = x < 0 || y < 0 || x >= width || y >= height || !method ? null : mapsAt(method, x, y);
+  if (!maps) {
     $('pixel-readout').textContent = '';
     return;
   }
   const { layout } = method.json;
-  const maps = (i) => method.values[((Math.floor(i / 4) * height + y) * width + x) * 4 + (i % 4)];
   const c = method.basis.coefficients(state.light);
   const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
   const out = [];
@@ -469,8 +703,10 @@ async function selectMethod(name) {
   state.method = name;
   $('method').value = name;
   const layout = method.json.layout;
+  const pyramid = method.json.data.pyramid;
   $('method-info').textContent = `${method.json.channels.length} maps, ${layout.basis_size} light terms` +
-    (method.json.basis.kind === 'table' ? ' (coefficients from a slant/tilt table)' : '');
+    (method.json.basis.kind === 'table' ? ' (coefficients from a slant/tilt table)' : '') +
+    (pyramid ? `; deep-zoom tiles of ${pyramid.tile_size} px, ${pyramid.levels} levels` : '');
   setStatus(`loading ${method.json.label}…`);
   await loadMethodData(method);
   if (state.method === name) {
@@ -654,8 +890,34 @@ window.photomatViewer = {
   },
   state: () => ({
     method: state.method, view: state.view, slant: slantDegrees(state.light), tilt: tiltDegrees(state.light),
-    light: [...state.light], zoom: state.zoom, origin: [...state.origin],
+    light: [...state.light], zoom: state.zoom, origin: [...state.origin], canvas: [canvas.width, canvas.height],
   }),
+  // Sets the zoom (canvas pixels per image pixel) and the canvas pixel of the image's top-left.
+  setZoomOrigin: (zoom, origin) => {
+    resizeCanvas();
+    state.zoom = zoom;
+    state.origin = [...origin];
+    $('zoom-readout').textContent = `${Math.round(zoom * 100)} %`;
+    updateWantedTiles();
+    requestDraw();
+  },
+  // Deep-zoom: the tiles the view wants that have not loaded yet.
+  tilesPending: () => tilesPending(),
+  level: () => {
+    const pyramid = state.methods.get(state.method)?.json.data.pyramid;
+    return pyramid ? levelForZoom(pyramid) : 0;
+  },
+  // Draws now and returns canvas pixels [x, x + width) x [y, y + height) (RGBA, rows from the top).
+  readCanvas: (x, y, width, height) => {
+    draw();
+    const bottomUp = new Uint8Array(width * height * 4);
+    gl.readPixels(x, canvas.height - y - height, width, height, gl.RGBA, gl.UNSIGNED_BYTE, bottomUp);
+    const rows = new Uint8Array(width * height * 4);
+    for (let r = 0; r < height; ++r) {
+      rows.set(bottomUp.subarray((height - 1 - r) * width * 4, (height - r) * width * 4), r * width * 4);
+    }
+    return { width, height, rgba: Array.from(rows) };
+  },
   // Draws now and returns the image's pixels as the canvas holds them (RGBA, rows from the top).
   // Needs zoom 1 (actualPixels) and the whole image on the canvas.
   readImagePixels: () => {

@@ -3,10 +3,13 @@
 //    relighting (`photomat relight`) within a mean absolute difference of 2/255;
 //  - the viewer's controls move the light, switch methods and views, zoom;
 //  - the report loads with no console error and shows one chart per method;
+//  - the deep-zoom viewer fetches only the tiles in view and relights them as photomat does;
 //  - screenshots of both land in the screenshot folder for a person to look at.
 import { after, before, describe, test } from 'node:test';
 import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
 import path from 'node:path';
+import { PNG } from 'pngjs';
 import { launchBrowser, loadFixtures, openPage, readPng, screenshotFolder, serve } from './support.mjs';
 
 const fixtures = loadFixtures();
@@ -166,6 +169,173 @@ describe('viewer controls', () => {
     await page.click('#zoom-1');
     assert.equal((await page.evaluate(() => window.photomatViewer.state())).zoom, 1);
     await page.screenshot({ path: path.join(screenshots, 'viewer-grid-controls.png') });
+    assert.deepEqual(problems, []);
+  });
+});
+
+// The deep-zoom viewer (README "Web viewer and evaluation report"): the tiles each view needs are
+// fetched and no others, and the relit tiles reproduce photomat's relighting at level 0 and its
+// box average at level 1.
+for (const deep of fixtures.deepzoom) describe(`deep-zoom viewer "${deep.name}"`, () => {
+  const pyramid = (method) => JSON.parse(readFileSync(path.join(deep.folder, 'viewer.json'), 'utf8'))
+    .methods.find((m) => m.name === method).data.pyramid;
+  let page;
+  let problems;
+  const requests = [];
+  before(async () => {
+    ({ page, problems } = await openPage(browser, server.url + deep.url));
+    page.on('request', (request) => {
+      const match = /\/maps\/([^/]+)\/levels\/(\d+)\/(\d+)_(\d+)\.f32$/.exec(request.url());
+      if (match) requests.push({ method: match[1], level: +match[2], column: +match[3], row: +match[4] });
+    });
+    await page.evaluate(() => window.photomatViewer.ready);
+    await page.waitForFunction(() => window.photomatViewer.tilesPending() === 0);
+  });
+  after(() => page.close());
+
+  // Sets the view, then waits until every tile it wants has loaded; the requests it made.
+  async function showAt(zoom, origin) {
+    const first = requests.length;
+    await page.evaluate(({ z, o }) => window.photomatViewer.setZoomOrigin(z, o), { z: zoom, o: origin });
+    await page.waitForFunction(() => window.photomatViewer.tilesPending() === 0);
+    return requests.slice(first);
+  }
+
+  async function selectMethod(method) {
+    const first = requests.length;
+    await page.evaluate((m) => window.photomatViewer.setMethod(m), method);
+    await page.waitForFunction(() => window.photomatViewer.tilesPending() === 0);
+    return requests.slice(first);
+  }
+
+  // The tiles of `level` a canvas shows (computed here from the pyramid's geometry), widened by
+  // `margin` tiles: as "column_row" strings.
+  function tilesShown(p, level, { zoom, origin, canvas }, margin) {
+    const [width, height] = p.level_sizes[level];
+    const scale = zoom * 2 ** level;
+    const x0 = Math.max(Math.floor(-origin[0] / scale), 0);
+    const y0 = Math.max(Math.floor(-origin[1] / scale), 0);
+    const x1 = Math.min(Math.ceil((canvas[0] - origin[0]) / scale), width);
+    const y1 = Math.min(Math.ceil((canvas[1] - origin[1]) / scale), height);
+    const t = p.tile_size;
+    const shown = new Set();
+    for (let r = Math.max(Math.floor(y0 / t) - margin, 0); r <= Math.min(Math.floor((y1 - 1) / t) + margin, Math.ceil(height / t) - 1); ++r) {
+      for (let c = Math.max(Math.floor(x0 / t) - margin, 0); c <= Math.min(Math.floor((x1 - 1) / t) + margin, Math.ceil(width / t) - 1); ++c) {
+        shown.add(`${c}_${r}`);
+      }
+    }
+    return shown;
+  }
+
+  function checkRequests(made, method, level, state) {
+    const p = pyramid(method);
+    const allowed = tilesShown(p, level, state, 1);
+    const needed = tilesShown(p, level, state, 0);
+    const got = new Set();
+    for (const r of made) {
+      assert.equal(r.method, method);
+      // The coarsest level's single tile is the backdrop every method loads first.
+      if (r.level === p.levels - 1) continue;
+      assert.equal(r.level, level, `a tile of level ${r.level} requested at level ${level}`);
+      assert.ok(allowed.has(`${r.column}_${r.row}`), `tile ${r.column}_${r.row} is not in view`);
+      got.add(`${r.column}_${r.row}`);
+    }
+    for (const t of needed) assert.ok(got.has(t), `tile ${t} in view was not requested`);
+    const total = Math.ceil(p.level_sizes[level][0] / p.tile_size) * Math.ceil(p.level_sizes[level][1] / p.tile_size);
+    return { requested: got.size, inView: needed.size, total };
+  }
+
+  // Mean absolute difference over RGB of a canvas crop and `expected(x, y, c)` (0-255 codes).
+  function meanDifference(canvas, expected) {
+    let sum = 0;
+    for (let y = 0; y < canvas.height; ++y) {
+      for (let x = 0; x < canvas.width; ++x) {
+        for (let c = 0; c < 3; ++c) sum += Math.abs(canvas.rgba[4 * (y * canvas.width + x) + c] - expected(x, y, c));
+      }
+    }
+    return sum / (canvas.width * canvas.height * 3) / 255;
+  }
+
+  const srgbCode = (v) => {
+    const x = Math.min(Math.max(v, 0), 1);
+    return Math.round(255 * (x <= 0.0031308 ? 12.92 * x : 1.055 * x ** (1 / 2.4) - 0.055));
+  };
+
+  async function readCrop(light, width, height) {
+    return page.evaluate(({ slant, tilt, w, h }) => {
+      window.photomatViewer.setLight(slant, tilt);
+      return window.photomatViewer.readCanvas(0, 0, w, h);
+    }, { slant: light.slant, tilt: light.tilt, w: width, h: height });
+  }
+
+  test('requests only the tiles in view; level 0 matches photomat relight on a crop, level 1 its box average', async () => {
+    const { canvas } = await page.evaluate(() => window.photomatViewer.state());
+    // Level 0 at 1:1, the image's top-left part off the canvas.
+    const [w, h] = pyramid(deep.methods[0]).level_sizes[0];
+    const origin0 = [-Math.floor(0.6 * w), -Math.floor(0.5 * h)];
+    const crop0 = [Math.min(w + origin0[0], canvas[0]), Math.min(h + origin0[1], canvas[1])];
+    let made0;
+    let first = deep.methods[0];
+    if (deep.methods.length > 1) {
+      // The first method has loaded level 0 for the fitted view: the second has loaded nothing
+      // yet, so what it requests now is the backdrop and this view's tiles.
+      await showAt(1, origin0);
+      first = deep.methods[1];
+      made0 = await selectMethod(first);
+    } else {
+      made0 = await showAt(1, origin0); // from the fitted view's coarser level
+    }
+    const state0 = await page.evaluate(() => window.photomatViewer.state());
+    assert.equal(await page.evaluate(() => window.photomatViewer.level()), 0);
+    const counts0 = checkRequests(made0, first, 0, state0);
+    assert.ok(counts0.requested < counts0.total, `${counts0.requested} of ${counts0.total} tiles requested`);
+
+    const order0 = [first, ...deep.methods.filter((m) => m !== first)];
+    const results = [];
+    for (const method of order0) {
+      await selectMethod(method);
+      for (const reference of deep.references.filter((r) => r.method === method)) {
+        const crop = await readCrop(reference, crop0[0], crop0[1]);
+        const png = readPng(reference.png8);
+        const mean = meanDifference(crop, (x, y, c) => png.data[4 * ((y - origin0[1]) * png.width + x - origin0[0]) + c]);
+        results.push({ level: 0, method, light: `${reference.slant},${reference.tilt}`, mean });
+      }
+    }
+
+    // Level 1 at zoom 1/2: each canvas pixel is a level-1 pixel, the average of 2 x 2 image pixels.
+    const current = order0[order0.length - 1];
+    const [w1, h1] = pyramid(current).level_sizes[1];
+    const origin1 = [-Math.floor(0.3 * w1), -Math.floor(0.3 * h1)];
+    const crop1 = [Math.min(w1 + origin1[0], canvas[0]), Math.min(h1 + origin1[1], canvas[1])];
+    const made1 = await showAt(0.5, origin1);
+    const state1 = await page.evaluate(() => window.photomatViewer.state());
+    assert.equal(await page.evaluate(() => window.photomatViewer.level()), 1);
+    const counts1 = checkRequests(made1, current, 1, state1);
+    for (const method of [current, ...deep.methods.filter((m) => m !== current)]) {
+      const made = await selectMethod(method);
+      if (method !== current) checkRequests(made, method, 1, state1);
+      for (const reference of deep.references.filter((r) => r.method === method)) {
+        const crop = await readCrop(reference, crop1[0], crop1[1]);
+        const png = PNG.sync.read(readFileSync(reference.png16), { skipRescale: true });
+        const boxAverage = (x, y, c) => {
+          let sum = 0;
+          for (const [dx, dy] of [[0, 0], [1, 0], [0, 1], [1, 1]]) {
+            sum += png.data[4 * ((2 * (y - origin1[1]) + dy) * png.width + 2 * (x - origin1[0]) + dx) + c] / 65535;
+          }
+          return srgbCode(sum / 4);
+        };
+        results.push({ level: 1, method, light: `${reference.slant},${reference.tilt}`, mean: meanDifference(crop, boxAverage) });
+      }
+    }
+    console.log(`  ${deep.name}: ${w}x${h}, level 0 view ${crop0[0]}x${crop0[1]} requested ${counts0.requested} of ${counts0.total} tiles (${counts0.inView} in view), ` +
+      `level 1 ${counts1.requested} of ${counts1.total} (${counts1.inView} in view); ` +
+      results.map((r) => `L${r.level} ${r.method} (${r.light}) mean ${(r.mean * 255).toFixed(3)}/255`).join('; '));
+    for (const r of results) {
+      assert.ok(r.mean < MAX_MEAN_DIFFERENCE, `level ${r.level} ${r.method} at ${r.light}: mean difference ${(r.mean * 255).toFixed(3)}/255`);
+    }
+    await page.evaluate(() => window.photomatViewer.fit());
+    await page.waitForFunction(() => window.photomatViewer.tilesPending() === 0);
+    await page.screenshot({ path: path.join(screenshots, `viewer-${deep.name}.png`) });
     assert.deepEqual(problems, []);
   });
 });

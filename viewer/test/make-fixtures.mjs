@@ -4,6 +4,7 @@
 //  irregular/  a capture under irregular lights (Eigen-k: Delaunay triangulation)
 //  table/      the grid's PTM and Gradient with their coefficients from the (slant, tilt) table
 //  files/      a .ptm and an HSH .rti exported from the grid's fits (values are display codes)
+//  deepzoom/   a viewer written as deep-zoom tiles (--viewer-tiles always)
 // and, for each viewer, method and test light, photomat's CPU relighting
 // (`photomat relight STACK --light S,T --out X.png`), which the viewer's canvas must reproduce.
 // Writes OUT/fixtures.json describing it all.
@@ -122,6 +123,42 @@ addViewer('ptm-file', path.join(files, 'grid.ptm'));
 if (all.includes('hsh9')) {
   run(photomat, ['export', path.join(grid, 'stacks'), '--method', 'hsh9', '--rti', path.join(files, 'grid.rti')]);
   addViewer('rti-file', path.join(files, 'grid.rti'));
+}
+
+// Exports `stacks` (a fit folder or one .exr) with `photomat export --viewer ... exportArgs` and
+// relights each method under two lights as 8-bit sRGB (the level-0 comparison) and 16-bit linear
+// PNG (box-averaged for level 1).
+function addDeepZoom(name, stacks, methods, exportArgs) {
+  const folder = path.join(out, name);
+  run(photomat, ['export', stacks, '--viewer', path.join(folder, 'viewer'), ...exportArgs]);
+  const references = [];
+  for (const method of methods) {
+    for (const [slant, tilt] of [[30, 0], [52.5, 77]]) {
+      const reference = path.join(folder, 'reference', `${method}_${slant}_${tilt}`);
+      mkdirSync(path.dirname(reference), { recursive: true });
+      for (const format of ['png8', 'png16']) {
+        run(photomat, ['relight', stacks, ...(stacks.endsWith('.exr') ? [] : ['--method', method]),
+          '--light', `${slant},${tilt}`, '--format', format, '--out', `${reference}.${format}.png`]);
+      }
+      references.push({ method, slant, tilt, png8: `${reference}.png8.png`, png16: `${reference}.png16.png` });
+    }
+  }
+  fixtures.deepzoom.push({ name, url: `${name}/viewer/index.html`, folder: path.join(folder, 'viewer'), methods, references });
+}
+
+// deepzoom: a 256 x 192 capture whose viewer is forced into deep-zoom tiles of 32 px (4 levels;
+// a stack small enough for a fast test).
+fixtures.deepzoom = [];
+const deep = path.join(out, 'deepzoom');
+run(photomat, ['generate', '--out', path.join(deep, 'capture'), '--size', '256x192', '--pattern', 'bricks',
+  '--relief', '45', '--seed', '7']);
+run(photomat, ['fit', path.join(deep, 'capture'), '--method', 'gradient,ptm', '--out', path.join(deep, 'stacks')]);
+addDeepZoom('deepzoom', path.join(deep, 'stacks'), ['gradient', 'ptm'], ['--viewer-tiles', 'always', '--viewer-tile-size', '32']);
+// PHOTOMAT_DEEPZOOM_STACK=STACK.exr METHOD: a large stack (the benchmark's), exported as
+// `photomat export --viewer` does by default (tiled above 4096 x 4096 pixels).
+if (process.env.PHOTOMAT_DEEPZOOM_STACK) {
+  const [stack, method] = process.env.PHOTOMAT_DEEPZOOM_STACK.split(' ');
+  addDeepZoom('deepzoom-large', path.resolve(stack), [method], []);
 }
 
 writeFileSync(path.join(out, 'fixtures.json'), `${JSON.stringify(fixtures, null, 2)}\n`);
