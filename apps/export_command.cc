@@ -423,15 +423,6 @@ void AddExportCommand(CLI::App& app) {
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "
                       "folder (or --method's), or for a photometric set every method's fit");
-<<<<<<< HEAD
-  command->add_option(
-      "--memory", options->memory_mb,
-      fmt::format("Memory in MB for the maps of a stack; a stack whose export does "
-                  "not fit is exported streamed, in bands (default: half the "
-                  "physical memory or of this process's memory limits, here {} "
-                  "MB, of which streamed bands take {} MB)",
-                  DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
-=======
   command
       ->add_option("--viewer-tiles", options->viewer_tiles,
                    "auto: the viewer gets stacks of more than 4096 x 4096 pixels as deep-zoom "
@@ -441,13 +432,13 @@ void AddExportCommand(CLI::App& app) {
       ->add_option("--viewer-tile-size", options->viewer_tile_size,
                    "Pixels a side of the viewer's tiles")
       ->capture_default_str();
-  command->add_option("--memory", options->memory_mb,
-                      fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); "
-                                  "a stack whose export does "
-                                  "not fit is exported streamed, in bands (default: half the "
-                                  "physical memory or of this process's memory limits, here {} MB)",
-                                  DefaultMemoryBudget(kMinimumExportMemory) >> 20));
->>>>>>> deepzoom
+  command->add_option(
+      "--memory", options->memory_mb,
+      fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); a stack whose "
+                  "export does not fit is exported streamed, in bands (default: half the "
+                  "physical memory or of this process's memory limits, here {} MB, of which "
+                  "streamed bands take {} MB)",
+                  DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
   command->add_flag("--stream", options->stream,
                     "Export a stack's maps streamed, in bands, whatever its size (height by "
                     "tiled Poisson; not for pbr stacks, --height fc, --ptm or --rti)");

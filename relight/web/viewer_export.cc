@@ -503,14 +503,19 @@ void ExportViewerStreamed(const fs::path& folder, const std::vector<fs::path>& s
     }
     CheckViewable(reader.header().representation);
   }
-  const std::size_t budget =
-      options.memory_bytes > 0 ? options.memory_bytes : DefaultMemoryBudget(kMinimumViewerMemory);
   const PyramidLayout layout(readers.front()->width(), readers.front()->height(),
                              options.tile_size);
-  // Every stack's bands are sized before anything is written.
+  // Every stack's bands are sized before anything is written; by default (DefaultBandBudget)
+  // the bands get the streamed steps' band size beyond the pyramid's buffers.
   std::vector<int> band_rows;
   std::size_t tile_bytes = 0;
   for (const auto& reader : readers) {
+    const std::size_t budget =
+        options.memory_bytes > 0
+            ? options.memory_bytes
+            : DefaultBandBudget(kMinimumViewerMemory,
+                                PyramidWriter::BufferBytes(
+                                    layout, reader->header().representation.maps().channels()));
     band_rows.push_back(ViewerBandRows(budget, *reader, layout));
     tile_bytes += layout.FileBytes(reader->header().representation.maps().channels());
   }

@@ -62,8 +62,8 @@ struct ViewerExportOptions {
   // Whether methods are written as tile pyramids (viewer_pyramid.h), and their tiles' size.
   ViewerTiling tiling = ViewerTiling::kAuto;
   int tile_size = kViewerTileSize;
-  // ExportViewerStreamed: bytes its bands and pyramid buffers may hold; 0:
-  // DefaultMemoryBudget(kMinimumViewerMemory).
+  // ExportViewerStreamed: bytes its bands and pyramid buffers may hold; 0: the pyramid's
+  // buffers plus DefaultBandBudget(kMinimumViewerMemory) (core/memory_limits.h).
   std::size_t memory_bytes = 0;
   Progress* progress = nullptr;
 };
