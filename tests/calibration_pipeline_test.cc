@@ -164,6 +164,8 @@ TEST(NearLightPipelineTest, PbrWithTheNearLampsRecoversAGgxMaterialThatDistantLi
   const Representation near = FitRobust(capture.corrected, Method::Parse("pbr"));
   EXPECT_EQ(near.details().at("pbr_light_model"), "near");
   EXPECT_EQ(distant.details().at("pbr_light_model"), "distant");
+  // The least-squares entry point starts pbr from the robust fit too, and takes the set's lamps.
+  EXPECT_EQ(Fit(capture.corrected, Method::Parse("pbr")).details().at("pbr_light_model"), "near");
   const NearGgxErrors with_lamps = PbrErrors(near, capture);
   const NearGgxErrors nominal = PbrErrors(distant, capture);
   std::printf(

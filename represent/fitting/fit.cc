@@ -394,6 +394,8 @@ Representation Fit(const PhotometricSet& set, const Method& method) {
     set.Fail(fmt::format("{} needs at least {} images; the set has {}", method.Name(),
                          method.MinimumImages(), set.size()));
   }
+  // pbr through the set, not its observations alone: the set carries its near lamps.
+  if (method.kind == Method::Kind::kPbr) return FitRobust(set, method, RobustFitOptions{});
   const Observations observations(set);
   return FitObservations(observations, set.lights(), method, all, set.source());
 }
