@@ -4,6 +4,7 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/neural_training_options.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 #include "core/json_file.h"
@@ -34,16 +35,7 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
   command->add_option("--json", options->json, "Write the evaluation as JSON");
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "Do not divide the images by the light intensities the input gives");
-  command->add_option("--neural-k", options->neural.coefficients, "Coefficients per pixel")
-      ->capture_default_str();
-  command->add_option("--neural-epochs", options->neural.max_epochs, "Most training epochs")
-      ->capture_default_str();
-  command
-      ->add_option("--neural-patience", options->neural.patience,
-                   "Epochs without a better validation loss before training stops")
-      ->capture_default_str();
-  command->add_option("--seed", options->neural.seed, "Seed of the training")
-      ->capture_default_str();
+  AddNeuralTrainingOptions(*command, options->neural);
   command->callback([options] {
     if (options->methods != "neural") {
       throw Error(

@@ -6,6 +6,7 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/neural_training_options.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/colour.h"
 #include "core/error.h"
@@ -42,23 +43,7 @@ void AddNeuralFitCommand(CLI::App& app) {
                     "Do not divide the images by the light intensities the input gives");
   command->add_option("--colour-space", options->colour_space,
                       "How untagged integer images encode light: linear or srgb");
-  command
-      ->add_option("--neural-k", options->neural.coefficients,
-                   "Coefficients per pixel (the maps neural.0 .. neural.{k-1})")
-      ->capture_default_str();
-  command
-      ->add_option("--neural-epochs", options->neural.max_epochs,
-                   "Most training epochs (training stops earlier when the validation loss "
-                   "stops falling)")
-      ->capture_default_str();
-  command
-      ->add_option("--neural-patience", options->neural.patience,
-                   "Epochs without a better validation loss before training stops")
-      ->capture_default_str();
-  command
-      ->add_option("--seed", options->neural.seed,
-                   "Seed of the initial weights, the validation pixels and the minibatch order")
-      ->capture_default_str();
+  AddNeuralTrainingOptions(*command, options->neural);
   AddExrCompressionOption(*command, options->exr_compression);
   command->callback([options] {
     if (options->method != "neural") {
@@ -91,8 +76,11 @@ void AddNeuralFitCommand(CLI::App& app) {
     SaveRepresentation(path, r, {set.lights(), "linear", options->input.string(), loaded.encodings},
                        compression);
     WriteFitManifest(options->out, options->input.string(), {{"neural", "neural.exr"}});
-    fmt::print("neural: {} epochs (best {}), validation loss {:.4g}, {:.1f} s\n", report.epochs,
-               report.best_epoch, report.validation_loss, report.seconds);
+    fmt::print(
+        "neural: {} epochs (best {}) on {} of {} pixels, validation loss {:.4g}, {:.1f} s wall, "
+        "{:.1f} s CPU on {} threads\n",
+        report.epochs, report.best_epoch, report.training_pixels, report.encoded_pixels,
+        report.validation_loss, report.seconds, report.cpu_seconds, report.threads);
     fmt::print("{:<10} {} maps -> {}\n", "neural", r.maps().channels(), path.string());
   });
 }

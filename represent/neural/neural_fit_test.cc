@@ -106,6 +106,45 @@ TEST(NeuralFitTest, ReportsTrainingAndStopsEarly) {
   EXPECT_EQ(r.details()["neural_training"]["epochs"], report.epochs);
 }
 
+// Training on a seeded sample of the pixels: the sample's size is the option's, its draw the
+// seed's (the same bits twice), and every pixel of the capture, sampled or not, gets coefficients
+// that relight it as well as the sampled ones are (the encoder generalises across pixels).
+TEST(NeuralFitTest, TrainsOnASeededSampleAndEncodesEveryPixel) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 24);
+  const Observations observations(synthetic.set);
+  const auto all = AllImages(synthetic.set.size());
+  NeuralFitOptions options = TinyOptions();
+  options.sample_pixels = 200;
+  options.max_epochs = 100;
+  options.threads = 1;
+  options.patience = 10;
+  options.learning_rate = 3e-3;
+  NeuralFitReport report;
+  const Representation a =
+      FitNeural(observations, synthetic.set.lights(), all, options, {}, nullptr, &report);
+  EXPECT_EQ(report.training_pixels + report.validation_pixels, 200);
+  EXPECT_EQ(report.validation_pixels, 20);
+  EXPECT_EQ(report.encoded_pixels, 576);
+  EXPECT_EQ(report.threads, 1);
+  const Representation b = FitNeural(observations, synthetic.set.lights(), all, options);
+  bool identical = true;
+  for (std::size_t p = 0; p < a.maps().pixel_count(); ++p) {
+    for (int j = 0; j < 6; ++j) identical &= a.maps().pixel(p)[j] == b.maps().pixel(p)[j];
+  }
+  EXPECT_TRUE(identical);
+  // Every pixel is encoded: eta over all 576 pixels at the training lights, 376 of which were
+  // never trained on, measured 0.2042 (a training on all 576: 0.1850); bound 0.25, a 22 % margin.
+  double eta = 0.0;
+  for (int i : all) {
+    eta += NormalisedRmsError(observations, i,
+                              RelightObservedPixels(a, observations, synthetic.set.lights()[i]));
+  }
+  eta /= static_cast<double>(all.size());
+  std::printf("eta over every pixel %.4f, training loss %.4g\n", eta, report.training_loss);
+  RecordProperty("eta_every_pixel", fmt::format("{:.4f}", eta));
+  EXPECT_LT(eta, 0.25);
+}
+
 TEST(NeuralFitTest, RefusesTooFewImagesNamingTheSource) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 8);
   const Observations observations(synthetic.set);
