@@ -15,16 +15,15 @@ namespace photomat::app {
 
 void AddNeuralEvaluateCommand(CLI::App& app) {
   struct Options {
-    std::filesystem::path input;
+    SetInputOptions set_input;
     std::string methods;
     std::filesystem::path json;
     int hold_out_every = 0;
-    bool raw_intensities = false;
     NeuralFitOptions neural;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "evaluate");
-  command->add_option("input", options->input, "Photometric set")->required();
+  AddSetInputOptions(*command, options->set_input);
   command->add_option("--methods", options->methods, "neural (this program evaluates it alone)")
       ->required();
   command
@@ -33,8 +32,6 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
                    "a training per image, as leave-one-out needs, would take hours)")
       ->required();
   command->add_option("--json", options->json, "Write the evaluation as JSON");
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "Do not divide the images by the light intensities the input gives");
   AddNeuralTrainingOptions(*command, options->neural);
   command->callback([options] {
     if (options->methods != "neural") {
@@ -42,9 +39,8 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
           fmt::format("--methods {}: this program evaluates neural only", options->methods));
     }
     if (options->hold_out_every < 2) throw Error("--hold-out-every: expected 2 or more");
-    LoadOptions load;
-    load.apply_intensities = !options->raw_intensities;
-    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    const LoadedSet loaded =
+        LoadSetForCommand(options->set_input.input, options->set_input.ToLoadOptions());
     const PhotometricSet& set = loaded.set;
     const Observations observations(set);
     MethodEvaluation evaluation;
