@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "core/colour.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/memory_limits.h"
@@ -70,6 +71,29 @@ void WarnAboutClippedPixels(const std::vector<std::size_t>& saturated,
         "measurements and bias least-squares fits",
         images, saturated.size(), worst, names[worst_index]);
   }
+}
+
+LoadOptions SetInputOptions::ToLoadOptions() const {
+  LoadOptions load;
+  load.apply_intensities = !raw_intensities;
+  if (!colour_space.empty()) {
+    load.untagged_colour_space = ParseColourSpace(colour_space);
+    if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
+  }
+  return load;
+}
+
+void AddSetInputOptions(CLI::App& command, SetInputOptions& options) {
+  command
+      .add_option("input", options.input,
+                  "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")
+      ->required();
+  command.add_flag("--ignore-intensities", options.raw_intensities,
+                   "Do not divide the images by the light intensities the input gives");
+  command.add_option("--colour-space", options.colour_space,
+                     "How untagged integer images encode light: linear or srgb (a file's own "
+                     "colour tags come first; default: what the manifest says, else 8-bit "
+                     "sRGB, 16-bit linear)");
 }
 
 LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options) {

@@ -31,6 +31,17 @@ std::pair<double, double> ParseRange(std::string_view option, const std::string&
 void WarnAboutClippedPixels(const std::vector<std::size_t>& saturated,
                             const std::vector<std::string>& names);
 
+// The photometric set a command reads: the positional INPUT, --ignore-intensities and
+// --colour-space, the same in `fit`, `fit --method neural` and `evaluate --methods neural`.
+struct SetInputOptions {
+  std::filesystem::path input;
+  bool raw_intensities = false;
+  std::string colour_space;
+  // The load options they ask for; Error for a colour space other than linear or srgb.
+  LoadOptions ToLoadOptions() const;
+};
+void AddSetInputOptions(CLI::App& command, SetInputOptions& options);
+
 // Loads a set with a progress bar and warns (stderr) about clipped pixels.
 LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOptions& options);
 

@@ -23,11 +23,9 @@ namespace photomat::app {
 
 void AddFitCommand(CLI::App& app) {
   struct Options {
-    std::filesystem::path input;
+    SetInputOptions set_input;
     std::string methods = "all";
     std::filesystem::path out;
-    bool raw_intensities = false;
-    std::string colour_space;
     bool robust = false;
     std::string loss = "cauchy";
     std::string exr_compression{ToString(kDefaultExrCompression)};
@@ -37,10 +35,7 @@ void AddFitCommand(CLI::App& app) {
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "fit");
-  command
-      ->add_option("input", options->input,
-                   "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")
-      ->required();
+  AddSetInputOptions(*command, options->set_input);
   command
       ->add_option("--method", options->methods,
                    "Method(s): 3i, gradient, ptm, ptm-lrgb, eigenK (eigen3, eigen6, ...), hsh4, "
@@ -50,12 +45,6 @@ void AddFitCommand(CLI::App& app) {
                    "(its own options: `photomat fit --method neural --help`)")
       ->capture_default_str();
   command->add_option("--out", options->out, "Output folder")->required();
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "Do not divide the images by the light intensities the input gives");
-  command->add_option("--colour-space", options->colour_space,
-                      "How untagged integer images encode light: linear or srgb (a file's own "
-                      "colour tags come first; default: what the manifest says, else 8-bit "
-                      "sRGB, 16-bit linear)");
   command->add_flag("--robust", options->robust,
                     "Robust fits: clipped samples, shadows and highlights get low or zero weight "
                     "(robust photometric stereo; PTM and Eigen-k share its outlier weights)");
@@ -76,15 +65,11 @@ void AddFitCommand(CLI::App& app) {
       options->robust = true;
     }
     const ExrCompression compression = ParseExrCompression(options->exr_compression);
-    LoadOptions load;
-    load.apply_intensities = !options->raw_intensities;
-    if (!options->colour_space.empty()) {
-      load.untagged_colour_space = ParseColourSpace(options->colour_space);
-      if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
-    }
+    const LoadOptions load = options->set_input.ToLoadOptions();
+    const std::filesystem::path& input = options->set_input.input;
     // Streamed (README, "Streamed fitting"): the images are read band by band and every stack
     // is written band by band, then all renamed into place.
-    StreamedSet set = OpenStreamedSet(options->input, load);
+    StreamedSet set = OpenStreamedSet(input, load);
     StreamedFitOptions fit;
     fit.memory_bytes = options->memory_mb << 20;
     fit.robust = options->robust;
@@ -94,7 +79,7 @@ void AddFitCommand(CLI::App& app) {
       fit.robust_options.pbr = options->pbr;
     }
     fit.compression = compression;
-    fit.provenance = {set.lights(), "linear", options->input.string(), set.encodings()};
+    fit.provenance = {set.lights(), "linear", input.string(), set.encodings()};
     TerminalProgressBar bar;
     fit.progress = &bar;
     CreateFolder(options->out);
@@ -113,7 +98,7 @@ void AddFitCommand(CLI::App& app) {
       fmt::print("{:<10} {} maps -> {}\n", methods[i].Name(), report.map_counts[i],
                  paths[i].string());
     }
-    WriteFitManifest(options->out, options->input.string(), stacks);
+    WriteFitManifest(options->out, input.string(), stacks);
   });
 }
 

@@ -4,6 +4,7 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/neural_training_options.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 #include "core/json_file.h"
@@ -14,16 +15,15 @@ namespace photomat::app {
 
 void AddNeuralEvaluateCommand(CLI::App& app) {
   struct Options {
-    std::filesystem::path input;
+    SetInputOptions set_input;
     std::string methods;
     std::filesystem::path json;
     int hold_out_every = 0;
-    bool raw_intensities = false;
     NeuralFitOptions neural;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "evaluate");
-  command->add_option("input", options->input, "Photometric set")->required();
+  AddSetInputOptions(*command, options->set_input);
   command->add_option("--methods", options->methods, "neural (this program evaluates it alone)")
       ->required();
   command
@@ -32,27 +32,15 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
                    "a training per image, as leave-one-out needs, would take hours)")
       ->required();
   command->add_option("--json", options->json, "Write the evaluation as JSON");
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "Do not divide the images by the light intensities the input gives");
-  command->add_option("--neural-k", options->neural.coefficients, "Coefficients per pixel")
-      ->capture_default_str();
-  command->add_option("--neural-epochs", options->neural.max_epochs, "Most training epochs")
-      ->capture_default_str();
-  command
-      ->add_option("--neural-patience", options->neural.patience,
-                   "Epochs without a better validation loss before training stops")
-      ->capture_default_str();
-  command->add_option("--seed", options->neural.seed, "Seed of the training")
-      ->capture_default_str();
+  AddNeuralTrainingOptions(*command, options->neural);
   command->callback([options] {
     if (options->methods != "neural") {
       throw Error(
           fmt::format("--methods {}: this program evaluates neural only", options->methods));
     }
     if (options->hold_out_every < 2) throw Error("--hold-out-every: expected 2 or more");
-    LoadOptions load;
-    load.apply_intensities = !options->raw_intensities;
-    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    const LoadedSet loaded =
+        LoadSetForCommand(options->set_input.input, options->set_input.ToLoadOptions());
     const PhotometricSet& set = loaded.set;
     const Observations observations(set);
     MethodEvaluation evaluation;

@@ -6,6 +6,7 @@
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/neural_training_options.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/colour.h"
 #include "core/error.h"
@@ -18,47 +19,22 @@ namespace photomat::app {
 
 void AddNeuralFitCommand(CLI::App& app) {
   struct Options {
-    std::filesystem::path input;
+    SetInputOptions set_input;
     std::string method;
     std::filesystem::path out;
-    bool raw_intensities = false;
-    std::string colour_space;
     std::string exr_compression{ToString(kDefaultExrCompression)};
     NeuralFitOptions neural;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = AddListedCommand(app, "fit");
-  command
-      ->add_option("input", options->input,
-                   "Photometric set: a folder, a .lp file, a manifest.json or a DiLiGenT folder")
-      ->required();
+  AddSetInputOptions(*command, options->set_input);
   command
       ->add_option("--method", options->method,
                    "neural (this program trains the neural basis only; the other methods are "
                    "fitted by `photomat fit` without --method neural)")
       ->required();
   command->add_option("--out", options->out, "Output folder")->required();
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "Do not divide the images by the light intensities the input gives");
-  command->add_option("--colour-space", options->colour_space,
-                      "How untagged integer images encode light: linear or srgb");
-  command
-      ->add_option("--neural-k", options->neural.coefficients,
-                   "Coefficients per pixel (the maps neural.0 .. neural.{k-1})")
-      ->capture_default_str();
-  command
-      ->add_option("--neural-epochs", options->neural.max_epochs,
-                   "Most training epochs (training stops earlier when the validation loss "
-                   "stops falling)")
-      ->capture_default_str();
-  command
-      ->add_option("--neural-patience", options->neural.patience,
-                   "Epochs without a better validation loss before training stops")
-      ->capture_default_str();
-  command
-      ->add_option("--seed", options->neural.seed,
-                   "Seed of the initial weights, the validation pixels and the minibatch order")
-      ->capture_default_str();
+  AddNeuralTrainingOptions(*command, options->neural);
   AddExrCompressionOption(*command, options->exr_compression);
   command->callback([options] {
     if (options->method != "neural") {
@@ -68,16 +44,12 @@ void AddNeuralFitCommand(CLI::App& app) {
                       options->method));
     }
     const ExrCompression compression = ParseExrCompression(options->exr_compression);
-    LoadOptions load;
-    load.apply_intensities = !options->raw_intensities;
-    if (!options->colour_space.empty()) {
-      load.untagged_colour_space = ParseColourSpace(options->colour_space);
-      if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
-    }
+    const LoadOptions load = options->set_input.ToLoadOptions();
+    const std::filesystem::path& input = options->set_input.input;
     // IMPLEMENTER CHOICE: not streamed (README "Streamed fitting"): every epoch visits every
     // pixel's whole profile, so the set is held in memory (DiLiGenT cat: 96 x 3 x 45k masked
     // values, 52 MB).
-    const LoadedSet loaded = LoadSetForCommand(options->input, load);
+    const LoadedSet loaded = LoadSetForCommand(input, load);
     const PhotometricSet& set = loaded.set;
     const Observations observations(set);
     std::vector<int> all(set.size());
@@ -88,11 +60,14 @@ void AddNeuralFitCommand(CLI::App& app) {
         FitNeural(observations, set.lights(), all, options->neural, set.source(), &bar, &report);
     CreateFolder(options->out);
     const std::filesystem::path path = options->out / "neural.exr";
-    SaveRepresentation(path, r, {set.lights(), "linear", options->input.string(), loaded.encodings},
+    SaveRepresentation(path, r, {set.lights(), "linear", input.string(), loaded.encodings},
                        compression);
-    WriteFitManifest(options->out, options->input.string(), {{"neural", "neural.exr"}});
-    fmt::print("neural: {} epochs (best {}), validation loss {:.4g}, {:.1f} s\n", report.epochs,
-               report.best_epoch, report.validation_loss, report.seconds);
+    WriteFitManifest(options->out, input.string(), {{"neural", "neural.exr"}});
+    fmt::print(
+        "neural: {} epochs (best {}) on {} of {} pixels, validation loss {:.4g}, {:.1f} s wall, "
+        "{:.1f} s CPU on {} threads\n",
+        report.epochs, report.best_epoch, report.training_pixels, report.encoded_pixels,
+        report.validation_loss, report.seconds, report.cpu_seconds, report.threads);
     fmt::print("{:<10} {} maps -> {}\n", "neural", r.maps().channels(), path.string());
   });
 }

@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <limits>
 #include <numeric>
+#include <thread>
 
 #include "core/error.h"
 #include "core/random.h"
@@ -31,13 +33,19 @@ void CheckOptions(const NeuralFitOptions& o, const fs::path& source) {
   }
   if (o.encoder_layers < 0 || o.decoder_layers < 0) fail("negative layer counts");
   if (o.max_epochs < 1) fail(fmt::format("{} epochs: expected at least 1", o.max_epochs));
-  if (o.patience < 1 || o.batch_pixels < 1 || o.threads < 1 || o.lights_per_batch < 0) {
-    fail("patience, batch size and threads must be positive");
+  if (o.patience < 1 || o.batch_pixels < 1 || o.threads < 0 || o.lights_per_batch < 0) {
+    fail("patience and batch size must be positive, threads not negative");
+  }
+  if (o.sample_pixels < 2) {
+    fail(fmt::format("a sample of {} pixels: expected at least 2", o.sample_pixels));
   }
   if (!(o.validation_fraction > 0.0 && o.validation_fraction < 0.5)) {
     fail("the validation fraction must be in (0, 0.5)");
   }
   if (!(o.learning_rate > 0.0)) fail("the learning rate must be positive");
+  if (!(o.plateau_decay > 0.0 && o.plateau_decay <= 1.0)) {
+    fail("the learning rate's plateau decay must be in (0, 1]");
+  }
 }
 
 // Seeded Fisher-Yates (core's Random: the same order on every platform).
@@ -47,45 +55,102 @@ void Shuffle(std::vector<std::int64_t>& values, Random& random) {
   }
 }
 
-// The training data: every selected observation of every pixel, divided by `scale`.
+// The encoder's input for `pixels` (indices into the observations): each pixel's observations
+// under the selected lights, light-major and channels inner (n C values), divided by `scale`.
+torch::Tensor ProfilesOf(const Observations& observations, std::span<const int> selected,
+                         std::span<const std::int64_t> pixels, float scale) {
+  const std::int64_t m = observations.pixels();
+  const auto n = static_cast<std::int64_t>(selected.size());
+  const std::int64_t channels = observations.channels();
+  const auto count = static_cast<std::int64_t>(pixels.size());
+  const Eigen::MatrixXf& matrix = observations.matrix();
+  torch::Tensor profiles = torch::empty({count, n * channels}, torch::kFloat32);
+  float* out = profiles.data_ptr<float>();
+  for (std::int64_t i = 0; i < n; ++i) {
+    for (std::int64_t c = 0; c < channels; ++c) {
+      const auto column = matrix.col(selected[i]);
+      for (std::int64_t q = 0; q < count; ++q) {
+        out[q * n * channels + i * channels + c] = column[c * m + pixels[q]] / scale;
+      }
+    }
+  }
+  return profiles;
+}
+
+// The RMS of every selected observation: the values are divided by it so that the networks see
+// values near 1 whatever the capture's exposure.
+float ObservationScale(const Observations& observations, std::span<const int> selected,
+                       const fs::path& source) {
+  const Eigen::MatrixXf& matrix = observations.matrix();
+  double sum_squares = 0.0;
+  for (int i : selected) sum_squares += matrix.col(i).cast<double>().squaredNorm();
+  const double count = static_cast<double>(matrix.rows()) * static_cast<double>(selected.size());
+  const double rms = std::sqrt(sum_squares / count);
+  if (!(rms > 0.0) || !std::isfinite(rms)) {
+    throw Error(source, "neural: every observed value is zero (or not finite)");
+  }
+  return static_cast<float>(rms);
+}
+
+// The training data: every selected observation of the sampled pixels, divided by `scale`.
 struct TrainingData {
-  torch::Tensor values;  // m x n x C
-  torch::Tensor inputs;  // m x (n C): the encoder's input, the same values per pixel
+  torch::Tensor values;  // s x n x C
+  torch::Tensor inputs;  // s x (n C): the encoder's input, the same values per pixel
   torch::Tensor lights;  // n x 2: (lx, ly) of the selected lights
   float scale = 1.0f;
 };
 
 TrainingData MakeTrainingData(const Observations& observations,
                               const std::vector<LightDirection>& lights,
-                              std::span<const int> selected, const fs::path& source) {
-  const std::int64_t m = observations.pixels();
+                              std::span<const int> selected, std::span<const std::int64_t> sample,
+                              float scale) {
   const auto n = static_cast<std::int64_t>(selected.size());
-  const std::int64_t channels = observations.channels();
-  const Eigen::MatrixXf& matrix = observations.matrix();
-  double sum_squares = 0.0;
-  for (int i : selected) sum_squares += matrix.col(i).cast<double>().squaredNorm();
-  const double rms = std::sqrt(sum_squares / static_cast<double>(m * n * channels));
-  if (!(rms > 0.0) || !std::isfinite(rms)) {
-    throw Error(source, "neural: every observed value is zero (or not finite)");
-  }
   TrainingData data;
-  data.scale = static_cast<float>(rms);
-  data.values = torch::empty({m, n, channels}, torch::kFloat32);
-  float* out = data.values.data_ptr<float>();
-  for (std::int64_t p = 0; p < m; ++p) {
-    for (std::int64_t i = 0; i < n; ++i) {
-      for (std::int64_t c = 0; c < channels; ++c) {
-        out[(p * n + i) * channels + c] = matrix(c * m + p, selected[i]) / data.scale;
-      }
-    }
-  }
-  data.inputs = data.values.view({m, n * channels});
+  data.scale = scale;
+  data.inputs = ProfilesOf(observations, selected, sample, scale);
+  data.values =
+      data.inputs.view({static_cast<std::int64_t>(sample.size()), n, observations.channels()});
   data.lights = torch::empty({n, 2}, torch::kFloat32);
   for (std::int64_t i = 0; i < n; ++i) {
     data.lights[i][0] = static_cast<float>(lights[selected[i]].x());
     data.lights[i][1] = static_cast<float>(lights[selected[i]].y());
   }
   return data;
+}
+
+// The first `count` pixels of a seeded partial Fisher-Yates shuffle of 0 .. m-1.
+std::vector<std::int64_t> SamplePixels(std::int64_t m, std::int64_t count, Random& random) {
+  std::vector<std::int64_t> order(static_cast<std::size_t>(m));
+  std::iota(order.begin(), order.end(), std::int64_t{0});
+  for (std::int64_t i = 0; i < count; ++i) {
+    const auto j = i + static_cast<std::int64_t>(random.Index(static_cast<std::uint64_t>(m - i)));
+    std::swap(order[i], order[j]);
+  }
+  order.resize(static_cast<std::size_t>(count));
+  return order;
+}
+
+// Every pixel's coefficients by the trained encoder, in bands (the profiles of a band only are
+// held as a tensor), written to `maps` at the pixels' image positions.
+void EncodeEveryPixel(torch::nn::Sequential& encoder, const Observations& observations,
+                      std::span<const int> selected, float scale, Image& maps) {
+  torch::NoGradGuard no_grad;
+  constexpr std::int64_t kBand = 8192;
+  const std::int64_t m = observations.pixels();
+  const int k = maps.channels();
+  std::vector<std::int64_t> band;
+  for (std::int64_t first = 0; first < m; first += kBand) {
+    const std::int64_t count = std::min(kBand, m - first);
+    band.resize(static_cast<std::size_t>(count));
+    std::iota(band.begin(), band.end(), first);
+    const torch::Tensor codes =
+        encoder->forward(ProfilesOf(observations, selected, band, scale)).contiguous();
+    const float* c = codes.data_ptr<float>();
+    for (std::int64_t p = 0; p < count; ++p) {
+      auto pixel = maps.pixel(observations.pixel_indices()[first + p]);
+      for (int j = 0; j < k; ++j) pixel[j] = c[p * k + j];
+    }
+  }
 }
 
 // The decoder's output for `codes` (B x k) under every light (n x 2): B x n x C.
@@ -119,7 +184,9 @@ nlohmann::json NeuralFitOptions::ToJson() const {
           {"batch_pixels", batch_pixels},
           {"lights_per_batch", lights_per_batch},
           {"learning_rate", learning_rate},
+          {"plateau_decay", plateau_decay},
           {"optimiser", "adam"},
+          {"sample_pixels", sample_pixels},
           {"seed", seed},
           {"threads", threads}};
 }
@@ -131,7 +198,10 @@ nlohmann::json NeuralFitReport::ToJson() const {
           {"validation_loss", validation_loss},
           {"training_pixels", training_pixels},
           {"validation_pixels", validation_pixels},
-          {"seconds", seconds}};
+          {"encoded_pixels", encoded_pixels},
+          {"threads", threads},
+          {"seconds", seconds},
+          {"cpu_seconds", cpu_seconds}};
 }
 
 Representation FitNeural(const Observations& observations,
@@ -139,6 +209,7 @@ Representation FitNeural(const Observations& observations,
                          const NeuralFitOptions& options, const fs::path& source,
                          Progress* progress, NeuralFitReport* report_out) {
   const auto start_time = std::chrono::steady_clock::now();
+  const std::clock_t start_cpu = std::clock();
   CheckOptions(options, source);
   const int minimum = Method{Method::Kind::kNeural}.MinimumImages();
   if (static_cast<int>(selected.size()) < minimum) {
@@ -152,11 +223,29 @@ Representation FitNeural(const Observations& observations,
 
   // IMPLEMENTER CHOICE: libtorch's thread count is process-wide; it is set here for every fit
   // (a fixed count gives fixed reduction orders: the same bits run after run).
-  torch::set_num_threads(options.threads);
+  const int threads = options.threads > 0
+                          ? options.threads
+                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  torch::set_num_threads(threads);
   torch::manual_seed(options.seed);
   const std::int64_t channels = observations.channels();
   const std::int64_t n = static_cast<std::int64_t>(selected.size());
-  const TrainingData data = MakeTrainingData(observations, lights, selected, source);
+
+  // The sample: a seeded draw of the pixels; its first validation_count are the early-stopping
+  // set, the rest train.
+  Random random(options.seed);
+  const std::int64_t sample_count = std::min<std::int64_t>(options.sample_pixels, m);
+  const std::vector<std::int64_t> sample = SamplePixels(m, sample_count, random);
+  const TrainingData data = MakeTrainingData(observations, lights, selected, sample,
+                                             ObservationScale(observations, selected, source));
+  const auto validation_count = std::clamp<std::int64_t>(
+      static_cast<std::int64_t>(std::llround(options.validation_fraction * sample_count)), 1,
+      sample_count - 1);
+  std::vector<std::int64_t> validation(static_cast<std::size_t>(validation_count));
+  std::iota(validation.begin(), validation.end(), std::int64_t{0});
+  std::vector<std::int64_t> training(static_cast<std::size_t>(sample_count - validation_count));
+  std::iota(training.begin(), training.end(), validation_count);
+
   torch::nn::Sequential encoder =
       MakePerceptron(static_cast<int>(n * channels), options.encoder_width, options.encoder_layers,
                      options.coefficients);
@@ -165,18 +254,8 @@ Representation FitNeural(const Observations& observations,
                      static_cast<int>(channels));
   std::vector<torch::Tensor> parameters = encoder->parameters();
   for (const torch::Tensor& p : decoder->parameters()) parameters.push_back(p);
-  torch::optim::Adam optimiser(parameters, torch::optim::AdamOptions(options.learning_rate));
-
-  // Validation pixels: a seeded draw; the rest train.
-  Random random(options.seed);
-  std::vector<std::int64_t> order(static_cast<std::size_t>(m));
-  std::iota(order.begin(), order.end(), std::int64_t{0});
-  Shuffle(order, random);
-  const auto validation_count = std::max<std::int64_t>(
-      1, static_cast<std::int64_t>(std::llround(options.validation_fraction * m)));
-  std::vector<std::int64_t> validation(order.begin(), order.begin() + validation_count);
-  std::vector<std::int64_t> training(order.begin() + validation_count, order.end());
-  std::sort(validation.begin(), validation.end());
+  double learning_rate = options.learning_rate;
+  torch::optim::Adam optimiser(parameters, torch::optim::AdamOptions(learning_rate));
 
   auto loss_of = [&](const torch::Tensor& index) {
     const torch::Tensor codes = encoder->forward(data.inputs.index_select(0, index));
@@ -257,6 +336,11 @@ Representation FitNeural(const Observations& observations,
       stale = 0;
     } else if (++stale >= options.patience) {
       break;
+    } else if (options.plateau_decay < 1.0) {
+      learning_rate *= options.plateau_decay;
+      for (auto& group : optimiser.param_groups()) {
+        static_cast<torch::optim::AdamOptions&>(group.options()).lr(learning_rate);
+      }
     }
   }
   {
@@ -265,24 +349,13 @@ Representation FitNeural(const Observations& observations,
   }
 
   // The coefficient maps: every pixel encoded by the kept encoder.
-  const int k = options.coefficients;
-  Image maps(observations.width(), observations.height(), NeuralMapNames(k));
-  {
-    torch::NoGradGuard no_grad;
-    constexpr std::int64_t kBatch = 4096;
-    for (std::int64_t first = 0; first < m; first += kBatch) {
-      const std::int64_t count = std::min(kBatch, m - first);
-      const torch::Tensor codes =
-          encoder->forward(data.inputs.narrow(0, first, count)).contiguous();
-      const float* c = codes.data_ptr<float>();
-      for (std::int64_t p = 0; p < count; ++p) {
-        auto pixel = maps.pixel(observations.pixel_indices()[first + p]);
-        for (int j = 0; j < k; ++j) pixel[j] = c[p * k + j];
-      }
-    }
-  }
+  Image maps(observations.width(), observations.height(), NeuralMapNames(options.coefficients));
+  EncodeEveryPixel(encoder, observations, selected, data.scale, maps);
+  report.encoded_pixels = static_cast<int>(m);
+  report.threads = threads;
   report.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+  report.cpu_seconds = static_cast<double>(std::clock() - start_cpu) / CLOCKS_PER_SEC;
   if (report_out) *report_out = report;
   auto shading = std::make_shared<NeuralShading>(ToNeuralDecoder(decoder, data.scale));
   nlohmann::json details = {{"neural", options.ToJson()}, {"neural_training", report.ToJson()}};

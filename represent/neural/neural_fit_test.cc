@@ -106,6 +106,45 @@ TEST(NeuralFitTest, ReportsTrainingAndStopsEarly) {
   EXPECT_EQ(r.details()["neural_training"]["epochs"], report.epochs);
 }
 
+// Training on a seeded sample of the pixels: the sample's size is the option's, its draw the
+// seed's (the same bits twice), and every pixel of the capture, sampled or not, gets coefficients
+// that relight it as well as the sampled ones are (the encoder generalises across pixels).
+TEST(NeuralFitTest, TrainsOnASeededSampleAndEncodesEveryPixel) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 24);
+  const Observations observations(synthetic.set);
+  const auto all = AllImages(synthetic.set.size());
+  NeuralFitOptions options = TinyOptions();
+  options.sample_pixels = 200;
+  options.max_epochs = 100;
+  options.threads = 1;
+  options.patience = 10;
+  options.learning_rate = 3e-3;
+  NeuralFitReport report;
+  const Representation a =
+      FitNeural(observations, synthetic.set.lights(), all, options, {}, nullptr, &report);
+  EXPECT_EQ(report.training_pixels + report.validation_pixels, 200);
+  EXPECT_EQ(report.validation_pixels, 20);
+  EXPECT_EQ(report.encoded_pixels, 576);
+  EXPECT_EQ(report.threads, 1);
+  const Representation b = FitNeural(observations, synthetic.set.lights(), all, options);
+  bool identical = true;
+  for (std::size_t p = 0; p < a.maps().pixel_count(); ++p) {
+    for (int j = 0; j < 6; ++j) identical &= a.maps().pixel(p)[j] == b.maps().pixel(p)[j];
+  }
+  EXPECT_TRUE(identical);
+  // Every pixel is encoded: eta over all 576 pixels at the training lights, 376 of which were
+  // never trained on, measured 0.2042 (a training on all 576: 0.1850); bound 0.25, a 22 % margin.
+  double eta = 0.0;
+  for (int i : all) {
+    eta += NormalisedRmsError(observations, i,
+                              RelightObservedPixels(a, observations, synthetic.set.lights()[i]));
+  }
+  eta /= static_cast<double>(all.size());
+  std::printf("eta over every pixel %.4f, training loss %.4g\n", eta, report.training_loss);
+  RecordProperty("eta_every_pixel", fmt::format("{:.4f}", eta));
+  EXPECT_LT(eta, 0.25);
+}
+
 TEST(NeuralFitTest, RefusesTooFewImagesNamingTheSource) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 8);
   const Observations observations(synthetic.set);
@@ -120,12 +159,39 @@ TEST(NeuralFitTest, RefusesTooFewImagesNamingTheSource) {
   }
 }
 
+TEST(NeuralFitTest, RefusesOptionsOutOfRangeNamingTheFault) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 8);
+  const Observations observations(synthetic.set);
+  const auto all = AllImages(synthetic.set.size());
+  auto fault_of = [&](NeuralFitOptions options) {
+    try {
+      FitNeural(observations, synthetic.set.lights(), all, options, "capture.lp");
+    } catch (const Error& error) {
+      return std::string(error.what());
+    }
+    return std::string("accepted");
+  };
+  NeuralFitOptions decay = TinyOptions();
+  decay.plateau_decay = 1.5;
+  EXPECT_NE(fault_of(decay).find("plateau decay"), std::string::npos) << fault_of(decay);
+  NeuralFitOptions sample = TinyOptions();
+  sample.sample_pixels = 1;
+  EXPECT_NE(fault_of(sample).find("a sample of 1 pixels"), std::string::npos) << fault_of(sample);
+  NeuralFitOptions threads = TinyOptions();
+  threads.threads = -1;
+  EXPECT_NE(fault_of(threads).find("threads"), std::string::npos) << fault_of(threads);
+}
+
 // Issue 19's claim: on the shadowed specular capture (highlights and cast shadows, which PTM's
 // biquadratic cannot follow), the neural basis predicts lights it never saw better than PTM.
-// Every 6th light of the 36 is held out; both fit the other 30. Not met yet (measured: neural
-// 0.3026, PTM 0.2848 held-out eta; 40 epochs on 576 pixels: 0.43 against 0.34): an expected
-// failure that asserts the measured state and fails once the target is met.
-TEST(NeuralFitTest, BeatingPtmOnHeldOutSpecularLightsMissesItsTarget) {
+// Every 6th light of the 36 is held out; both fit the other 30. The training's options were
+// chosen on a validation split of the 30 training lights only (every 5th held out, fitted on 24,
+// seeds 1 and 2; PTM 0.300 there): 150 epochs, patience 10 gave 0.335 and 0.322; k = 4, decoder
+// widths 24 or 100, learning rate 1e-3, minibatches of 8, a 20 % validation set or a halving
+// learning rate on plateaus were worse; 400 epochs with patience 30 gave 0.253 and 0.274, the
+// best, kept. On the held-out lights: neural 0.1986 (239 epochs, best 209), PTM 0.2848 (before:
+// 0.3026 against 0.2848, an expected failure). Bound: 0.22, a 10 % margin over the measured.
+TEST(NeuralFitTest, BeatsPtmOnHeldOutSpecularLights) {
   const auto synthetic = testing::ShadowedSpecularSet(16);
   const Observations observations(synthetic.set);
   std::vector<int> kept;
@@ -134,8 +200,8 @@ TEST(NeuralFitTest, BeatingPtmOnHeldOutSpecularLightsMissesItsTarget) {
   // A small capture (256 pixels): small minibatches for enough steps, one thread (the steps are
   // too small to share), every light per step.
   NeuralFitOptions options;
-  options.max_epochs = 150;
-  options.patience = 10;
+  options.max_epochs = 400;
+  options.patience = 30;
   options.batch_pixels = 16;
   options.lights_per_batch = 0;
   options.learning_rate = 3e-3;
@@ -161,14 +227,8 @@ TEST(NeuralFitTest, BeatingPtmOnHeldOutSpecularLightsMissesItsTarget) {
   RecordProperty("epochs", report.epochs);
   std::printf("held-out eta: neural %.4f (epochs %d, best %d), ptm %.4f\n", eta_neural,
               report.epochs, report.best_epoch, eta_ptm);
-  EXPECT_GE(eta_neural, eta_ptm) << "the target is met: make this an EXPECT_LT";
-  if (eta_neural >= eta_ptm) {
-    std::printf(
-        "EXPECTED FAILURE: target neural held-out eta < PTM's (%.4f) not met (measured %.4f) "
-        "because a 256-pixel capture trains the decoder's light interpolation on 30 lights only "
-        "and early stopping watches held-out pixels, not held-out lights\n",
-        eta_ptm, eta_neural);
-  }
+  EXPECT_LT(eta_neural, eta_ptm);
+  EXPECT_LT(eta_neural, 0.22);
 }
 
 }  // namespace
