@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <numbers>
 #include <numeric>
+#include <optional>
+#include <string>
 
 #include "calibrate/radiometry/exposure.h"
 #include "calibrate/radiometry/flat_field.h"
@@ -15,6 +17,7 @@
 #include "calibrate/testing/synthetic_calibration.h"
 #include "capture/io/load_photometric_set.h"
 #include "capture/synthetic/synthetic_capture.h"
+#include "core/error.h"
 #include "core/image_io.h"
 #include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
@@ -159,7 +162,17 @@ NearGgxErrors PbrErrors(const Representation& pbr, const NearGgxCapture& capture
 TEST(NearLightPipelineTest, PbrWithTheNearLampsRecoversAGgxMaterialThatDistantLightsMiss) {
   NearGgxCapture capture = RenderNearGgxCapture();
   // The same corrected images fitted with the nominal directions only.
-  const Representation distant = FitRobust(capture.corrected, Method::Parse("pbr"));
+  std::optional<Representation> distant_fit;
+  try {
+    distant_fit.emplace(FitRobust(capture.corrected, Method::Parse("pbr")));
+  } catch (const Error& error) {
+    // A build without Ceres (PHOTOMAT_WITH_CERES=OFF) has no pbr fit, and says so.
+    if (std::string(error.what()).find("built without") != std::string::npos) {
+      GTEST_SKIP() << error.what();
+    }
+    throw;
+  }
+  const Representation& distant = *distant_fit;
   capture.corrected.set_near_lighting(capture.lighting);
   const Representation near = FitRobust(capture.corrected, Method::Parse("pbr"));
   EXPECT_EQ(near.details().at("pbr_light_model"), "near");
