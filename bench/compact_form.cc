@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/relight_cli_peer.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/colour.h"
 #include "core/error.h"
@@ -54,13 +55,7 @@ Arguments Parse(int argc, char** argv) {
   if (const char* data = std::getenv("PHOTOMAT_TEST_DATA")) {
     arguments.set = fs::path(data) / "diligent" / "cat";
   }
-  if (const char* cli = std::getenv("PHOTOMAT_RELIGHT_CLI"); cli && *cli) {
-    arguments.relight_cli = cli;
-  } else if (const char* home = std::getenv("HOME")) {
-    const fs::path cached =
-        fs::path(home) / ".cache/photomat-peers/relight-build/relight-cli/relight-cli";
-    if (fs::exists(cached)) arguments.relight_cli = cached;
-  }
+  arguments.relight_cli = FindRelightCli();
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {

@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/relight_cli_peer.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/error.h"
 #include "relight/formats/stack_file.h"
@@ -58,19 +59,9 @@ struct Arguments {
   LightProfileOptions profile;
 };
 
-std::optional<fs::path> DefaultRelightCli() {
-  if (const char* cli = std::getenv("PHOTOMAT_RELIGHT_CLI"); cli && *cli) return fs::path(cli);
-  if (const char* home = std::getenv("HOME")) {
-    const fs::path cached =
-        fs::path(home) / ".cache/photomat-peers/relight-build/relight-cli/relight-cli";
-    if (fs::exists(cached)) return cached;
-  }
-  return std::nullopt;
-}
-
 Arguments Parse(int argc, char** argv) {
   Arguments arguments;
-  arguments.relight_cli = DefaultRelightCli();
+  arguments.relight_cli = FindRelightCli();
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const auto value = [&]() -> std::string {
