@@ -13,6 +13,7 @@
 #include "core/json_file.h"
 #include "core/random.h"
 #include "relight/web/viewer_assets.h"
+#include "relight/web/viewer_pyramid.h"
 #include "represent/fitting/fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
@@ -27,19 +28,6 @@ std::vector<Representation> FitAll(const PhotometricSet& set) {
   std::vector<Representation> fits;
   for (const Method& method : AllMethods()) fits.push_back(Fit(set, method));
   return fits;
-}
-
-std::vector<float> ReadFloat32s(const fs::path& path) {
-  const std::string bytes = ReadTextFile(path);
-  std::vector<float> values(bytes.size() / 4);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    std::uint32_t bits = 0;
-    for (int b = 0; b < 4; ++b) {
-      bits |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[4 * i + b])) << (8 * b);
-    }
-    values[i] = std::bit_cast<float>(bits);
-  }
-  return values;
 }
 
 LightDirection FromJson(const nlohmann::json& v) {
@@ -82,7 +70,7 @@ TEST(ViewerExportTest, WritesTheViewerAndEveryMethodsMapsAsFloat32Layers) {
     const int layers = (n + 3) / 4;
     EXPECT_EQ(method["data"]["layers"], layers);
     const std::vector<float> data =
-        ReadFloat32s(dir / "viewer" / method["data"]["file"].get<std::string>());
+        ReadFloat32File(dir / "viewer" / method["data"]["file"].get<std::string>());
     ASSERT_EQ(data.size(), static_cast<std::size_t>(layers) * 24 * 24 * 4);
     // Map i of pixel p is component i % 4 of texel p in layer i / 4; padding is 0.
     for (std::size_t p = 0; p < r.maps().pixel_count(); ++p) {
@@ -221,7 +209,8 @@ TEST(ViewerExportTest, TableMethodsWriteTheirCoefficientTable) {
   EXPECT_EQ(basis["kind"], "table");
   EXPECT_EQ(basis["source_kind"], "ptm");
   EXPECT_LT(basis["max_error"].get<double>(), 2e-4);
-  const std::vector<float> values = ReadFloat32s(dir / "viewer" / basis["file"].get<std::string>());
+  const std::vector<float> values =
+      ReadFloat32File(dir / "viewer" / basis["file"].get<std::string>());
   const CoefficientTable table(fits[0].basis());
   EXPECT_EQ(values, table.values());
   EXPECT_EQ(manifest["methods"][1]["basis"]["kind"], "linear");

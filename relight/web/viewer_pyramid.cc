@@ -24,6 +24,23 @@ void AppendFloat32(std::string& bytes, float value) {
     bytes += static_cast<char>((bits >> (8 * b)) & 0xff);  // little-endian
 }
 
+std::vector<float> ReadFloat32File(const std::filesystem::path& path) {
+  const std::string bytes = ReadTextFile(path);
+  if (bytes.size() % 4 != 0) {
+    throw Error(path,
+                fmt::format("{} bytes is not a whole number of float32 values", bytes.size()));
+  }
+  std::vector<float> values(bytes.size() / 4);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    std::uint32_t bits = 0;
+    for (int b = 0; b < 4; ++b) {
+      bits |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[4 * i + b])) << (8 * b);
+    }
+    values[i] = std::bit_cast<float>(bits);
+  }
+  return values;
+}
+
 ViewerTiling ParseViewerTiling(const std::string& text) {
   if (text == "auto") return ViewerTiling::kAuto;
   if (text == "always") return ViewerTiling::kAlways;

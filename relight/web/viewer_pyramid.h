@@ -40,6 +40,11 @@ namespace photomat {
 // Appends `value` as float32 little-endian: the number format of every viewer data file.
 void AppendFloat32(std::string& bytes, float value);
 
+// The values of a file of float32 little-endian values (a viewer map, table or tile, as
+// AppendFloat32 writes them). Throws Error naming the file when its size is not a whole number
+// of values.
+std::vector<float> ReadFloat32File(const std::filesystem::path& path);
+
 // When `photomat export --viewer` writes tiles (--viewer-tiles).
 enum class ViewerTiling { kAuto, kAlways, kNever };
 ViewerTiling ParseViewerTiling(const std::string& text);

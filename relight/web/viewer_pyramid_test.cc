@@ -21,19 +21,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing::TempDir;
 
-std::vector<float> ReadTileValues(const fs::path& path) {
-  const std::string bytes = ReadTextFile(path);
-  std::vector<float> values(bytes.size() / 4);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    std::uint32_t bits = 0;
-    for (int b = 0; b < 4; ++b) {
-      bits |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[4 * i + b])) << (8 * b);
-    }
-    values[i] = std::bit_cast<float>(bits);
-  }
-  return values;
-}
-
 // Every level of the pyramid in `folder`, reassembled from its tiles (their cores; the overlaps
 // are checked against the neighbours' cores). Unused layer components must be 0.
 std::vector<Image> ReassembleLevels(const fs::path& folder, const PyramidLayout& layout, int maps) {
@@ -47,7 +34,7 @@ std::vector<Image> ReassembleLevels(const fs::path& folder, const PyramidLayout&
       for (int column = 0; column < layout.Columns(level); ++column) {
         const TileRect t = layout.Tile(level, column, row);
         std::vector<float> values =
-            ReadTileValues(folder / PyramidLayout::TilePath(level, column, row));
+            ReadFloat32File(folder / PyramidLayout::TilePath(level, column, row));
         EXPECT_EQ(values.size(), static_cast<std::size_t>(layers) * t.width * t.height * 4);
         const int T = layout.tile_size();
         for (int y = row * T; y < std::min((row + 1) * T, image.height()); ++y) {
