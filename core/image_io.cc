@@ -46,21 +46,35 @@ constexpr int kBandRows = 64;
 
 // Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes through
 // the encoding's code -> light table; returns the pixels with a kept channel at the largest code.
-template <typename T>
+// kFileChannels > 0 fixes the file's channel count at compile time (the common RGB case, which
+// the compiler then unrolls: decoding is a large share of a fit's CPU time); 0 reads it at run
+// time.
+template <int kFileChannels, typename T>
 std::size_t DecodeIntegerRow(const T* row, int file_channels,
                              const std::vector<float>& light_of_code, ImageView band, int y) {
   constexpr T kMax = std::numeric_limits<T>::max();
+  const int stride = kFileChannels > 0 ? kFileChannels : file_channels;
   const int width = band.width(), kept = band.channels();
+  const float* table = light_of_code.data();
   for (int c = 0; c < kept; ++c) {
     float* out = band.row(c, y).data();
-    for (int x = 0; x < width; ++x) out[x] = light_of_code[row[x * file_channels + c]];
+    for (int x = 0; x < width; ++x) out[x] = table[row[x * stride + c]];
   }
   std::size_t saturated = 0;
   for (int x = 0; x < width; ++x) {
-    const T* pixel = row + static_cast<std::size_t>(x) * file_channels;
-    if (std::find(pixel, pixel + kept, kMax) != pixel + kept) ++saturated;
+    const T* pixel = row + static_cast<std::size_t>(x) * stride;
+    bool at_max = false;
+    for (int c = 0; c < kept; ++c) at_max |= pixel[c] == kMax;
+    saturated += at_max ? 1 : 0;
   }
   return saturated;
+}
+
+template <typename T>
+std::size_t DecodeIntegerRow(const T* row, int file_channels,
+                             const std::vector<float>& light_of_code, ImageView band, int y) {
+  return file_channels == 3 ? DecodeIntegerRow<3>(row, file_channels, light_of_code, band, y)
+                            : DecodeIntegerRow<0>(row, file_channels, light_of_code, band, y);
 }
 
 // Float, half and unusual integer widths, converted to float by OpenImageIO (integers to
