@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
+#include <utility>
 
 namespace photomat {
 namespace {
@@ -13,29 +15,67 @@ namespace {
 // float sums of one block stay accurate (2^12 terms).
 constexpr Eigen::Index kRowBlock = 4096;
 
-// Columns up to which ParallelProduct accumulates outer products instead of calling Eigen's GEMM,
-// and the rows of the result block it keeps in the L1 cache while doing so (512 x 16 floats:
-// 32 KiB at most).
-constexpr Eigen::Index kOuterProductMaxColumns = 16;
-constexpr Eigen::Index kOuterProductRows = 512;
+// Columns up to which ParallelProduct uses its own kernel instead of Eigen's GEMM, the rows of
+// the result it keeps in the L1 cache (256 x 16 floats: 16 KiB at most) and the images it adds
+// per pass over them.
+constexpr int kKernelMaxColumns = 16;
+constexpr Eigen::Index kKernelRows = 256;
+constexpr Eigen::Index kKernelImages = 4;
 
-// result = left * right for one block of rows, one left column (one image) at a time. Why not
-// Eigen's product: a GEMM first packs its left operand (here the band's whole image matrix) into
-// panels; with the few columns of a least-squares fit (3 to 16) the packing cost more than the
-// multiplication itself (perf, a PTM fit of DiLiGenT cat: 7.5 % packing against 4 % multiplying).
-// Adding each image's outer product into a block of the result that stays in the L1 cache reads
-// the image matrix once, in its own (column) order. Each value is summed over the images in
-// order, so the result does not depend on the blocks (nor on the band the rows came from).
-void AccumulateOuterProducts(const Eigen::Ref<const Eigen::MatrixXf>& left,
-                             const Eigen::MatrixXf& right, Eigen::Ref<Eigen::MatrixXf> result) {
-  for (Eigen::Index start = 0; start < left.rows(); start += kOuterProductRows) {
-    const Eigen::Index count = std::min(kOuterProductRows, left.rows() - start);
-    auto block = result.middleRows(start, count);
-    block.setZero();
-    for (Eigen::Index image = 0; image < left.cols(); ++image) {
-      block.noalias() += left.col(image).segment(start, count) * right.row(image);
+// result = left * right, for a right-hand side of kColumns columns. Why not Eigen's product: a
+// GEMM first packs its left operand (here the band's whole image matrix) into panels; with the
+// few columns of a least-squares fit (3 to 16) packing cost more than multiplying (perf, a PTM
+// fit of DiLiGenT cat: 7.5 % packing against 4 % multiplying). Here a block of the result stays
+// in the L1 cache while the images' columns stream by, each read once and in order (which the
+// prefetcher follows; 8 rows of the result in registers against every column at once was slower:
+// ~100 streams), four images per pass so each pass's loads and stores of the block serve four
+// products. Each value is summed over the images in order, so a row gives the same bits in any
+// block or band.
+template <int kColumns>
+void MultiplyFewColumns(const Eigen::Ref<const Eigen::MatrixXf>& left, const Eigen::MatrixXf& right,
+                        Eigen::Ref<Eigen::MatrixXf> result) {
+  const Eigen::Index rows = left.rows(), images = left.cols();
+  for (Eigen::Index first = 0; first < rows; first += kKernelRows) {
+    const Eigen::Index count = std::min(kKernelRows, rows - first);
+    float* sums[kColumns];
+    for (int k = 0; k < kColumns; ++k) {
+      sums[k] = &result.coeffRef(first, k);
+      std::fill_n(sums[k], count, 0.0f);
+    }
+    Eigen::Index image = 0;
+    for (; image + kKernelImages <= images; image += kKernelImages) {
+      const float* x0 = &left.coeffRef(first, image);
+      const float* x1 = &left.coeffRef(first, image + 1);
+      const float* x2 = &left.coeffRef(first, image + 2);
+      const float* x3 = &left.coeffRef(first, image + 3);
+      for (int k = 0; k < kColumns; ++k) {
+        const float w0 = right(image, k), w1 = right(image + 1, k);
+        const float w2 = right(image + 2, k), w3 = right(image + 3, k);
+        float* sum = sums[k];
+        for (Eigen::Index r = 0; r < count; ++r) {
+          sum[r] = (((sum[r] + w0 * x0[r]) + w1 * x1[r]) + w2 * x2[r]) + w3 * x3[r];
+        }
+      }
+    }
+    for (; image < images; ++image) {
+      const float* x = &left.coeffRef(first, image);
+      for (int k = 0; k < kColumns; ++k) {
+        const float w = right(image, k);
+        float* sum = sums[k];
+        for (Eigen::Index r = 0; r < count; ++r) sum[r] += w * x[r];
+      }
     }
   }
+}
+
+// MultiplyFewColumns<right.cols()>, or false when right has more than kKernelMaxColumns.
+template <int... kMinusOne>
+bool MultiplyFewColumns(const Eigen::Ref<const Eigen::MatrixXf>& left, const Eigen::MatrixXf& right,
+                        Eigen::Ref<Eigen::MatrixXf> result,
+                        std::integer_sequence<int, kMinusOne...>) {
+  return ((right.cols() == kMinusOne + 1 &&
+           (MultiplyFewColumns<kMinusOne + 1>(left, right, result), true)) ||
+          ...);
 }
 
 }  // namespace
@@ -144,18 +184,17 @@ void RowGram::Add(const Eigen::MatrixXf& matrix, std::span<const std::size_t> pi
 
 Eigen::MatrixXf ParallelProduct(const Eigen::MatrixXf& left, const Eigen::MatrixXf& right) {
   Eigen::MatrixXf result(left.rows(), right.cols());
-  const bool few_columns = right.cols() <= kOuterProductMaxColumns;
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, left.rows(), kRowBlock),
-                    [&](const tbb::blocked_range<Eigen::Index>& range) {
-                      const Eigen::Index count = range.end() - range.begin();
-                      if (few_columns) {
-                        AccumulateOuterProducts(left.middleRows(range.begin(), count), right,
-                                                result.middleRows(range.begin(), count));
-                      } else {
-                        result.middleRows(range.begin(), count).noalias() =
-                            left.middleRows(range.begin(), count) * right;
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<Eigen::Index>(0, left.rows(), kRowBlock),
+      [&](const tbb::blocked_range<Eigen::Index>& range) {
+        const Eigen::Index count = range.end() - range.begin();
+        const auto rows = left.middleRows(range.begin(), count);
+        auto out = result.middleRows(range.begin(), count);
+        if (!MultiplyFewColumns(rows, right, out,
+                                std::make_integer_sequence<int, kKernelMaxColumns>{})) {
+          out.noalias() = rows * right;
+        }
+      });
   return result;
 }
 
