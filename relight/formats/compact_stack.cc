@@ -1,0 +1,242 @@
+#include "relight/formats/compact_stack.h"
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "relight/render/output_folder.h"
+#include "represent/stack/stack_band_writer.h"  // StackDescription
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path PlaneFileName(int plane, CompactPlaneCoding coding) {
+  return fmt::format("map_{:03d}.{}", plane, coding == CompactPlaneCoding::kPng ? "png" : "jpg");
+}
+
+// The plane's low and high ends over the mask: minimum and maximum, or the (1 - q) and q
+// quantiles.
+std::pair<double, double> MaskedRange(std::span<const float> values,
+                                      const std::vector<std::size_t>& inside, double quantile) {
+  if (inside.empty()) return {0.0, 0.0};
+  std::vector<float> masked(inside.size());
+  for (std::size_t i = 0; i < inside.size(); ++i) masked[i] = values[inside[i]];
+  if (quantile >= 1.0) {
+    const auto [low, high] = std::minmax_element(masked.begin(), masked.end());
+    return {*low, *high};
+  }
+  const auto at = [&](double q) {
+    const auto index = static_cast<std::ptrdiff_t>(std::lround(q * (masked.size() - 1.0)));
+    std::nth_element(masked.begin(), masked.begin() + index, masked.end());
+    return static_cast<double>(masked[static_cast<std::size_t>(index)]);
+  };
+  return {at(1.0 - quantile), at(quantile)};
+}
+
+// IMPLEMENTER CHOICE: the planes are written with OpenImageIO directly, as the bytes themselves
+// (core's WriteImage takes floats and has no JPEG quality); they are read back with ReadImage.
+void WritePlaneFile(const fs::path& path, const CompactPlanes& planes, int plane,
+                    const CompactStackOptions& options) {
+  auto output = OIIO::ImageOutput::create(path.string());
+  OIIO::ImageSpec spec(planes.width, planes.height, 1, OIIO::TypeDesc::UINT8);
+  if (options.coding == CompactPlaneCoding::kJpeg) {
+    spec.attribute("Compression", fmt::format("jpeg:{}", options.jpeg_quality));
+  }
+  if (!output || !output->open(path.string(), spec) ||
+      !output->write_image(OIIO::TypeDesc::UINT8, planes.bytes[plane].data()) || !output->close()) {
+    throw Error(path, fmt::format("cannot write the plane: {}",
+                                  output ? output->geterror() : OIIO::geterror()));
+  }
+}
+
+// The stored bytes of one plane file, which must be `width` x `height` with one channel.
+std::vector<std::uint8_t> ReadPlaneFile(const fs::path& path, int width, int height) {
+  ImageReadOptions read;
+  read.colour_space = ColourSpace::kLinear;  // the stored codes / 255, whatever the file's tags
+  const LoadedImage loaded = ReadImage(path, read);
+  const Image& image = loaded.image;
+  if (image.width() != width || image.height() != height || image.channels() != 1 ||
+      loaded.info.bits_per_sample != 8) {
+    throw Error(path, fmt::format("{}x{} with {} channel(s) of {} bits, the manifest says {}x{} "
+                                  "with 1 channel of 8 bits",
+                                  image.width(), image.height(), image.channels(),
+                                  loaded.info.bits_per_sample, width, height));
+  }
+  std::vector<std::uint8_t> bytes(image.pixel_count());
+  const auto values = image.plane(0);
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    bytes[i] = static_cast<std::uint8_t>(std::clamp(std::lround(values[i] * 255.0f), 0L, 255L));
+  }
+  return bytes;
+}
+
+void CheckOptions(const CompactStackOptions& options) {
+  if (options.jpeg_quality < 1 || options.jpeg_quality > 100) {
+    throw Error(fmt::format("JPEG quality {} is not in 1..100", options.jpeg_quality));
+  }
+}
+
+}  // namespace
+
+std::string_view ToString(CompactPlaneCoding coding) {
+  return coding == CompactPlaneCoding::kPng ? "png" : "jpeg";
+}
+
+CompactPlaneCoding ParseCompactPlaneCoding(std::string_view name) {
+  if (name == "png") return CompactPlaneCoding::kPng;
+  if (name == "jpeg" || name == "jpg") return CompactPlaneCoding::kJpeg;
+  throw Error(fmt::format("plane coding \"{}\": expected png or jpeg", name));
+}
+
+Mask NonzeroMapsMask(const Image& maps) {
+  Mask mask(maps.width(), maps.height(), false);
+  for (int c = 0; c < maps.channels(); ++c) {
+    const auto plane = maps.plane(c);
+    for (std::size_t p = 0; p < plane.size(); ++p) {
+      if (!std::isfinite(plane[p])) {
+        throw Error(fmt::format("map {} has a non-finite value at pixel ({}, {})",
+                                c < static_cast<int>(maps.channel_names().size())
+                                    ? maps.channel_names()[c]
+                                    : std::to_string(c),
+                                p % maps.width(), p / maps.width()));
+      }
+      if (plane[p] != 0.0f) mask.Set(p, true);
+    }
+  }
+  return mask;
+}
+
+CompactPlanes QuantiseMaps(const Image& maps, const Mask& mask, double range_quantile) {
+  if (!(range_quantile > 0.5 && range_quantile <= 1.0)) {
+    throw Error(fmt::format("range quantile {} is not in (0.5, 1]", range_quantile));
+  }
+  if (!mask.SameSize(maps)) throw Error("the compact form's mask is not the maps' size");
+  CompactPlanes planes;
+  planes.width = maps.width();
+  planes.height = maps.height();
+  planes.channels = maps.channel_names();
+  planes.mask = mask;
+  const std::vector<std::size_t> inside = mask.SetIndices();
+  for (int c = 0; c < maps.channels(); ++c) {
+    const auto values = maps.plane(c);
+    const auto [low, high] = MaskedRange(values, inside, range_quantile);
+    // A constant plane keeps a nonzero step so that decoding never divides by zero.
+    const double scale = high > low ? (high - low) / 255.0 : 1.0;
+    std::vector<std::uint8_t> bytes(values.size(), 0);
+    for (std::size_t p : inside) {
+      const long code = std::lround((values[p] - low) / scale);
+      bytes[p] = static_cast<std::uint8_t>(std::clamp(code, 0L, 255L));
+    }
+    planes.bytes.push_back(std::move(bytes));
+    planes.scale.push_back(scale);
+    planes.bias.push_back(low);
+  }
+  return planes;
+}
+
+Image DequantiseMaps(const CompactPlanes& planes) {
+  Image maps(planes.width, planes.height, planes.channels);
+  for (int c = 0; c < planes.PlaneCount(); ++c) {
+    auto out = maps.plane(c);
+    for (std::size_t p = 0; p < out.size(); ++p) {
+      if (planes.mask[p]) {
+        out[p] = static_cast<float>(planes.bias[c] + planes.scale[c] * planes.bytes[c][p]);
+      }
+    }
+  }
+  return maps;
+}
+
+bool IsCompactStackFolder(const fs::path& path) {
+  std::error_code ec;
+  return fs::is_directory(path, ec) && fs::exists(path / kCompactStackManifest, ec);
+}
+
+void WriteCompactStack(const fs::path& folder, const LoadedStack& stack,
+                       const CompactStackOptions& options) {
+  const Representation& r = stack.representation;
+  if (r.shading()) {
+    throw Error(folder, fmt::format("a {} stack is a nonlinear {} shading, which the compact "
+                                    "form's 8-bit maps do not hold within a bound: keep its .exr",
+                                    r.method(), r.shading()->kind()));
+  }
+  CheckOptions(options);
+  const CompactPlanes planes =
+      QuantiseMaps(r.maps(), NonzeroMapsMask(r.maps()), options.range_quantile);
+  nlohmann::ordered_json manifest;
+  manifest["format"] = kCompactStackFormat;
+  manifest["version"] = 1;
+  manifest["width"] = planes.width;
+  manifest["height"] = planes.height;
+  manifest["coding"] = ToString(options.coding);
+  if (options.coding == CompactPlaneCoding::kJpeg) manifest["quality"] = options.jpeg_quality;
+  manifest["mask"] = "mask.png";
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (int c = 0; c < planes.PlaneCount(); ++c) {
+    list.push_back({{"file", PlaneFileName(c, options.coding).string()},
+                    {"channel", planes.channels[c]},
+                    {"scale", planes.scale[c]},
+                    {"bias", planes.bias[c]}});
+  }
+  manifest["planes"] = std::move(list);
+  nlohmann::json description = StackDescription(r, stack.provenance);
+  description.erase("extra_layers");
+  manifest["stack"] = std::move(description);
+  WriteFolderAtomically(
+      folder, kCompactStackManifest, kCompactStackFormat, [&](const fs::path& temp) {
+        WriteMask(temp / "mask.png", planes.mask);
+        for (int c = 0; c < planes.PlaneCount(); ++c) {
+          WritePlaneFile(temp / PlaneFileName(c, options.coding), planes, c, options);
+        }
+        WriteTextFileAtomically(temp / kCompactStackManifest, manifest.dump(1) + "\n");
+      });
+}
+
+LoadedStack ReadCompactStack(const fs::path& folder) {
+  const fs::path file = folder / kCompactStackManifest;
+  const nlohmann::json document = ReadJsonFile(file);
+  const JsonReader json(document, file);
+  if (!document.is_object() || json["format"].String() != kCompactStackFormat) {
+    json.Fail(fmt::format("expected format \"{}\"", kCompactStackFormat));
+  }
+  if (json["version"].Integer() != 1) json["version"].Fail("unsupported version");
+  CompactPlanes planes;
+  planes.width = json["width"].Integer();
+  planes.height = json["height"].Integer();
+  if (planes.width <= 0 || planes.height <= 0 || planes.width > 65535 || planes.height > 65535) {
+    throw Error(file, fmt::format("image size {}x{} is not valid", planes.width, planes.height));
+  }
+  ParseCompactPlaneCoding(json["coding"].String());
+  const fs::path mask_file = folder / json["mask"].String();
+  planes.mask = ReadMask(mask_file);
+  if (planes.mask.width() != planes.width || planes.mask.height() != planes.height) {
+    throw Error(mask_file, fmt::format("{}x{}, the manifest says {}x{}", planes.mask.width(),
+                                       planes.mask.height(), planes.width, planes.height));
+  }
+  const JsonReader list = json["planes"];
+  for (std::size_t i = 0; i < list.ArraySize(); ++i) {
+    const JsonReader plane = list[i];
+    planes.channels.push_back(plane["channel"].String());
+    const double scale = plane["scale"].Number();
+    if (!(scale > 0)) plane["scale"].Fail("the scale must be positive");
+    planes.scale.push_back(scale);
+    planes.bias.push_back(plane["bias"].Number());
+    const std::string name = plane["file"].String();
+    if (name.empty() || fs::path(name).has_parent_path()) {
+      plane["file"].Fail(fmt::format("\"{}\" is not a file name in the folder", name));
+    }
+    planes.bytes.push_back(ReadPlaneFile(folder / name, planes.width, planes.height));
+  }
+  // The description names the maps it needs; SelectChannels reports one that no plane holds.
+  return StackFromDescription(json["stack"].value().dump(), DequantiseMaps(planes), file);
+}
+
+}  // namespace photomat
