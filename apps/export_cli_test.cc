@@ -190,7 +190,8 @@ TEST(ExportCliTest, CompactStacksAreWrittenAndReadWhereverStacksAre) {
                     " --compact-coding jpeg --compact-quality 98");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(LoadStackFile(compact).representation.method(), "hsh9");
-  EXPECT_TRUE(fs::exists(dir / "compact" / "map_026.jpg"));
+  EXPECT_TRUE(fs::exists(dir / "compact" / "map_017.jpg"));  // the default 18 components
+  EXPECT_FALSE(fs::exists(dir / "compact" / "map_018.jpg"));
   run = RunPhotomat("export " + fit + " --compact " + compact + " --compact-coding gif");
   EXPECT_NE(run.exit_code, 0);
   EXPECT_THAT(run.output, HasSubstr("expected png or jpeg"));

@@ -53,6 +53,7 @@ struct ExportCommandOptions {
   std::string compact_coding = "png";
   int compact_quality = 100;
   double compact_range_quantile = 1.0;
+  int compact_pca = CompactStackOptions{}.pca_planes;
 };
 
 // relight's basis for --relight-web: --relight-basis, else the input's own (ptm, hsh4/9, rbf,
@@ -104,10 +105,11 @@ void WriteCompact(const ExportCommandOptions& options, const LoadedStack& stack)
   compact.coding = ParseCompactPlaneCoding(options.compact_coding);
   compact.jpeg_quality = options.compact_quality;
   compact.range_quantile = options.compact_range_quantile;
+  compact.pca_planes = options.compact_pca;
   WriteCompactStack(options.compact, stack, compact);
   fmt::print("wrote {} (photomat compact stack: {}, {} planes of 8 bits as {})\n",
              options.compact.string(), stack.representation.method(),
-             stack.representation.maps().channels(), ToString(compact.coding));
+             CompactPlaneCount(stack.representation, compact), ToString(compact.coding));
 }
 
 // The .ptm method: what --ptm-format asks, else the input's own PTM form, else LRGB (PTMfitter's).
@@ -455,6 +457,11 @@ void AddExportCommand(CLI::App& app) {
       ->add_option("--compact-range-quantile", options->compact_range_quantile,
                    "Quantise each plane over its (1 - q) to q quantiles over the mask (tails "
                    "clipped); 1: minimum to maximum")
+      ->capture_default_str();
+  command
+      ->add_option("--compact-pca", options->compact_pca,
+                   "Store the maps' principal components: K the K largest (all when the stack has "
+                   "no more maps), -1 all, 0 the maps themselves")
       ->capture_default_str();
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "

@@ -14,7 +14,7 @@
 //   compact_form [SET] [--every K] [--methods ptm,hsh,rbf,bilinear] [--relight-cli PATH]
 //                [--quality Q] [--relight-planes K] [--resolution R] [--range-quantile Q]
 //                [--compact-coding png|jpeg] [--compact-quality Q] [--compact-range-quantile Q]
-//                [--compact-only]
+//                [--compact-pca K] [--compact-only]
 //
 // (--compact-* set the compact stack's options; --compact-only skips relight's web folders.)
 // (--quality, --relight-planes, --resolution and --range-quantile change photomat's folders only,
@@ -95,6 +95,8 @@ Arguments Parse(int argc, char** argv) {
       arguments.compact.jpeg_quality = std::stoi(value());
     } else if (a == "--compact-range-quantile") {
       arguments.compact.range_quantile = std::stod(value());
+    } else if (a == "--compact-pca") {
+      arguments.compact.pca_planes = std::stoi(value());
     } else if (a == "--compact-only") {
       arguments.compact_only = true;
     } else if (a == "--resolution") {

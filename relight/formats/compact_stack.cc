@@ -3,13 +3,16 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/formats/interchange.h"  // RefitLights
 #include "relight/render/output_folder.h"
 #include "represent/stack/stack_band_writer.h"  // StackDescription
 
@@ -82,6 +85,19 @@ void CheckOptions(const CompactStackOptions& options) {
   if (options.jpeg_quality < 1 || options.jpeg_quality > 100) {
     throw Error(fmt::format("JPEG quality {} is not in 1..100", options.jpeg_quality));
   }
+  if (options.pca_planes < -1) throw Error(fmt::format("{} PCA planes", options.pca_planes));
+}
+
+nlohmann::json VectorToJson(const Eigen::VectorXd& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
+
+Eigen::VectorXd VectorFromJson(const JsonReader& json, Eigen::Index size) {
+  const std::vector<double> values = json.Numbers();
+  if (static_cast<Eigen::Index>(values.size()) != size) {
+    json.Fail(fmt::format("expected {} values, got {}", size, values.size()));
+  }
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), size);
 }
 
 }  // namespace
@@ -155,9 +171,96 @@ Image DequantiseMaps(const CompactPlanes& planes) {
   return maps;
 }
 
+Eigen::VectorXd MapWeights(const LoadedStack& stack) {
+  const Representation& r = stack.representation;
+  const MapLayout& layout = r.layout();
+  const int n = r.maps().channels();
+  Eigen::VectorXd weights = Eigen::VectorXd::Ones(n);
+  if (layout.shading_maps > 0) return weights;
+  const std::vector<LightDirection>& lights =
+      stack.provenance.capture_lights.empty() ? RefitLights() : stack.provenance.capture_lights;
+  Eigen::VectorXd sum_of_squares = Eigen::VectorXd::Zero(layout.basis_size);
+  for (const LightDirection& light : lights) {
+    sum_of_squares += r.basis().Coefficients(light).cwiseAbs2();
+  }
+  for (int j = 0; j < layout.GainOffset(); ++j) {
+    const double rms = std::sqrt(sum_of_squares[j / layout.BasisMapsPerTerm()] / lights.size());
+    if (rms > 0 && std::isfinite(rms)) weights[j] = rms;
+  }
+  return weights;
+}
+
+CompactPca FitMapPca(const Image& maps, const Mask& mask, const Eigen::VectorXd& weights,
+                     int planes) {
+  const int n = maps.channels();
+  if (weights.size() != n) throw Error("one weight per map expected");
+  const int k = planes < 0 ? n : planes;
+  if (k < 1 || k > n) throw Error(fmt::format("{} PCA planes of {} maps", k, n));
+  CompactPca pca;
+  pca.channels = maps.channel_names();
+  pca.weights = weights;
+  const std::vector<std::size_t> inside = mask.SetIndices();
+  pca.mean = Eigen::VectorXd::Zero(n);
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd x(n);
+  for (std::size_t p : inside) {
+    for (int j = 0; j < n; ++j) x[j] = weights[j] * maps.plane(j)[p];
+    pca.mean += x;
+  }
+  if (!inside.empty()) pca.mean /= static_cast<double>(inside.size());
+  for (std::size_t p : inside) {
+    for (int j = 0; j < n; ++j) x[j] = weights[j] * maps.plane(j)[p] - pca.mean[j];
+    covariance.selfadjointView<Eigen::Lower>().rankUpdate(x);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(
+      covariance.selfadjointView<Eigen::Lower>());
+  // Largest variance first; each axis's sign fixed so its largest entry is positive.
+  pca.axes.resize(n, k);
+  for (int c = 0; c < k; ++c) {
+    Eigen::VectorXd axis = eigen.eigenvectors().col(n - 1 - c);
+    Eigen::Index largest;
+    axis.cwiseAbs().maxCoeff(&largest);
+    pca.axes.col(c) = axis[largest] < 0 ? Eigen::VectorXd(-axis) : axis;
+  }
+  return pca;
+}
+
+Image ProjectMaps(const Image& maps, const Mask& mask, const CompactPca& pca) {
+  const int n = static_cast<int>(pca.mean.size());
+  const int k = static_cast<int>(pca.axes.cols());
+  std::vector<std::string> names;
+  for (int c = 0; c < k; ++c) names.push_back(fmt::format("pca.{}", c));
+  Image planes(maps.width(), maps.height(), names);
+  Eigen::VectorXd x(n);
+  for (std::size_t p : mask.SetIndices()) {
+    for (int j = 0; j < n; ++j) x[j] = pca.weights[j] * maps.plane(j)[p] - pca.mean[j];
+    const Eigen::VectorXd projected = pca.axes.transpose() * x;
+    for (int c = 0; c < k; ++c) planes.plane(c)[p] = static_cast<float>(projected[c]);
+  }
+  return planes;
+}
+
+Image ReconstructMaps(const Image& planes, const Mask& mask, const CompactPca& pca) {
+  const int n = static_cast<int>(pca.mean.size());
+  const int k = static_cast<int>(pca.axes.cols());
+  Image maps(planes.width(), planes.height(), pca.channels);
+  Eigen::VectorXd projected(k);
+  for (std::size_t p : mask.SetIndices()) {
+    for (int c = 0; c < k; ++c) projected[c] = planes.plane(c)[p];
+    const Eigen::VectorXd x = pca.mean + pca.axes * projected;
+    for (int j = 0; j < n; ++j) maps.plane(j)[p] = static_cast<float>(x[j] / pca.weights[j]);
+  }
+  return maps;
+}
+
 bool IsCompactStackFolder(const fs::path& path) {
   std::error_code ec;
   return fs::is_directory(path, ec) && fs::exists(path / kCompactStackManifest, ec);
+}
+
+int CompactPlaneCount(const Representation& representation, const CompactStackOptions& options) {
+  const int maps = representation.maps().channels();
+  return options.pca_planes <= 0 ? maps : std::min(options.pca_planes, maps);
 }
 
 void WriteCompactStack(const fs::path& folder, const LoadedStack& stack,
@@ -169,8 +272,13 @@ void WriteCompactStack(const fs::path& folder, const LoadedStack& stack,
                                     r.method(), r.shading()->kind()));
   }
   CheckOptions(options);
-  const CompactPlanes planes =
-      QuantiseMaps(r.maps(), NonzeroMapsMask(r.maps()), options.range_quantile);
+  const Mask mask = NonzeroMapsMask(r.maps());
+  std::optional<CompactPca> pca;
+  if (options.pca_planes != 0) {
+    pca = FitMapPca(r.maps(), mask, MapWeights(stack), CompactPlaneCount(r, options));
+  }
+  const CompactPlanes planes = QuantiseMaps(pca ? ProjectMaps(r.maps(), mask, *pca) : r.maps(),
+                                            mask, options.range_quantile);
   nlohmann::ordered_json manifest;
   manifest["format"] = kCompactStackFormat;
   manifest["version"] = 1;
@@ -187,6 +295,12 @@ void WriteCompactStack(const fs::path& folder, const LoadedStack& stack,
                     {"bias", planes.bias[c]}});
   }
   manifest["planes"] = std::move(list);
+  if (pca) {
+    manifest["pca"] = {{"channels", pca->channels},
+                       {"weights", VectorToJson(pca->weights)},
+                       {"mean", VectorToJson(pca->mean)},
+                       {"axes", MatrixToJson(pca->axes)}};
+  }
   nlohmann::json description = StackDescription(r, stack.provenance);
   description.erase("extra_layers");
   manifest["stack"] = std::move(description);
@@ -235,8 +349,26 @@ LoadedStack ReadCompactStack(const fs::path& folder) {
     }
     planes.bytes.push_back(ReadPlaneFile(folder / name, planes.width, planes.height));
   }
+  Image maps = DequantiseMaps(planes);
+  if (json.Has("pca")) {
+    const JsonReader pca_json = json["pca"];
+    CompactPca pca;
+    const JsonReader channels = pca_json["channels"];
+    for (std::size_t i = 0; i < channels.ArraySize(); ++i) {
+      pca.channels.push_back(channels[i].String());
+    }
+    const auto n = static_cast<Eigen::Index>(pca.channels.size());
+    pca.weights = VectorFromJson(pca_json["weights"], n);
+    if ((pca.weights.array() <= 0).any()) pca_json["weights"].Fail("weights must be positive");
+    pca.mean = VectorFromJson(pca_json["mean"], n);
+    pca.axes = MatrixFromJson(pca_json["axes"], planes.PlaneCount());
+    if (pca.axes.rows() != n) {
+      pca_json["axes"].Fail(fmt::format("{} rows for {} maps", pca.axes.rows(), n));
+    }
+    maps = ReconstructMaps(maps, planes.mask, pca);
+  }
   // The description names the maps it needs; SelectChannels reports one that no plane holds.
-  return StackFromDescription(json["stack"].value().dump(), DequantiseMaps(planes), file);
+  return StackFromDescription(json["stack"].value().dump(), maps, file);
 }
 
 }  // namespace photomat

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -52,7 +53,37 @@ struct CompactStackOptions {
   // In (0.5, 1]: each plane quantised over its (1 - q) to q quantiles over the mask's pixels,
   // values outside clipped; 1: minimum to maximum.
   double range_quantile = 1.0;
+  // Store the maps' principal components instead of the maps (below): k > 0 the k largest (all
+  // when the stack has k maps or fewer), -1 every component (a rotation: decorrelated planes, no
+  // compression), 0 the maps themselves. IMPLEMENTER CHOICE: 18 by default, measured on DiLiGenT
+  // cat (bench/compact_form, README "Compact form against the float stack and relight-cli"): the
+  // one setting under 0.3 dB loss and within 2 x relight-cli's size for ptm (18 maps: a rotation),
+  // hsh9 (27 maps), rbf and bilinear (9 planes x 3 channels) alike.
+  int pca_planes = 18;
 };
+
+// The maps' principal components (the optional "pca" of the manifest). Each pixel's n-vector of
+// maps is weighted by how much each map moves a relit value, x_j = w_j B_j (w_j: the RMS over the
+// capture lights of the map's light coefficient; 1 for gain and shading maps), so that the
+// components' errors are errors of relit values; the planes are P = (x - mean) V over the mask,
+// V's columns ordered by variance, and the maps decode as B_j = (mean + V P)_j / w_j.
+// IMPLEMENTER CHOICE: correlated coefficient maps (HSH's terms) otherwise each take a whole 8-bit
+// range of their own; after the rotation the small components get small steps.
+struct CompactPca {
+  std::vector<std::string> channels;  // the maps', in layout order
+  Eigen::VectorXd weights;            // n
+  Eigen::VectorXd mean;               // n
+  Eigen::MatrixXd axes;               // n x k, orthonormal columns
+};
+// The weights w_j of `stack`'s maps (above).
+Eigen::VectorXd MapWeights(const LoadedStack& stack);
+// The principal components of the weighted maps over `mask`; `planes` -1 for all.
+CompactPca FitMapPca(const Image& maps, const Mask& mask, const Eigen::VectorXd& weights,
+                     int planes);
+// The k component planes ("pca.0", ...), 0 outside the mask.
+Image ProjectMaps(const Image& maps, const Mask& mask, const CompactPca& pca);
+// The maps the component planes decode to, 0 outside the mask.
+Image ReconstructMaps(const Image& planes, const Mask& mask, const CompactPca& pca);
 
 // Quantised maps in memory: what the files hold, before their PNG/JPEG coding.
 struct CompactPlanes {
@@ -78,6 +109,10 @@ Image DequantiseMaps(const CompactPlanes& planes);
 
 // True for a folder holding a compact_stack.json.
 bool IsCompactStackFolder(const std::filesystem::path& path);
+
+// The planes WriteCompactStack writes for `representation`: its maps' count, or the components
+// pca_planes keeps.
+int CompactPlaneCount(const Representation& representation, const CompactStackOptions& options);
 
 // Writes `stack` (its maps quantised over NonzeroMapsMask) into `folder` whole or not at all (an
 // existing folder is replaced only when empty or another compact stack). Throws Error naming the

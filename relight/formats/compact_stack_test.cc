@@ -105,7 +105,9 @@ TEST(CompactStackTest, PngFolderReadsAsTheDequantisedStack) {
     const LoadedStack fit = MaskedFit(method);
     testing::TempDir dir;
     const fs::path folder = dir / "compact";
-    WriteCompactStack(folder, fit);
+    CompactStackOptions maps_only;
+    maps_only.pca_planes = 0;
+    WriteCompactStack(folder, fit, maps_only);
     ASSERT_TRUE(IsCompactStackFolder(folder));
     ASSERT_TRUE(IsStackInput(folder));
     ASSERT_TRUE(IsReadWholeStackInput(folder));
@@ -132,6 +134,7 @@ TEST(CompactStackTest, JpegPlanesStayCloseToTheBytes) {
   CompactStackOptions options;
   options.coding = CompactPlaneCoding::kJpeg;
   options.jpeg_quality = 100;
+  options.pca_planes = 0;
   WriteCompactStack(dir / "jpeg", fit, options);
   const Image jpeg = ReadCompactStack(dir / "jpeg").representation.maps();
   const CompactPlanes planes =
@@ -148,11 +151,62 @@ TEST(CompactStackTest, JpegPlanesStayCloseToTheBytes) {
   EXPECT_LE(worst_in_steps, 2.0);
 }
 
+// PCA planes: at full rank the maps decode within the quantisation of the components, carried
+// back through the axes and weights, |B_j - decoded_j| <= sum_c |V_jc| scale_c / 2 / w_j; fewer
+// planes keep only the largest components.
+TEST(CompactStackTest, PcaPlanesDecodeWithinTheirQuantisation) {
+  const LoadedStack fit = MaskedFit("hsh9");
+  const Image& maps = fit.representation.maps();
+  const Mask mask = NonzeroMapsMask(maps);
+  const CompactPca pca = FitMapPca(maps, mask, MapWeights(fit), -1);
+  ASSERT_EQ(pca.axes.cols(), maps.channels());
+  // Full rank, unquantised: the rotation is undone to float precision.
+  const Image exact = ReconstructMaps(ProjectMaps(maps, mask, pca), mask, pca);
+  EXPECT_LE(testing::LargestDifferenceOverLargestValue(exact, maps), 1e-5);
+  testing::TempDir dir;
+  CompactStackOptions options;
+  options.pca_planes = -1;
+  WriteCompactStack(dir / "pca", fit, options);
+  const Image decoded = ReadCompactStack(dir / "pca").representation.maps();
+  const nlohmann::json manifest = ReadJsonFile(dir / "pca" / kCompactStackManifest);
+  std::vector<double> scale;
+  for (const auto& plane : manifest["planes"]) scale.push_back(plane["scale"].get<double>());
+  double worst_over_bound = 0;
+  for (int j = 0; j < maps.channels(); ++j) {
+    double bound = 0;
+    for (int c = 0; c < pca.axes.cols(); ++c) bound += std::abs(pca.axes(j, c)) * scale[c] / 2;
+    bound /= pca.weights[j];
+    for (std::size_t p : mask.SetIndices()) {
+      worst_over_bound =
+          std::max(worst_over_bound, std::abs(decoded.plane(j)[p] - maps.plane(j)[p]) / bound);
+    }
+  }
+  // Measured 0.90 of the bound (the components' errors partly cancel); bound plus 1e-3 for float
+  // rounding.
+  EXPECT_LE(worst_over_bound, 1.001);
+  // And the folder relights exactly as the stack of the components' dequantised planes,
+  // reconstructed, does (PNG: lossless).
+  const Image expected_maps =
+      ReconstructMaps(DequantiseMaps(QuantiseMaps(ProjectMaps(maps, mask, pca), mask)), mask, pca);
+  const Representation expected = fit.representation.WithMaps(expected_maps);
+  const Representation read = ReadCompactStack(dir / "pca").representation;
+  for (const LightDirection& light : TestLights()) {
+    EXPECT_TRUE(testing::SameBits(read.Relight(light), expected.Relight(light)));
+  }
+  options.pca_planes = 6;
+  WriteCompactStack(dir / "six", fit, options);
+  EXPECT_TRUE(fs::exists(dir / "six" / "map_005.png"));
+  EXPECT_FALSE(fs::exists(dir / "six" / "map_006.png"));
+  EXPECT_EQ(ReadCompactStack(dir / "six").representation.maps().channels(), maps.channels());
+}
+
 TEST(CompactStackTest, RejectsMalformedFolders) {
   const LoadedStack fit = MaskedFit("ptm");
   testing::TempDir dir;
   const fs::path folder = dir / "compact";
-  WriteCompactStack(folder, fit);
+  CompactStackOptions maps_only;
+  maps_only.pca_planes = 0;
+  WriteCompactStack(folder, fit, maps_only);
   const fs::path manifest = folder / kCompactStackManifest;
   const std::string good = ReadTextFile(manifest);
   // A missing plane.
