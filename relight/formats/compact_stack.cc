@@ -81,6 +81,16 @@ std::vector<std::uint8_t> ReadPlaneFile(const fs::path& path, int width, int hei
   return bytes;
 }
 
+// IMPLEMENTER CHOICE (issue 19: what is published carries no absolute local path): the source
+// is written relative to the compact folder, as a stack's provenance may be.
+StackProvenance PublishedProvenance(StackProvenance provenance, const fs::path& folder) {
+  const fs::path source(provenance.source);
+  if (source.is_absolute()) {
+    provenance.source = source.lexically_proximate(fs::absolute(folder)).generic_string();
+  }
+  return provenance;
+}
+
 void CheckOptions(const CompactStackOptions& options) {
   if (options.jpeg_quality < 1 || options.jpeg_quality > 100) {
     throw Error(fmt::format("JPEG quality {} is not in 1..100", options.jpeg_quality));
@@ -301,7 +311,7 @@ void WriteCompactStack(const fs::path& folder, const LoadedStack& stack,
                        {"mean", VectorToJson(pca->mean)},
                        {"axes", MatrixToJson(pca->axes)}};
   }
-  nlohmann::json description = StackDescription(r, stack.provenance);
+  nlohmann::json description = StackDescription(r, PublishedProvenance(stack.provenance, folder));
   description.erase("extra_layers");
   manifest["stack"] = std::move(description);
   WriteFolderAtomically(

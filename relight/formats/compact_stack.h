@@ -39,6 +39,8 @@ namespace photomat {
 // - One greyscale file per map: a JPEG of one channel has no colour transform and no chroma
 //   subsampling, so planes never mix.
 // - Extra layers of a stack (export's height, derived normals) are not stored.
+// - The provenance's source, when absolute, is stored relative to the compact folder (what is
+//   published carries no absolute local path).
 inline constexpr const char* kCompactStackManifest = "compact_stack.json";
 inline constexpr const char* kCompactStackFormat = "photomat-compact-stack";
 

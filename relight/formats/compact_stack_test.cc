@@ -246,6 +246,15 @@ TEST(CompactStackTest, RejectsMalformedFolders) {
   EXPECT_THAT([&] { ReadCompactStack(folder); }, ThrowsMessage<Error>(HasSubstr("mask.png")));
 }
 
+// The manifest holds no absolute local path: an absolute source is stored relative to the folder.
+TEST(CompactStackTest, SourceIsRelativeToTheFolder) {
+  LoadedStack fit = MaskedFit("ptm");
+  testing::TempDir dir;
+  fit.provenance.source = (dir / "captures" / "cat").string();
+  WriteCompactStack(dir / "out" / "compact", fit);
+  EXPECT_EQ(ReadCompactStack(dir / "out" / "compact").provenance.source, "../../captures/cat");
+}
+
 // Written whole or not at all: an unrelated folder is never replaced.
 TEST(CompactStackTest, DoesNotReplaceUnrelatedFolders) {
   const LoadedStack fit = MaskedFit("ptm");
