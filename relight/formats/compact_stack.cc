@@ -339,13 +339,18 @@ LoadedStack ReadCompactStack(const fs::path& folder) {
     throw Error(file, fmt::format("image size {}x{} is not valid", planes.width, planes.height));
   }
   ParseCompactPlaneCoding(json["coding"].String());
-  const fs::path mask_file = folder / json["mask"].String();
+  const std::string mask_name = json["mask"].String();
+  if (mask_name.empty() || fs::path(mask_name).has_parent_path()) {
+    json["mask"].Fail(fmt::format("\"{}\" is not a file name in the folder", mask_name));
+  }
+  const fs::path mask_file = folder / mask_name;
   planes.mask = ReadMask(mask_file);
   if (planes.mask.width() != planes.width || planes.mask.height() != planes.height) {
     throw Error(mask_file, fmt::format("{}x{}, the manifest says {}x{}", planes.mask.width(),
                                        planes.mask.height(), planes.width, planes.height));
   }
   const JsonReader list = json["planes"];
+  if (list.ArraySize() == 0) list.Fail("no planes");
   for (std::size_t i = 0; i < list.ArraySize(); ++i) {
     const JsonReader plane = list[i];
     planes.channels.push_back(plane["channel"].String());

@@ -193,6 +193,12 @@ TEST(CompactStackTest, PcaPlanesDecodeWithinTheirQuantisation) {
   for (const LightDirection& light : TestLights()) {
     EXPECT_TRUE(testing::SameBits(read.Relight(light), expected.Relight(light)));
   }
+  // Damaged components: axes for other maps than the planes and channels.
+  nlohmann::json damaged = manifest;
+  damaged["pca"]["axes"].erase(damaged["pca"]["axes"].size() - 1);
+  testing::WriteFile(dir / "pca" / kCompactStackManifest, damaged.dump());
+  EXPECT_THAT([&] { ReadCompactStack(dir / "pca"); },
+              ThrowsMessage<Error>(AllOf(HasSubstr(kCompactStackManifest), HasSubstr("axes"))));
   options.pca_planes = 6;
   WriteCompactStack(dir / "six", fit, options);
   EXPECT_TRUE(fs::exists(dir / "six" / "map_005.png"));
@@ -240,6 +246,11 @@ TEST(CompactStackTest, RejectsMalformedFolders) {
   testing::WriteFile(manifest, json.dump());
   EXPECT_THAT([&] { ReadCompactStack(folder); },
               ThrowsMessage<Error>(AllOf(HasSubstr(kCompactStackManifest), HasSubstr("ptm."))));
+  json = nlohmann::json::parse(good);
+  json["mask"] = "../elsewhere.png";
+  testing::WriteFile(manifest, json.dump());
+  EXPECT_THAT([&] { ReadCompactStack(folder); },
+              ThrowsMessage<Error>(HasSubstr("not a file name in the folder")));
   // A missing mask.
   testing::WriteFile(manifest, good);
   fs::remove(folder / "mask.png");
