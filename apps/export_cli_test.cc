@@ -9,6 +9,7 @@
 #include "core/colour.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/formats/compact_stack.h"
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/ptm_jpeg_test_codings.h"
 #include "relight/formats/relight_web_format.h"
@@ -151,6 +152,49 @@ TEST(ExportCliTest, RelightWebFoldersAreWrittenAndReadWhereverStacksAre) {
   run = RunPhotomat("export " + capture + " --relight-web " + (dir / "other").string());
   EXPECT_NE(run.exit_code, 0);
   EXPECT_TRUE(fs::exists(dir / "other" / "notes.txt"));
+}
+
+// `export --compact DIR` writes photomat's compact stack form from a saved stack (and from a set);
+// `relight DIR` relights it as the compact form's own representation (the dequantised maps) does,
+// within the rounding of the relit image to 8-bit codes, and `export DIR --viewer` shows it.
+TEST(ExportCliTest, CompactStacksAreWrittenAndReadWhereverStacksAre) {
+  TempDir dir;
+  const std::string capture = Generate(dir);
+  const std::string fit = (dir / "fit").string();
+  RunResult run = RunPhotomat("fit " + capture + " --method ptm --out " + fit);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string compact = (dir / "compact").string();
+  run = RunPhotomat("export " + fit + " --compact " + compact);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("photomat compact stack: ptm, 18 planes of 8 bits as png"));
+  EXPECT_TRUE(fs::exists(dir / "compact" / kCompactStackManifest));
+  const fs::path png = dir / "relit.png";
+  run = RunPhotomat("relight " + compact + " --light 40,30 --format png8 --out " + png.string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const Image expected =
+      LoadStackFile(compact).representation.Relight(LightDirection::FromSlantTilt(40, 30));
+  ImageReadOptions codes;  // the stored sRGB codes / 255
+  codes.colour_space = ColourSpace::kLinear;
+  const Image image = ReadImage(png, codes).image;
+  ASSERT_TRUE(image.SameShape(expected));
+  double worst = 0.0;
+  for (std::size_t v = 0; v < image.values().size(); ++v) {
+    const double want = LinearToSrgb(std::clamp(expected.values()[v], 0.0f, 1.0f));
+    worst = std::max(worst, 255.0 * std::abs(image.values()[v] - want));
+  }
+  EXPECT_LE(worst, 0.5 + 1e-3);
+  run = RunPhotomat("export " + compact + " --viewer " + (dir / "viewer").string());
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_TRUE(fs::exists(dir / "viewer" / "viewer.json"));
+  run = RunPhotomat("export " + capture + " --method hsh9 --compact " + compact +
+                    " --compact-coding jpeg --compact-quality 98");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(LoadStackFile(compact).representation.method(), "hsh9");
+  EXPECT_TRUE(fs::exists(dir / "compact" / "map_017.jpg"));  // the default 18 components
+  EXPECT_FALSE(fs::exists(dir / "compact" / "map_018.jpg"));
+  run = RunPhotomat("export " + fit + " --compact " + compact + " --compact-coding gif");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_THAT(run.output, HasSubstr("expected png or jpeg"));
 }
 
 // Must show: a JPEG_LRGB file predicted as HP's files are (inverted references, a reference

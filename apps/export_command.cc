@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/memory_limits.h"
 #include "relight/export/export.h"
+#include "relight/formats/compact_stack.h"
 #include "relight/formats/interchange.h"
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/relight_web_format.h"
@@ -48,6 +49,11 @@ struct ExportCommandOptions {
   std::string relight_basis;
   int relight_planes = 9;
   int relight_quality = 95;
+  std::filesystem::path compact;
+  std::string compact_coding = "png";
+  int compact_quality = 100;
+  double compact_range_quantile = 1.0;
+  int compact_pca = CompactStackOptions{}.pca_planes;
 };
 
 // relight's basis for --relight-web: --relight-basis, else the input's own (ptm, hsh4/9, rbf,
@@ -91,6 +97,19 @@ void PrintRelightWeb(const ExportCommandOptions& options, const RelightWebStack&
   fmt::print("wrote {} (relight web format: {} {}, {} planes, {}x{})\n",
              options.relight_web.string(), ToString(web.basis), ToString(web.colour_space),
              web.PlaneCount(), web.width, web.height);
+}
+
+void WriteCompact(const ExportCommandOptions& options, const LoadedStack& stack) {
+  if (options.compact.empty()) return;
+  CompactStackOptions compact;
+  compact.coding = ParseCompactPlaneCoding(options.compact_coding);
+  compact.jpeg_quality = options.compact_quality;
+  compact.range_quantile = options.compact_range_quantile;
+  compact.pca_planes = options.compact_pca;
+  WriteCompactStack(options.compact, stack, compact);
+  fmt::print("wrote {} (photomat compact stack: {}, {} planes of 8 bits as {})\n",
+             options.compact.string(), stack.representation.method(),
+             CompactPlaneCount(stack.representation, compact), ToString(compact.coding));
 }
 
 // The .ptm method: what --ptm-format asks, else the input's own PTM form, else LRGB (PTMfitter's).
@@ -248,7 +267,8 @@ std::vector<std::string> ViewerMethodOrder(const std::filesystem::path& folder) 
 
 bool ShowsEveryMethod(const std::filesystem::path& input,
                       const std::optional<std::string>& method) {
-  return !method && std::filesystem::is_directory(input) && !IsRelightWebFolder(input);
+  return !method && std::filesystem::is_directory(input) && !IsRelightWebFolder(input) &&
+         !IsCompactStackFolder(input);
 }
 
 // Every stack of a fit folder (in photomat's method order), or the one `method` or the file names.
@@ -310,17 +330,17 @@ void WriteViewerOfStacks(const ExportCommandOptions& options,
 
 void RunExport(const ExportCommandOptions& options) {
   if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty() &&
-      options.relight_web.empty()) {
+      options.relight_web.empty() && options.compact.empty()) {
     throw Error(
-        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE, --relight-web DIR and/or "
-        "--viewer DIR");
+        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE, --relight-web DIR, "
+        "--compact DIR and/or --viewer DIR");
   }
   const std::optional<std::string> method =
       options.method.empty() ? std::nullopt : std::optional(options.method);
   if (!options.viewer.empty() && IsStackInput(options.input)) {
     WriteViewerOfStacks(options, method);
     if (options.out.empty() && options.ptm.empty() && options.rti.empty() &&
-        options.relight_web.empty()) {
+        options.relight_web.empty() && options.compact.empty()) {
       return;
     }
   }
@@ -328,7 +348,7 @@ void RunExport(const ExportCommandOptions& options) {
     const std::filesystem::path stack_path = ResolveStack(options.input, method);
     if (IsStreamableStack(stack_path)) {
       StackBandReader stack(stack_path);
-      if (StreamsMaps(options, stack_path, stack)) {
+      if (options.compact.empty() && StreamsMaps(options, stack_path, stack)) {
         WriteMapsStreamed(options, stack);
         return;
       }
@@ -343,6 +363,7 @@ void RunExport(const ExportCommandOptions& options) {
       PrintRelightWeb(options,
                       RelightWebFromStack(stack, RelightWebOptionsFor(options, r.method())));
     }
+    WriteCompact(options, stack);
     WriteMaps(options, stack);
     return;
   }
@@ -370,10 +391,12 @@ void RunExport(const ExportCommandOptions& options) {
   if (!options.relight_web.empty()) {
     PrintRelightWeb(options, RelightWebFromSet(loaded.set, RelightWebOptionsFor(options, "")));
   }
-  if (options.out.empty()) return;
+  if (options.out.empty() && options.compact.empty()) return;
   const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
                                    loaded.encodings};
-  WriteMaps(options, {Fit(loaded.set, Method::Parse(method.value_or("gradient"))), provenance});
+  const LoadedStack fit{Fit(loaded.set, Method::Parse(method.value_or("gradient"))), provenance};
+  WriteCompact(options, fit);
+  WriteMaps(options, fit);
 }
 
 }  // namespace
@@ -412,14 +435,34 @@ void AddExportCommand(CLI::App& app) {
   command->add_flag("--ignore-intensities", options->raw_intensities,
                     "For a photometric set: do not divide by the light intensities it gives");
   command->add_option("--relight-web", options->relight_web,
-                      "Also write relight's web format (info.json + plane_N.jpg; photomat's "
-                      "compact stack form) into this folder");
+                      "Also write relight's web format (info.json + plane_N.jpg, the interchange "
+                      "format relight and OpenLIME read) into this folder");
   command->add_option("--relight-basis", options->relight_basis,
                       "ptm, hsh, rbf or bilinear (default: the input's own, else ptm)");
   command->add_option("--relight-planes", options->relight_planes,
                       "rbf/bilinear: PCA planes (default 9)");
   command->add_option("--relight-quality", options->relight_quality,
                       "JPEG quality of the planes (default 95)");
+  command->add_option("--compact", options->compact,
+                      "Also write photomat's compact stack form (linear maps as 8-bit planes with "
+                      "per-plane scale and bias + compact_stack.json; photomat-only, read by "
+                      "relight and export like a stack) into this folder");
+  command
+      ->add_option("--compact-coding", options->compact_coding,
+                   "png (lossless planes) or jpeg (greyscale, --compact-quality)")
+      ->capture_default_str();
+  command->add_option("--compact-quality", options->compact_quality, "JPEG quality of the planes")
+      ->capture_default_str();
+  command
+      ->add_option("--compact-range-quantile", options->compact_range_quantile,
+                   "Quantise each plane over its (1 - q) to q quantiles over the mask (tails "
+                   "clipped); 1: minimum to maximum")
+      ->capture_default_str();
+  command
+      ->add_option("--compact-pca", options->compact_pca,
+                   "Store the maps' principal components: K the K largest (all when the stack has "
+                   "no more maps), -1 all, 0 the maps themselves")
+      ->capture_default_str();
   command->add_option("--viewer", options->viewer,
                       "Also write the web relighting viewer into this folder: every stack of a fit "
                       "folder (or --method's), or for a photometric set every method's fit");

@@ -1,16 +1,22 @@
-// The compact stack form (relight's web format, issue 19) against the float stack and against
-// relight-cli's own folders: size and held-out-light PSNR. Every K-th light of the set is held
-// out; the rest are fitted (float stack: photomat's linear fit), exported (`RelightWebFromStack`,
-// and `RelightWebFromSet` from the photographs) and built by relight-cli from the same photographs
-// (8-bit sRGB JPEGs, quality 95, and an .lp file) when it is available. Every result is relit at
-// the held-out lights, decoded to linear, and compared with the photographs over the mask, the set
-// first scaled so that its largest value (over the mask) is 1, both clamped to [0, 1]: PSNR with
-// peak 1. Sizes are the folders' files (info.json and plane_N.jpg; relight-cli's extra
-// materials.png is counted separately).
+// The compact forms of a stack (issue 19) against the float stack and against relight-cli's own
+// folders: size and held-out-light PSNR. Every K-th light of the set is held out; the rest are
+// fitted (float stack: photomat's linear fit), written as photomat's compact stack form
+// (`WriteCompactStack`, relight/formats/compact_stack.h), exported in relight's web format
+// (`RelightWebFromStack`, and `RelightWebFromSet` from the photographs) and built by relight-cli
+// from the same photographs (8-bit sRGB JPEGs, quality 95, and an .lp file) when it is available.
+// Every result is relit at the held-out lights, decoded to linear, and compared with the
+// photographs over the mask, the set first scaled so that its largest value (over the mask) is 1,
+// both clamped to [0, 1]: PSNR with peak 1. Sizes are the folders' files (info.json and
+// plane_N.jpg; relight-cli's extra materials.png is counted separately; the compact stack: every
+// file of its folder). Prints an EXPECTED FAILURE line for each basis whose compact stack misses
+// the issue's target (under 0.3 dB loss, within 2 x relight-cli's size).
 //
 //   compact_form [SET] [--every K] [--methods ptm,hsh,rbf,bilinear] [--relight-cli PATH]
 //                [--quality Q] [--relight-planes K] [--resolution R] [--range-quantile Q]
+//                [--compact-coding png|jpeg] [--compact-quality Q] [--compact-range-quantile Q]
+//                [--compact-pca K] [--compact-only]
 //
+// (--compact-* set the compact stack's options; --compact-only skips relight's web folders.)
 // (--quality, --relight-planes, --resolution and --range-quantile change photomat's folders only,
 // relight-cli runs with its defaults.) (default: DiLiGenT cat from $PHOTOMAT_TEST_DATA, K = 10;
 // relight-cli from $PHOTOMAT_RELIGHT_CLI or
@@ -30,6 +36,7 @@
 #include "core/colour.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "relight/formats/compact_stack.h"
 #include "relight/formats/interchange.h"
 #include "relight/formats/relight_web_format.h"
 #include "relight/formats/stack_file.h"
@@ -48,6 +55,8 @@ struct Arguments {
   std::vector<std::string> methods = {"ptm", "hsh", "rbf", "bilinear"};
   std::optional<fs::path> relight_cli;
   RelightWebOptions web;  // --quality, --relight-planes, --resolution (photomat's folders only)
+  CompactStackOptions compact;
+  bool compact_only = false;
 };
 
 Arguments Parse(int argc, char** argv) {
@@ -80,6 +89,16 @@ Arguments Parse(int argc, char** argv) {
       arguments.web.planes = std::stoi(value());
     } else if (a == "--range-quantile") {
       arguments.web.range_quantile = std::stod(value());
+    } else if (a == "--compact-coding") {
+      arguments.compact.coding = ParseCompactPlaneCoding(value());
+    } else if (a == "--compact-quality") {
+      arguments.compact.jpeg_quality = std::stoi(value());
+    } else if (a == "--compact-range-quantile") {
+      arguments.compact.range_quantile = std::stod(value());
+    } else if (a == "--compact-pca") {
+      arguments.compact.pca_planes = std::stoi(value());
+    } else if (a == "--compact-only") {
+      arguments.compact_only = true;
     } else if (a == "--resolution") {
       arguments.web.resolution = std::stoi(value());
     } else {
@@ -114,6 +133,12 @@ std::uintmax_t FolderBytes(const fs::path& folder, bool materials) {
     const bool web = name == "info.json" || (name.starts_with("plane_") && name.ends_with(".jpg"));
     if (materials ? name == "materials.png" : web) bytes += entry.file_size();
   }
+  return bytes;
+}
+
+std::uintmax_t AllBytes(const fs::path& folder) {
+  std::uintmax_t bytes = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) bytes += entry.file_size();
   return bytes;
 }
 
@@ -200,33 +225,50 @@ int Run(int argc, char** argv) {
     fmt::print("relight-cli: not available (set PHOTOMAT_RELIGHT_CLI), its columns are empty\n");
   }
   fmt::print(
-      "| basis | float stack dB | encoded refit, unquantised dB | compact (from stack) dB, loss, "
-      "KB "
-      "| compact (from photos) dB, KB | relight-cli dB, KB (+ materials.png) | compact / "
-      "relight-cli size |\n"
-      "| --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+      "| basis | float stack dB | photomat compact stack: dB, loss, KB | compact stack / "
+      "relight-cli size | encoded refit, unquantised dB | relight web (from stack) dB, loss, KB "
+      "| relight web (from photos) dB, KB | relight-cli dB, KB (+ materials.png) | relight web "
+      "(photos) / relight-cli size |\n"
+      "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  std::vector<std::string> failures;
   for (const std::string& basis : arguments.methods) {
     const Representation fit = Fit(train, Method::Parse(FloatMethod(basis)));
     const double float_db = Psnr(fit, held_out, false);
+    const LoadedStack float_stack{fit, StackProvenance(train_lights, "linear")};
+    const fs::path compact_folder = work / (basis + "-compact");
+    WriteCompactStack(compact_folder, float_stack, arguments.compact);
+    const double compact_db =
+        Psnr(ReadCompactStack(compact_folder).representation, held_out, false);
+    const auto compact_bytes = AllBytes(compact_folder);
     // The float stack refitted in sRGB-encoded values (what ptm/hsh folders hold), before any
     // quantisation: how much of the loss is the change of domain.
     std::string refit = "-";
-    if (basis == "ptm" || basis == "hsh") {
-      const Representation encoded = ConvertToEncoded(
-          {fit, StackProvenance(train_lights, "linear")}, Method::Parse(FloatMethod(basis)));
-      refit = fmt::format("{:.2f}", Psnr(encoded, held_out, true));
+    std::string web_stack = "-";
+    std::string web_photos = "-";
+    std::uintmax_t photos_bytes = 0;
+    if (!arguments.compact_only) {
+      if (basis == "ptm" || basis == "hsh") {
+        const Representation encoded =
+            ConvertToEncoded(float_stack, Method::Parse(FloatMethod(basis)));
+        refit = fmt::format("{:.2f}", Psnr(encoded, held_out, true));
+      }
+      RelightWebOptions options = arguments.web;
+      options.basis = BasisNamed(basis);
+      const fs::path from_stack = work / (basis + "-stack");
+      WriteRelightWeb(from_stack, RelightWebFromStack(float_stack, options));
+      const double stack_db = PsnrOfFolder(from_stack, held_out);
+      web_stack = fmt::format("{:.2f}, {:+.2f}, {:.0f}", stack_db, stack_db - float_db,
+                              FolderBytes(from_stack, false) / 1024.0);
+      const fs::path from_photos = work / (basis + "-photos");
+      WriteRelightWeb(from_photos, RelightWebFromSet(train, options));
+      photos_bytes = FolderBytes(from_photos, false);
+      web_photos =
+          fmt::format("{:.2f}, {:.0f}", PsnrOfFolder(from_photos, held_out), photos_bytes / 1024.0);
     }
-    RelightWebOptions options = arguments.web;
-    options.basis = BasisNamed(basis);
-    const fs::path from_stack = work / (basis + "-stack");
-    WriteRelightWeb(from_stack,
-                    RelightWebFromStack({fit, StackProvenance(train_lights, "linear")}, options));
-    const double stack_db = PsnrOfFolder(from_stack, held_out);
-    const fs::path from_photos = work / (basis + "-photos");
-    WriteRelightWeb(from_photos, RelightWebFromSet(train, options));
-    const double photos_db = PsnrOfFolder(from_photos, held_out);
     std::string theirs = "-";
     std::string ratio = "-";
+    std::string compact_ratio = "-";
+    double compact_over_theirs = 0;
     if (photos) {
       const fs::path folder = work / (basis + "-relight-cli");
       const std::string command = fmt::format(
@@ -237,13 +279,25 @@ int Run(int argc, char** argv) {
       const auto bytes = FolderBytes(folder, false);
       theirs = fmt::format("{:.2f}, {:.0f} (+ {:.0f})", db, bytes / 1024.0,
                            FolderBytes(folder, true) / 1024.0);
-      ratio = fmt::format("{:.2f}", static_cast<double>(FolderBytes(from_photos, false)) / bytes);
+      if (photos_bytes > 0) {
+        ratio = fmt::format("{:.2f}", static_cast<double>(photos_bytes) / bytes);
+      }
+      compact_over_theirs = static_cast<double>(compact_bytes) / bytes;
+      compact_ratio = fmt::format("{:.2f}", compact_over_theirs);
     }
-    fmt::print("| {} | {:.2f} | {} | {:.2f}, {:+.2f}, {:.0f} | {:.2f}, {:.0f} | {} | {} |\n", basis,
-               float_db, refit, stack_db, stack_db - float_db,
-               FolderBytes(from_stack, false) / 1024.0, photos_db,
-               FolderBytes(from_photos, false) / 1024.0, theirs, ratio);
+    const double loss = float_db - compact_db;
+    fmt::print("| {} | {:.2f} | {:.2f}, {:+.2f}, {:.0f} | {} | {} | {} | {} | {} | {} |\n", basis,
+               float_db, compact_db, -loss, compact_bytes / 1024.0, compact_ratio, refit, web_stack,
+               web_photos, theirs, ratio);
+    if (loss >= 0.3 || compact_over_theirs > 2.0) {
+      failures.push_back(fmt::format(
+          "EXPECTED FAILURE: target \"{} compact stack under 0.3 dB loss against the float stack, "
+          "within 2 x relight-cli's size\" not met (measured loss {:.2f} dB, {} x relight-cli's "
+          "size) because 8-bit planes over the mask's range at this coding lose that much",
+          basis, loss, compact_ratio));
+    }
   }
+  for (const std::string& failure : failures) fmt::print("{}\n", failure);
   fs::remove_all(work);
   return 0;
 }

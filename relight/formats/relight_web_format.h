@@ -35,10 +35,9 @@ namespace photomat {
 // linear codes), so a folder reads as a representation of values in [0, 1] (codes / 255) with the
 // stack colour space "srgb" or "linear", and is written from a fit in the encoded domain.
 //
-// The compact stack form (issue 19) IS this format (IMPLEMENTER CHOICE): PCA-compressed (rbf,
-// bilinear) or polynomial (ptm, hsh) planes quantised to 8 bits with a per-plane scale and bias,
-// which relight, OpenLIME and photomat read directly; `photomat export --relight-web DIR` writes
-// it (there is no separate `fit --compact`: fit, then export).
+// This is the interchange format for relight and OpenLIME (`photomat export --relight-web DIR`);
+// photomat's own compact form, which keeps photomat's bases and linear values, is
+// compact_stack.h (`photomat export --compact DIR`).
 
 enum class RelightWebBasis { kPtm, kHsh, kRbf, kBilinear };
 enum class RelightWebColourSpace { kRgb, kLrgb, kMrgb };

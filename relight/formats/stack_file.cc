@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/text_parsing.h"
+#include "relight/formats/compact_stack.h"
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/relight_web_format.h"
 #include "relight/formats/rti_file.h"
@@ -24,14 +25,15 @@ bool IsInterchangeFile(const fs::path& path) {
 
 bool IsReadWholeStackInput(const fs::path& path) {
   std::error_code ec;
-  return IsInterchangeFile(path) ||
+  return IsInterchangeFile(path) || IsCompactStackFolder(path) ||
          (IsRelightWebFolder(path) && !fs::exists(path / kFitManifestName, ec));
 }
 
 bool IsStackInput(const fs::path& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
-    return fs::exists(path / kFitManifestName, ec) || IsRelightWebFolder(path);
+    return fs::exists(path / kFitManifestName, ec) || IsRelightWebFolder(path) ||
+           IsCompactStackFolder(path);
   }
   return IsInterchangeFile(path) || LowerExtension(path) == ".exr";
 }
@@ -57,9 +59,20 @@ LoadedStack LoadRelightWebFolder(const fs::path& path, const std::optional<std::
   return {std::move(representation), std::move(provenance)};
 }
 
+// A compact stack folder (relight/formats/compact_stack.h): read like the map stack it was.
+LoadedStack LoadCompactStackFolder(const fs::path& path, const std::optional<std::string>& method) {
+  LoadedStack stack = ReadCompactStack(path);
+  if (method && *method != stack.representation.method()) {
+    throw Error(path, fmt::format("holds a {} representation, not {}",
+                                  stack.representation.method(), *method));
+  }
+  return stack;
+}
+
 }  // namespace
 
 LoadedStack LoadStackFile(const fs::path& path, const std::optional<std::string>& method) {
+  if (IsCompactStackFolder(path)) return LoadCompactStackFolder(path, method);
   if (IsReadWholeStackInput(path) && !IsInterchangeFile(path)) {
     return LoadRelightWebFolder(path, method);
   }
