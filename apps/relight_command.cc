@@ -39,8 +39,9 @@ void AddRelightCommand(CLI::App& app) {
   CLI::App* command = AddListedCommand(app, "relight");
   command
       ->add_option("stack", options->stack,
-                   "A map stack (.exr), a folder written by `photomat fit`, a .ptm or .rti "
-                   "file, or a relight web folder (info.json + plane_N.jpg)")
+                   "A map stack (.exr), a folder written by `photomat fit`, a compact stack "
+                   "folder (export --compact), a .ptm or .rti file, or a relight web folder "
+                   "(info.json + plane_N.jpg)")
       ->required();
   command->add_option("--method", options->method, "Which stack of a fit folder");
   auto* light = command->add_option("--light", options->light, "One light: SLANT,TILT in degrees");
@@ -83,8 +84,8 @@ void AddRelightCommand(CLI::App& app) {
     const std::filesystem::path stack_path =
         interchange ? options->stack : ResolveStack(options->stack, method);
     if (interchange || !IsStreamableStack(stack_path)) {
-      // .ptm and .rti files and relight's web folders are read whole (README, "Streamed
-      // relighting and export").
+      // .ptm and .rti files, compact stack folders and relight's web folders are read whole
+      // (README, "Streamed relighting and export").
       const LoadedStack stack = LoadStackFile(options->stack, method);
       output.values = StackValueEncoding(stack.provenance);
       const Representation& r = stack.representation;
