@@ -105,11 +105,19 @@ LoadedSet LoadSetForCommand(const std::filesystem::path& input, const LoadOption
   return loaded;
 }
 
-void AddExrCompressionOption(CLI::App& command, std::string& name) {
+void AddExrCompressionOption(CLI::App& command, std::string& name, bool offer_auto) {
   command
       .add_option("--exr-compression", name,
-                  "Compression of the map stack (lossless): none, rle, zips, zip or piz")
+                  offer_auto ? "Compression of the map stacks (lossless): auto (rle for a masked "
+                               "set, none for full frames), none, rle, zips, zip or piz"
+                             : "Compression of the map stack (lossless): none, rle, zips, zip or "
+                               "piz")
       ->capture_default_str();
+}
+
+ExrCompression FittedStackCompression(std::string_view name, bool masked) {
+  if (name != kAutoExrCompression) return ParseExrCompression(name);
+  return masked ? ExrCompression::kRle : ExrCompression::kNone;
 }
 
 void AddBandMemoryOption(CLI::App& command, std::size_t& memory_mb, std::string_view bands,

@@ -51,5 +51,15 @@ TEST(SetInputOptionsTest, TheInputIsRequired) {
   EXPECT_THROW(Parse({"--ignore-intensities"}), CLI::RequiredError);
 }
 
+TEST(FittedStackCompressionTest, AutoIsRleForAMaskedSetAndNoneForFullFrames) {
+  EXPECT_EQ(FittedStackCompression(kAutoExrCompression, true), ExrCompression::kRle);
+  EXPECT_EQ(FittedStackCompression(kAutoExrCompression, false), ExrCompression::kNone);
+  // A name is what it says, mask or not.
+  EXPECT_EQ(FittedStackCompression("zip", false), ExrCompression::kZip);
+  EXPECT_EQ(FittedStackCompression("rle", false), ExrCompression::kRle);
+  EXPECT_EQ(FittedStackCompression("none", true), ExrCompression::kNone);
+  EXPECT_THROW(FittedStackCompression("dwaa", true), Error);
+}
+
 }  // namespace
 }  // namespace photomat::app

@@ -28,7 +28,7 @@ void AddFitCommand(CLI::App& app) {
     std::filesystem::path out;
     bool robust = false;
     std::string loss = "cauchy";
-    std::string exr_compression{ToString(kDefaultExrCompression)};
+    std::string exr_compression{kAutoExrCompression};
     PbrFitOptions pbr;
     LightProfileCli profile;
     std::size_t memory_mb = 0;
@@ -52,7 +52,7 @@ void AddFitCommand(CLI::App& app) {
       ->capture_default_str();
   AddPbrOptions(*command, options->pbr);
   AddLightProfileOptions(*command, options->profile);
-  AddExrCompressionOption(*command, options->exr_compression);
+  AddExrCompressionOption(*command, options->exr_compression, true);
   AddBandMemoryOption(*command, options->memory_mb,
                       "the bands of rows fitted at a time, beyond the decoders' buffers",
                       kMinimumFitMemory);
@@ -64,12 +64,14 @@ void AddFitCommand(CLI::App& app) {
                     [](const Method& m) { return m.kind == Method::Kind::kPbr; })) {
       options->robust = true;
     }
-    const ExrCompression compression = ParseExrCompression(options->exr_compression);
     const LoadOptions load = options->set_input.ToLoadOptions();
     const std::filesystem::path& input = options->set_input.input;
     // Streamed (README, "Streamed fitting"): the images are read band by band and every stack
     // is written band by band, then all renamed into place.
     StreamedSet set = OpenStreamedSet(input, load);
+    const std::size_t pixels = static_cast<std::size_t>(set.width()) * set.height();
+    const ExrCompression compression = FittedStackCompression(
+        options->exr_compression, set.SelectedPixels(0, set.height()) < pixels);
     StreamedFitOptions fit;
     fit.memory_bytes = options->memory_mb << 20;
     fit.robust = options->robust;

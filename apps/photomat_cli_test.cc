@@ -79,9 +79,10 @@ TEST(PhotomatCliTest, FitWritesTheChosenLosslessExrCompression) {
   ASSERT_EQ(
       RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 5").exit_code,
       0);
-  // The default (rle), the smallest on real stacks (zip) and piz: the same maps, bit for bit.
+  // The default on a full frame (auto: none), rle, the smallest on real stacks (zip) and piz:
+  // the same maps, bit for bit.
   std::vector<Image> maps;
-  for (const char* compression : {"", "zip", "piz"}) {
+  for (const char* compression : {"", "rle", "zip", "piz"}) {
     SCOPED_TRACE(compression);
     const std::filesystem::path out = dir / (std::string("fit_") + compression);
     const std::string option = *compression ? std::string(" --exr-compression ") + compression : "";
@@ -91,15 +92,27 @@ TEST(PhotomatCliTest, FitWritesTheChosenLosslessExrCompression) {
     ImageReadOptions keep;
     keep.keep_alpha = true;
     const LoadedImage stored = ReadImage(out / "ptm.exr", keep);
-    EXPECT_EQ(stored.info.attributes.at("compression"), *compression ? compression : "rle");
+    EXPECT_EQ(stored.info.attributes.at("compression"), *compression ? compression : "none");
     maps.push_back(LoadRepresentation(out / "ptm.exr").representation.maps());
   }
-  for (const Image& other : {maps[1], maps[2]}) {
-    ASSERT_TRUE(other.SameShape(maps[0]));
-    EXPECT_EQ(std::memcmp(other.values().data(), maps[0].values().data(),
+  for (std::size_t i = 1; i < maps.size(); ++i) {
+    ASSERT_TRUE(maps[i].SameShape(maps[0]));
+    EXPECT_EQ(std::memcmp(maps[i].values().data(), maps[0].values().data(),
                           maps[0].values().size() * sizeof(float)),
               0);
   }
+  // With a mask, auto is rle: the zero background's runs compress.
+  Mask mask(40, 32, true);
+  for (int x = 0; x < 40; ++x) mask.Set(static_cast<std::size_t>(x), false);  // the first row
+  WriteMask(dir / "capture" / "mask.png", mask);
+  nlohmann::json manifest = ReadJsonFile(dir / "capture" / "manifest.json");
+  manifest["mask"] = "mask.png";
+  WriteJsonFile(dir / "capture" / "manifest.json", manifest);
+  const std::filesystem::path masked = dir / "fit_masked";
+  const RunResult masked_fit =
+      RunPhotomat("fit " + capture + " --method ptm --out " + masked.string());
+  ASSERT_EQ(masked_fit.exit_code, 0) << masked_fit.output;
+  EXPECT_EQ(ReadImage(masked / "ptm.exr").info.attributes.at("compression"), "rle");
   const RunResult lossy = RunPhotomat("fit " + capture + " --method ptm --out " +
                                       (dir / "lossy").string() + " --exr-compression dwaa");
   EXPECT_EQ(lossy.exit_code, 1);
