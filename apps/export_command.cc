@@ -365,8 +365,9 @@ void RunExport(const ExportCommandOptions& options) {
     if (IsStreamableStack(stack_path)) {
       StackBandReader stack(stack_path);
       if (StreamsStack(options, stack_path, stack)) {
-        WriteInterchangeFilesStreamed(options, stack);
+        // The maps first: a refusal (--height fc) comes before anything is written.
         if (!options.out.empty()) WriteMapsStreamed(options, stack);
+        WriteInterchangeFilesStreamed(options, stack);
         return;
       }
     }
