@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/memory_limits.h"
 #include "relight/export/export.h"
+#include "relight/export/streamed_interchange.h"
 #include "relight/formats/compact_stack.h"
 #include "relight/formats/interchange.h"
 #include "relight/formats/ptm_file.h"
@@ -161,18 +162,23 @@ std::size_t MemoryBudget(const ExportCommandOptions& options) {
                                : DefaultMemoryBudget(kMinimumExportMemory);
 }
 
-// IMPLEMENTER CHOICE: the maps of a stack are exported streamed (ExportMapsStreamed) when asked
-// (--stream) or when the in-memory export would not fit the memory budget, and it can be: a
-// linear method's stack (.exr), the Poisson height, and no .ptm/.rti/viewer asked (they need the
-// whole stack). Otherwise in memory, whose Poisson height is the exact solve.
-bool StreamsMaps(const ExportCommandOptions& options, const std::filesystem::path& stack_path,
-                 const StackBandReader& stack) {
-  if (options.out.empty() || !options.ptm.empty() || !options.rti.empty()) return false;
-  if (!IsStreamableStack(stack_path)) return false;
-  // Asked for: a pbr stack or --height fc is then an error saying why.
+// IMPLEMENTER CHOICE: a stack is exported streamed (ExportMapsStreamed, ExportPtmStreamed,
+// ExportRtiStreamed) when asked (--stream) or when the in-memory export would not fit the memory
+// budget, and it can be: a map stack (.exr), and no relight web folder or compact stack form asked
+// (both are made from the whole stack: its ranges, and the compact form's PCA). The maps then need
+// the Poisson height (--height fc is in memory, or refused under --stream). Otherwise in memory,
+// whose Poisson height is the exact solve; the .ptm and .rti files are the same bytes either way.
+bool StreamsStack(const ExportCommandOptions& options, const std::filesystem::path& stack_path,
+                  const StackBandReader& stack) {
+  if (!options.relight_web.empty() || !options.compact.empty() || !IsStreamableStack(stack_path)) {
+    return false;
+  }
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return false;
+  // Asked for: --height fc is then an error saying why.
   if (options.stream) return true;
-  if (stack.header().representation.shading()) return false;
-  if (ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) return false;
+  if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
+    return false;
+  }
   const Representation& r = stack.header().representation;
   return InMemoryExportBytes(stack.width(), stack.height(), r.maps().channels(),
                              r.output_channels()) > MemoryBudget(options);
@@ -202,6 +208,38 @@ void WriteMapsStreamed(const ExportCommandOptions& options, StackBandReader& sta
       "height by tiled Poisson)\n",
       stack.header().representation.method(), stack.header().provenance.source,
       options.out.string(), description["normals"]["source"].get<std::string>(), report.band_rows);
+}
+
+// The .ptm and .rti files of a stack read in bands (ExportPtmStreamed, ExportRtiStreamed).
+void WriteInterchangeFilesStreamed(const ExportCommandOptions& options, StackBandReader& stack) {
+  const Representation& r = stack.header().representation;
+  StreamedInterchangeOptions streamed;
+  // Without --memory the bands take DefaultBandBudget's few tens of MB, not the whole budget.
+  streamed.memory_bytes = options.memory_mb << 20;
+  TerminalProgressBar bar;
+  streamed.progress = &bar;
+  const std::size_t pixels = static_cast<std::size_t>(stack.width()) * stack.height();
+  const auto folder = [](const std::filesystem::path& file) {
+    return file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  };
+  StreamedInterchangeReport report;
+  if (!options.ptm.empty()) {
+    const Method method = PtmMethod(options, r.method(), r.output_channels());
+    // At most 18 bytes per pixel (RGB) and the header.
+    CheckDiskSpace(folder(options.ptm), pixels * 18 + kImageFileOverhead, "the .ptm file");
+    const PtmFile ptm = ExportPtmStreamed(stack, options.ptm, method, streamed, &report);
+    fmt::print("wrote {} ({}, {}x{}; streamed in bands of {} rows)\n", options.ptm.string(),
+               ToString(ptm.format), ptm.width, ptm.height, report.band_rows);
+  }
+  if (!options.rti.empty()) {
+    const Method method = HshMethod(options, r.method());
+    CheckDiskSpace(folder(options.rti),
+                   pixels * 16 * static_cast<std::size_t>(r.output_channels()) + kImageFileOverhead,
+                   "the .rti file");
+    const RtiFile rti = ExportRtiStreamed(stack, options.rti, method, streamed, &report);
+    fmt::print("wrote {} (HSH, {} terms, {}x{}; streamed in bands of {} rows)\n",
+               options.rti.string(), rti.terms, rti.width, rti.height, report.band_rows);
+  }
 }
 
 void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
@@ -348,8 +386,10 @@ void RunExport(const ExportCommandOptions& options) {
     const std::filesystem::path stack_path = ResolveStack(options.input, method);
     if (IsStreamableStack(stack_path)) {
       StackBandReader stack(stack_path);
-      if (options.compact.empty() && StreamsMaps(options, stack_path, stack)) {
-        WriteMapsStreamed(options, stack);
+      if (StreamsStack(options, stack_path, stack)) {
+        // The maps first: a refusal (--height fc) comes before anything is written.
+        if (!options.out.empty()) WriteMapsStreamed(options, stack);
+        WriteInterchangeFilesStreamed(options, stack);
         return;
       }
     }
@@ -357,8 +397,9 @@ void RunExport(const ExportCommandOptions& options) {
   if (IsStackInput(options.input)) {
     const LoadedStack stack = LoadStackFile(options.input, method);
     const Representation& r = stack.representation;
+    // By rows, as the streamed export, so both write the same bytes (streamed_interchange.h).
     WriteInterchangeFiles(options, r.method(), r.output_channels(),
-                          [&](const Method& target) { return ConvertToEncoded(stack, target); });
+                          [&](const Method& target) { return RefitEncodedByRows(stack, target); });
     if (!options.relight_web.empty()) {
       PrintRelightWeb(options,
                       RelightWebFromStack(stack, RelightWebOptionsFor(options, r.method())));
@@ -483,8 +524,8 @@ void AddExportCommand(CLI::App& app) {
                   "streamed bands take {} MB)",
                   DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
   command->add_flag("--stream", options->stream,
-                    "Export a stack's maps streamed, in bands, whatever its size (height by "
-                    "tiled Poisson; not for pbr stacks, --height fc, --ptm or --rti)");
+                    "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size "
+                    "(height by tiled Poisson; not for --height fc or --relight-web)");
   command->callback([options] { RunExport(*options); });
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <optional>
 
 #include "core/disk_space.h"
@@ -80,44 +81,72 @@ struct PbrFiles {
   nlohmann::json description;
 };
 
-// The microfacet maps beyond normal and base colour, for glTF, Blender and Substance.
-PbrFiles WritePbrMaps(const Representation& r, const Mask& mask, const fs::path& folder,
-                      const ImageWriteOptions& png16) {
-  const Image& maps = r.maps();
+// The largest F0 of the masked pixels of microfacet `maps` (at least the glTF dielectric's): what
+// the specular texture is scaled by. A band's, combined by max over the bands, is the whole map's.
+double LargestF0(const Image& maps, const Mask& mask) {
   double largest_f0 = kGltfDielectricF0;
   for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
     if (mask[p]) largest_f0 = std::max(largest_f0, double{maps.pixel(p)[MicrofacetShading::kF0]});
   }
-  Image roughness(r.width(), r.height(), std::vector<std::string>{"roughness"});
-  Image f0(r.width(), r.height(), std::vector<std::string>{"f0"});
-  Image level(r.width(), r.height(), std::vector<std::string>{"Y"});
-  Image metallic_roughness(r.width(), r.height(), std::vector<std::string>{"R", "G", "B"});
-  Image specular(r.width(), r.height(), std::vector<std::string>{"R", "G", "B"});
-  Image base(r.width(), r.height(), std::vector<std::string>{"R", "G", "B"});
+  return largest_f0;
+}
+
+// The microfacet maps beyond normal and base colour, for glTF, Blender and Substance, over some
+// rows of the map (each pixel's from its own maps and the whole map's largest F0).
+struct PbrImages {
+  Image roughness, f0, level, metallic_roughness, specular, base;
+};
+
+PbrImages PbrBand(const Image& maps, const Mask& mask, double largest_f0) {
+  const int width = maps.width(), rows = maps.height();
+  const std::vector<std::string> rgb = {"R", "G", "B"};
+  PbrImages out{Image(width, rows, std::vector<std::string>{"roughness"}),
+                Image(width, rows, std::vector<std::string>{"f0"}),
+                Image(width, rows, std::vector<std::string>{"Y"}),
+                Image(width, rows, rgb),
+                Image(width, rows, rgb),
+                Image(width, rows, rgb)};
   for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
     if (!mask[p]) continue;
     const auto m = maps.pixel(p);
-    roughness.pixel(p)[0] = m[MicrofacetShading::kRoughness];
-    f0.pixel(p)[0] = m[MicrofacetShading::kF0];
-    level.pixel(p)[0] = static_cast<float>(m[MicrofacetShading::kF0] / kSpecularLevelF0);
+    out.roughness.pixel(p)[0] = m[MicrofacetShading::kRoughness];
+    out.f0.pixel(p)[0] = m[MicrofacetShading::kF0];
+    out.level.pixel(p)[0] = static_cast<float>(m[MicrofacetShading::kF0] / kSpecularLevelF0);
     // glTF: R unused (occlusion lives in its own texture), G roughness, B metallic (a dielectric).
-    metallic_roughness.pixel(p)[0] = 1.0f;
-    metallic_roughness.pixel(p)[1] = m[MicrofacetShading::kRoughness];
+    out.metallic_roughness.pixel(p)[0] = 1.0f;
+    out.metallic_roughness.pixel(p)[1] = m[MicrofacetShading::kRoughness];
     for (int c = 0; c < 3; ++c) {
-      specular.pixel(p)[c] = static_cast<float>(m[MicrofacetShading::kF0] / largest_f0);
+      out.specular.pixel(p)[c] = static_cast<float>(m[MicrofacetShading::kF0] / largest_f0);
     }
-    for (int c = 0; c < 3; ++c) base.pixel(p)[c] = m[MicrofacetShading::kBase + c];
+    for (int c = 0; c < 3; ++c) out.base.pixel(p)[c] = m[MicrofacetShading::kBase + c];
   }
-  WriteImage(folder / "roughness.exr", roughness);
-  WriteImage(folder / "roughness.png", roughness, png16);
-  WriteImage(folder / "f0.exr", f0);
-  WriteImage(folder / "specular_level.png", level, png16);
-  WriteImage(folder / "metallic_roughness.png", metallic_roughness, png16);
+  return out;
+}
+
+// The files of PbrImages, in its order, with their write options.
+struct PbrFile {
+  std::string name;
+  Image PbrImages::*image;
+  ImageWriteOptions options;
+  std::vector<std::string> channels;  // as PbrBand names them
+};
+
+std::vector<PbrFile> PbrFileList(const ImageWriteOptions& png16) {
   ImageWriteOptions srgb16 = png16;
   srgb16.encoding = ColourSpace::kSrgb;
-  WriteImage(folder / "specular.png", specular, srgb16);
-  WriteImage(folder / "base_color.exr", base);
-  WriteImage(folder / "base_color.png", base, srgb16);
+  const std::vector<std::string> rgb = {"R", "G", "B"};
+  const ImageWriteOptions exr;
+  return {{"roughness.exr", &PbrImages::roughness, exr, {"roughness"}},
+          {"roughness.png", &PbrImages::roughness, png16, {"roughness"}},
+          {"f0.exr", &PbrImages::f0, exr, {"f0"}},
+          {"specular_level.png", &PbrImages::level, png16, {"Y"}},
+          {"metallic_roughness.png", &PbrImages::metallic_roughness, png16, rgb},
+          {"specular.png", &PbrImages::specular, srgb16, rgb},
+          {"base_color.exr", &PbrImages::base, exr, rgb},
+          {"base_color.png", &PbrImages::base, srgb16, rgb}};
+}
+
+PbrFiles PbrDescription(double largest_f0) {
   PbrFiles files;
   files.metallic_roughness = "metallic_roughness.png";
   files.specular = "specular.png";
@@ -148,6 +177,17 @@ PbrFiles WritePbrMaps(const Representation& r, const Mask& mask, const fs::path&
          "grey F0 / (0.04 specularColorFactor)"},
         {"specular_color_factor", files.specular_color_factor}}}};
   return files;
+}
+
+// The microfacet maps of the whole map (in memory).
+PbrFiles WritePbrMaps(const Representation& r, const Mask& mask, const fs::path& folder,
+                      const ImageWriteOptions& png16) {
+  const double largest_f0 = LargestF0(r.maps(), mask);
+  const PbrImages images = PbrBand(r.maps(), mask, largest_f0);
+  for (const PbrFile& file : PbrFileList(png16)) {
+    WriteImage(folder / file.name, images.*file.image, file.options);
+  }
+  return PbrDescription(largest_f0);
 }
 
 // The normal map in glTF's convention (+Y up) when another one is asked.
@@ -336,8 +376,10 @@ std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack) {
   // and stack.exr's band (maps and extra layers).
   const std::size_t lights =
       std::max<std::size_t>(stack.header().provenance.capture_lights.size(), 193);
+  // A pbr stack adds its 12 channels of pbr maps (in pass 3), and their writers' copies.
+  const std::size_t pbr = IsMicrofacet(r.shading()) ? 8 * 12 : 0;
   return 4 * (stored + maps) + 4 * lights * channels + 8 * (6 + channels) +
-         4 * (maps + 4 + channels);
+         4 * (maps + 4 + channels) + pbr;
 }
 
 std::size_t InMemoryExportBytes(int width, int height, int maps, int channels) {
@@ -372,11 +414,6 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
                 "a streamed export integrates the height by tiled Poisson only "
                 "(--height fc needs the whole map in memory)");
   }
-  if (r.shading()) {
-    throw Error(stack.path(),
-                "a pbr stack is exported in memory only (its specular texture is "
-                "scaled by the largest F0 of the whole map)");
-  }
   const int width = stack.width(), height = stack.height();
   const int channels = r.output_channels();
   const int band_rows = StreamedBandRows(stack, options);
@@ -409,6 +446,10 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
   ImageBandWriter albedo_png(folder / "albedo.png", width, height, OutputChannelNames(channels),
                              srgb8);
   std::string normals_source;
+  // A pbr stack's specular texture is scaled by the largest F0 of the whole map: gathered here,
+  // the pbr maps written in pass 3.
+  const bool pbr = IsMicrofacet(r.shading());
+  double largest_f0 = kGltfDielectricF0;
   {
     ImageBandWriter surface(surface_path, width, height, surface_names, scratch_options);
     std::size_t covered = 0;
@@ -419,6 +460,7 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
       const MaterialMaps maps = ExtractSurfaceMaps(band.representation, map_options);
       normals_source = maps.normals_source;
       covered += maps.mask.CountSet();
+      if (pbr) largest_f0 = std::max(largest_f0, LargestF0(band.representation.maps(), maps.mask));
       normal_png.WriteNext(EncodeNormalMap(maps.normals, options.maps.normal_convention));
       if (gltf_normal_png) {
         gltf_normal_png->WriteNext(EncodeNormalMap(maps.normals, NormalConvention::kOpenGl));
@@ -501,6 +543,12 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
   std::vector<std::string> stack_names = r.maps().channel_names();
   stack_names.insert(stack_names.end(), extra_names.begin(), extra_names.end());
   StackBandWriter stack_exr(folder / "stack.exr", stack_description, stack_names, width, height);
+  const std::vector<PbrFile> pbr_files = pbr ? PbrFileList(png16) : std::vector<PbrFile>{};
+  std::vector<std::unique_ptr<ImageBandWriter>> pbr_writers;
+  for (const PbrFile& file : pbr_files) {
+    pbr_writers.push_back(std::make_unique<ImageBandWriter>(folder / file.name, width, height,
+                                                            file.channels, file.options));
+  }
   {
     stack.Rewind();
     ImageBandReader surface(surface_path, {});
@@ -539,6 +587,12 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
                       derived_values.end() - static_cast<std::ptrdiff_t>(mask.pixel_count()), out);
       std::copy(height_band.values().begin(), height_band.values().end(), out);
       stack_exr.Write(layers);
+      if (pbr) {
+        const PbrImages images = PbrBand(band.representation.maps(), mask, largest_f0);
+        for (std::size_t f = 0; f < pbr_files.size(); ++f) {
+          pbr_writers[f]->WriteNext(images.*pbr_files[f].image);
+        }
+      }
       progress.Advance();
     }
     progress.Finish();
@@ -556,7 +610,15 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
   height_exr.Commit();
   height_png.Commit();
   stack_exr.Commit();
-  if (options.maps.gltf) WriteTile(folder, width, height, range, {}, options.maps, description);
+  PbrFiles pbr_description;
+  if (pbr) {
+    for (const auto& writer : pbr_writers) writer->Commit();
+    pbr_description = PbrDescription(largest_f0);
+    description["pbr"] = pbr_description.description;
+  }
+  if (options.maps.gltf) {
+    WriteTile(folder, width, height, range, pbr_description, options.maps, description);
+  }
   WriteJsonFile(folder / "export.json", description);
   if (report) {
     report->band_rows = band_rows;

@@ -116,25 +116,67 @@ TEST(StreamedExportTest, StreamedFilesEqualTheInMemoryExport) {
   }
 }
 
-TEST(StreamedExportTest, PbrAndFrankotChellappaAreRefusedWithTheReason) {
+// A pbr stack streams: its specular texture's scale (the largest F0 over the mask) is gathered in
+// the first pass and the pbr maps written in the last, equal to the in-memory export's.
+TEST(StreamedExportTest, PbrMapsEqualTheInMemoryExport) {
   testing::TempDir dir;
-  Image maps(3, 4, MicrofacetShading().MapNames());
-  for (std::size_t p = 0; p < maps.pixel_count(); ++p) {
-    const float values[] = {0.5f, 0.4f, 0.3f, 0.3f, 0.05f, 0.1f, 0.0f, 0.995f};
-    for (int c = 0; c < 8; ++c) maps.pixel(p)[c] = values[c];
+  // 23 x 19 varied maps (base colour, roughness, F0, a tilted normal), the largest F0 in the last
+  // band and a few pixels uncovered (all maps 0).
+  Image maps(23, 19, MicrofacetShading().MapNames());
+  for (int y = 0; y < maps.height(); ++y) {
+    for (int x = 0; x < maps.width(); ++x) {
+      if ((x + 3 * y) % 17 == 0) continue;
+      const float nx = 0.3f * std::sin(0.4f * x), ny = 0.2f * std::cos(0.3f * y);
+      const float nz = std::sqrt(1.0f - nx * nx - ny * ny);
+      const float values[] = {0.2f + 0.02f * x,
+                              0.5f,
+                              0.1f + 0.03f * y,
+                              0.1f + 0.03f * y,
+                              0.02f + 0.004f * y + 0.001f * x,
+                              nx,
+                              ny,
+                              nz};
+      for (int c = 0; c < 8; ++c) maps.at(x, y, c) = values[c];
+    }
   }
-  SaveRepresentation(dir / "pbr.exr",
+  const fs::path stack_path = dir / "pbr.exr";
+  SaveRepresentation(stack_path,
                      Representation("pbr", maps, std::make_shared<MicrofacetShading>()));
-  StackBandReader pbr(dir / "pbr.exr");
-  EXPECT_THAT([&] { ExportMapsStreamed(pbr, dir.path()); },
-              ThrowsMessage<Error>(HasSubstr("a pbr stack is exported in memory only")));
+  const fs::path whole = dir / "whole";
+  const fs::path streamed = dir / "streamed";
+  fs::create_directories(whole);
+  fs::create_directories(streamed);
+  const nlohmann::json whole_description = ExportMaps(LoadRepresentation(stack_path), whole);
+  StreamedExportOptions options;
+  options.band_rows = 4;
+  options.poisson.tile = 8;
+  options.poisson.overlap = 2;
+  options.poisson.coarse_factor = 2;
+  StackBandReader reader(stack_path);
+  const nlohmann::json description = ExportMapsStreamed(reader, streamed, options);
+  for (const char* file : {"normal.png", "albedo.png", "roughness.exr", "roughness.png", "f0.exr",
+                           "specular_level.png", "metallic_roughness.png", "specular.png",
+                           "base_color.exr", "base_color.png"}) {
+    EXPECT_TRUE(testing::SameBits(ReadImage(streamed / file).image, ReadImage(whole / file).image))
+        << file;
+  }
+  // The largest F0 (0.02 + 0.004 x 18 + 0.001 x 22 = 0.114) scales the specular texture.
+  EXPECT_EQ(description["pbr"], whole_description["pbr"]);
+  EXPECT_NEAR(description["pbr"]["specular"]["specular_color_factor"].get<double>(), 0.114 / 0.04,
+              1e-5);
+  EXPECT_EQ(ReadJsonFile(streamed / "export.json")["pbr"], whole_description["pbr"]);
+}
+
+// --height fc is a whole-image FFT: a streamed export refuses it, saying why.
+TEST(StreamedExportTest, FrankotChellappaIsRefusedWithTheReason) {
+  testing::TempDir dir;
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 16);
   SaveRepresentation(dir / "g.exr", Fit(synthetic.set, Method::Parse("gradient")));
   StackBandReader gradient(dir / "g.exr");
   StreamedExportOptions options;
   options.maps.height = HeightIntegrator::kFrankotChellappa;
   EXPECT_THAT([&] { ExportMapsStreamed(gradient, dir.path(), options); },
-              ThrowsMessage<Error>(HasSubstr("tiled Poisson only")));
+              ThrowsMessage<Error>(HasSubstr("--height fc needs the whole map in memory")));
 }
 
 }  // namespace

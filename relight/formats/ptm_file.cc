@@ -217,6 +217,49 @@ void AppendJpegPlanes(const PtmFile& ptm, std::string& out) {
   for (const EncodedPtmPlane& plane : encoded) out += plane.jpeg + plane.side_information;
 }
 
+// The raw payload (README "Interchange formats"): blocks one after another, each holding every
+// pixel (rows bottom to top) with `count` bytes per pixel, the planes first_plane + k stride.
+// RGB: the R, G and B blocks of 6 coefficients; LUM: one block; LRGB (1.2): 6 luminance
+// coefficients, then the 3 colour bytes.
+struct PayloadBlock {
+  int first_plane;
+  int count;
+  int stride;
+};
+
+std::vector<PayloadBlock> PayloadBlocks(PtmFormat format) {
+  switch (format) {
+    case PtmFormat::kRgb:
+      return {{0, 6, 3}, {1, 6, 3}, {2, 6, 3}};
+    case PtmFormat::kLum:
+      return {{0, 6, 1}};
+    default:
+      return {{0, 6, 1}, {6, 3, 1}};
+  }
+}
+
+// One image row of `block`: the pixels first .. first + width - 1 of `planes`, `count` bytes each.
+void EncodeBlockRow(const std::vector<std::vector<std::uint8_t>>& planes, std::size_t first,
+                    int width, const PayloadBlock& block, std::uint8_t* out) {
+  for (int x = 0; x < width; ++x) {
+    for (int k = 0; k < block.count; ++k) {
+      *out++ = planes[block.first_plane + k * block.stride][first + x];
+    }
+  }
+}
+
+// The header of a PTM_1.2 file, in the layout of real files: one item per line, a space before
+// each newline after numbers.
+std::string PtmHeaderText(const PtmFile& ptm) {
+  std::string out =
+      fmt::format("PTM_1.2\n{}\n{}\n{}\n", ToString(ptm.format), ptm.width, ptm.height);
+  for (double s : ptm.scale) out += fmt::format("{:.6f} ", s);
+  out += "\n";
+  for (int b : ptm.bias) out += fmt::format("{} ", b);
+  out += "\n";
+  return out;
+}
+
 }  // namespace
 
 std::string_view ToString(PtmFormat format) {
@@ -303,37 +346,21 @@ std::string SerializePtm(const PtmFile& ptm) {
   for (const auto& plane : ptm.planes) {
     if (plane.size() != pixels) throw Error("PTM planes differ from the image size");
   }
-  // The layout of real files: one item per line, a space before each newline after numbers.
-  std::string out =
-      fmt::format("PTM_1.2\n{}\n{}\n{}\n", ToString(ptm.format), ptm.width, ptm.height);
-  for (double s : ptm.scale) out += fmt::format("{:.6f} ", s);
-  out += "\n";
-  for (int b : ptm.bias) out += fmt::format("{} ", b);
-  out += "\n";
+  std::string out = PtmHeaderText(ptm);
   if (IsJpeg(ptm.format)) {
     AppendJpegPlanes(ptm, out);
     return out;
   }
+  const std::size_t width = static_cast<std::size_t>(ptm.width);
   const std::size_t header = out.size();
   out.resize(header + pixels * static_cast<std::size_t>(ptm.PlaneCount()));
   auto* payload = reinterpret_cast<std::uint8_t*>(out.data()) + header;
-  const auto put = [&](int first_plane, int count, int stride) {
-    for (std::size_t p = 0; p < pixels; ++p) {
-      const std::size_t source = ImageIndexOfFileByte(ptm, p);
-      for (int k = 0; k < count; ++k) *payload++ = ptm.planes[first_plane + k * stride][source];
+  for (const PayloadBlock& block : PayloadBlocks(ptm.format)) {
+    for (int file_row = 0; file_row < ptm.height; ++file_row) {
+      const std::size_t image_row = static_cast<std::size_t>(ptm.height - 1 - file_row);
+      EncodeBlockRow(ptm.planes, image_row * width, ptm.width, block, payload);
+      payload += width * static_cast<std::size_t>(block.count);
     }
-  };
-  switch (ptm.format) {
-    case PtmFormat::kRgb:
-      for (int c = 0; c < 3; ++c) put(c, 6, 3);
-      break;
-    case PtmFormat::kLum:
-      put(0, 6, 1);
-      break;
-    default:
-      put(0, 6, 1);
-      put(6, 3, 1);
-      break;
   }
   return out;
 }
@@ -384,9 +411,38 @@ std::uint8_t Quantise(double value, double scale, int bias) {
   return static_cast<std::uint8_t>(std::clamp(std::lround(value / scale + bias), 0L, 255L));
 }
 
+bool IsLrgb(PtmFormat format) {
+  return format == PtmFormat::kLrgb || format == PtmFormat::kJpegLrgb;
+}
+
+// The coefficients of every pixel of `representation` in file units (codes 0..255), PlaneCount
+// per pixel; LRGB chroma normalised per pixel so that its largest channel is 255. Each pixel's
+// from its own maps only, so a band gives the rows of the whole map's values.
+std::vector<double> FileUnitValues(const Representation& representation, PtmFormat format) {
+  const std::size_t pixels = representation.maps().pixel_count();
+  const int planes = PlaneCountOf(format);
+  std::vector<double> values(pixels * planes);
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const auto maps = representation.maps().pixel(p);
+    double* v = &values[p * planes];
+    if (!std::all_of(maps.begin(), maps.end(), [](float m) { return std::isfinite(m); })) {
+      throw Error(fmt::format("{}: a coefficient is not finite", representation.method()));
+    }
+    if (!IsLrgb(format)) {
+      for (int k = 0; k < planes; ++k) v[k] = 255.0 * maps[k];
+      continue;
+    }
+    const double peak = std::max({maps[6], maps[7], maps[8]});
+    const double k = peak > 0.0 ? peak : 1.0;
+    for (int j = 0; j < 6; ++j) v[j] = 255.0 * maps[j] * k;
+    for (int c = 0; c < 3; ++c) v[6 + c] = 255.0 * maps[6 + c] / k;
+  }
+  return values;
+}
+
 }  // namespace
 
-PtmFile PtmFromRepresentation(const Representation& representation) {
+PtmFormat PtmFormatOf(const Representation& representation) {
   const std::string& method = representation.method();
   const MapLayout& layout = representation.layout();
   const bool lrgb = method == "ptm-lrgb";
@@ -403,55 +459,134 @@ PtmFile PtmFromRepresentation(const Representation& representation) {
        (layout.has_gain || (layout.output_channels != 3 && layout.output_channels != 1)))) {
     throw Error(fmt::format("a {} representation cannot be stored as a PTM file as it is", method));
   }
-  PtmFile ptm;
-  ptm.format = lrgb                          ? PtmFormat::kLrgb
-               : layout.output_channels == 1 ? PtmFormat::kLum
-                                             : PtmFormat::kRgb;
-  ptm.width = representation.width();
-  ptm.height = representation.height();
-  const std::size_t pixels = representation.maps().pixel_count();
-  const int planes = ptm.PlaneCount();
-  // Coefficients in file units (codes 0..255), LRGB chroma normalised per pixel.
-  std::vector<double> values(pixels * planes);
-  for (std::size_t p = 0; p < pixels; ++p) {
-    const auto maps = representation.maps().pixel(p);
-    double* v = &values[p * planes];
-    if (!std::all_of(maps.begin(), maps.end(), [](float m) { return std::isfinite(m); })) {
-      throw Error(fmt::format("{}: a coefficient is not finite", method));
-    }
-    if (!lrgb) {
-      for (int k = 0; k < planes; ++k) v[k] = 255.0 * maps[k];
-      continue;
-    }
-    const double peak = std::max({maps[6], maps[7], maps[8]});
-    const double k = peak > 0.0 ? peak : 1.0;
-    for (int j = 0; j < 6; ++j) v[j] = 255.0 * maps[j] * k;
-    for (int c = 0; c < 3; ++c) v[6 + c] = 255.0 * maps[6 + c] / k;
+  return lrgb ? PtmFormat::kLrgb : layout.output_channels == 1 ? PtmFormat::kLum : PtmFormat::kRgb;
+}
+
+PtmCoefficientRanges::PtmCoefficientRanges(PtmFormat format) : format_(format) {
+  low_.fill(INFINITY);
+  high_.fill(-INFINITY);
+}
+
+void PtmCoefficientRanges::Add(const Representation& band) {
+  if (PtmFormatOf(band) != format_) {
+    throw Error(
+        fmt::format("a {} band added to the ranges of a {}", band.method(), ToString(format_)));
   }
-  for (int j = 0; j < 6; ++j) {
-    double low = INFINITY, high = -INFINITY;
+  method_ = band.method();
+  const int planes = PlaneCountOf(format_);
+  const std::vector<double> values = FileUnitValues(band, format_);
+  const std::size_t pixels = values.size() / static_cast<std::size_t>(planes);
+  for (int plane = 0; plane < planes; ++plane) {
+    const int j = CoefficientOf(format_, plane);
+    if (j < 0) continue;
     for (std::size_t p = 0; p < pixels; ++p) {
-      for (int plane = 0; plane < planes; ++plane) {
-        if (CoefficientOf(ptm.format, plane) != j) continue;
-        low = std::min(low, values[p * planes + plane]);
-        high = std::max(high, values[p * planes + plane]);
-      }
+      low_[j] = std::min(low_[j], values[p * planes + plane]);
+      high_[j] = std::max(high_[j], values[p * planes + plane]);
     }
-    if (!std::isfinite(low) || !std::isfinite(high)) {
-      throw Error(fmt::format("{}: coefficient a{} is not finite", method, j));
-    }
-    ChooseQuantisation(low, high, ptm.scale[j], ptm.bias[j]);
   }
-  ptm.planes.assign(planes, std::vector<std::uint8_t>(pixels));
+}
+
+void PtmCoefficientRanges::ChooseScalesAndBiases(PtmFile& ptm) const {
+  for (int j = 0; j < 6; ++j) {
+    if (!std::isfinite(low_[j]) || !std::isfinite(high_[j])) {
+      throw Error(fmt::format("{}: coefficient a{} is not finite", method_, j));
+    }
+    ChooseQuantisation(low_[j], high_[j], ptm.scale[j], ptm.bias[j]);
+  }
+}
+
+std::vector<std::vector<std::uint8_t>> QuantisePtmPlanes(const Representation& band,
+                                                         const PtmFile& ptm) {
+  const std::vector<double> values = FileUnitValues(band, ptm.format);
+  const int planes = ptm.PlaneCount();
+  const std::size_t pixels = values.size() / static_cast<std::size_t>(planes);
+  std::vector<std::vector<std::uint8_t>> bytes(planes, std::vector<std::uint8_t>(pixels));
   for (std::size_t p = 0; p < pixels; ++p) {
     for (int plane = 0; plane < planes; ++plane) {
       const double v = values[p * planes + plane];
       const int j = CoefficientOf(ptm.format, plane);
-      ptm.planes[plane][p] = j < 0 ? static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L))
-                                   : Quantise(v, ptm.scale[j], ptm.bias[j]);
+      bytes[plane][p] = j < 0 ? static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L))
+                              : Quantise(v, ptm.scale[j], ptm.bias[j]);
     }
   }
+  return bytes;
+}
+
+PtmFile PtmFromRepresentation(const Representation& representation) {
+  PtmFile ptm;
+  ptm.format = PtmFormatOf(representation);
+  ptm.width = representation.width();
+  ptm.height = representation.height();
+  PtmCoefficientRanges ranges(ptm.format);
+  ranges.Add(representation);
+  ranges.ChooseScalesAndBiases(ptm);
+  ptm.planes = QuantisePtmPlanes(representation, ptm);
   return ptm;
+}
+
+namespace {
+
+std::size_t PtmPayloadBytes(const PtmFile& header) {
+  return static_cast<std::size_t>(header.width) * static_cast<std::size_t>(header.height) *
+         static_cast<std::size_t>(header.PlaneCount());
+}
+
+}  // namespace
+
+PtmBandWriter::PtmBandWriter(const fs::path& path, const PtmFile& header)
+    : PtmBandWriter(path, header, PtmHeaderText(header)) {}
+
+PtmBandWriter::PtmBandWriter(const fs::path& path, const PtmFile& header, const std::string& text)
+    : header_{header.version, header.format, header.width, header.height,
+              header.scale,   header.bias,   {},           {}},
+      header_bytes_(text.size()),
+      file_(path, text, text.size() + PtmPayloadBytes(header)) {
+  if (IsJpeg(header.format) || header.width < 1 || header.height < 1) {
+    throw Error(path, "a .ptm is written in bands in the raw RGB, LUM or LRGB formats only");
+  }
+}
+
+void PtmBandWriter::WriteNext(const std::vector<std::vector<std::uint8_t>>& planes) {
+  const std::size_t width = static_cast<std::size_t>(header_.width);
+  if (static_cast<int>(planes.size()) != header_.PlaneCount() || planes.front().empty() ||
+      planes.front().size() % width != 0) {
+    throw Error(file_.path(), "a band needs every coefficient plane, whole rows of the width");
+  }
+  const int rows = static_cast<int>(planes.front().size() / width);
+  for (const auto& plane : planes) {
+    if (plane.size() != planes.front().size()) {
+      throw Error(file_.path(), "the planes of a band differ in size");
+    }
+  }
+  if (next_row_ + rows > header_.height) {
+    throw Error(file_.path(), fmt::format("rows {}..{} are past the image's {} rows", next_row_,
+                                          next_row_ + rows - 1, header_.height));
+  }
+  // The band's rows are one run of each block, in reverse: the file holds rows bottom to top,
+  // so the band's last row comes first, at file row height - next_row - rows.
+  const std::size_t pixels = width * static_cast<std::size_t>(header_.height);
+  const std::size_t first_file_row = static_cast<std::size_t>(header_.height - next_row_ - rows);
+  std::size_t block_start = header_bytes_;
+  std::vector<std::uint8_t> run;
+  for (const PayloadBlock& block : PayloadBlocks(header_.format)) {
+    const std::size_t row_bytes = width * static_cast<std::size_t>(block.count);
+    run.resize(row_bytes * static_cast<std::size_t>(rows));
+    for (int y = 0; y < rows; ++y) {
+      EncodeBlockRow(planes, static_cast<std::size_t>(y) * width, header_.width, block,
+                     run.data() + static_cast<std::size_t>(rows - 1 - y) * row_bytes);
+    }
+    file_.Write(block_start + first_file_row * row_bytes, run);
+    block_start += pixels * static_cast<std::size_t>(block.count);
+  }
+  next_row_ += rows;
+}
+
+void PtmBandWriter::Commit() {
+  if (next_row_ != header_.height) {
+    throw Error(file_.path(),
+                fmt::format("only {} of its {} rows were written", next_row_, header_.height));
+  }
+  file_.Commit();
 }
 
 }  // namespace photomat

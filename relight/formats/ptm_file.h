@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "relight/formats/positioned_file.h"
 #include "relight/formats/ptm_jpeg.h"
 #include "represent/model/representation.h"
 
@@ -80,7 +81,59 @@ enum class PtmLayout { kRgb, kLrgb };
 // and channels and the bias the integer ceil(-min / scale), so every value is representable and
 // quantised within scale / 2. LRGB: each pixel's chroma is normalised so that its largest channel
 // is 255 (the luminance carries the rest), and the luminance is quantised; the chroma bytes are
-// within 1/2 of exact. Throws Error for other methods.
+// within 1/2 of exact. Throws Error for other methods. The same as PtmCoefficientRanges over the
+// whole map, then QuantisePtmPlanes.
 PtmFile PtmFromRepresentation(const Representation& representation);
+
+// The parts of PtmFromRepresentation, for a map given in bands of rows (the streamed export, README
+// "Streamed relighting and export"): the format a representation is stored in (throws Error as
+// PtmFromRepresentation for other methods), the per-coefficient ranges accumulated band by band
+// (the scales and biases are global), and a band's coefficient bytes under chosen scales and
+// biases. Every pixel's bytes depend on its own maps and the ranges only, so bands give the bytes
+// of the whole map.
+PtmFormat PtmFormatOf(const Representation& representation);
+
+class PtmCoefficientRanges {
+ public:
+  explicit PtmCoefficientRanges(PtmFormat format);
+  // The coefficients of `band` (any rows of the map); throws Error for a non-finite one or a band
+  // of another format.
+  void Add(const Representation& band);
+  // Sets ptm.scale and ptm.bias from the ranges; throws Error when nothing finite was added.
+  void ChooseScalesAndBiases(PtmFile& ptm) const;
+
+ private:
+  PtmFormat format_;
+  std::string method_;
+  std::array<double, 6> low_{}, high_{};
+};
+
+// `band`'s planes (PlaneCount of ptm.format, band rows top to bottom) quantised with ptm's scales
+// and biases.
+std::vector<std::vector<std::uint8_t>> QuantisePtmPlanes(const Representation& band,
+                                                         const PtmFile& ptm);
+
+// A raw .ptm (RGB, LUM or LRGB, PTM_1.2) written band by band of rows, top to bottom: the file's
+// size is known from its header, so each band is written at its final offset (the file holds rows
+// bottom to top) into a file of full size under a temporary name, renamed by Commit(). The bytes
+// equal SerializePtm's for the same planes. Destroyed without Commit(), it leaves no file.
+class PtmBandWriter {
+ public:
+  // `header`: version, format, size, scales and biases (its planes are ignored). Throws Error
+  // naming `path` for a JPEG format or when the file cannot be created.
+  PtmBandWriter(const std::filesystem::path& path, const PtmFile& header);
+  int next_row() const { return next_row_; }
+  // The next rows: PlaneCount planes of rows x width bytes (QuantisePtmPlanes of a band).
+  void WriteNext(const std::vector<std::vector<std::uint8_t>>& planes);
+  // Throws Error naming the file unless every row was written, or when renaming fails.
+  void Commit();
+
+ private:
+  PtmBandWriter(const std::filesystem::path& path, const PtmFile& header, const std::string& text);
+  PtmFile header_;
+  std::size_t header_bytes_;
+  PositionedFileWriter file_;
+  int next_row_ = 0;
+};
 
 }  // namespace photomat
