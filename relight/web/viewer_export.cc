@@ -19,6 +19,8 @@
 #include "relight/render/display_image.h"
 #include "relight/render/output_folder.h"
 #include "relight/web/viewer_assets.h"
+#include "relight/web/viewer_decoder.h"
+#include "represent/model/neural_decoder.h"
 #include "represent/stack/stack_band_reader.h"
 #include "represent/surface/surface_integration.h"
 
@@ -230,9 +232,10 @@ void CheckSameSample(const std::vector<Representation>& representations, bool ti
   }
 }
 
-// Stacks with a nonlinear shading (pbr, neural) have no place in the viewer's shader.
+// Of the nonlinear shadings the viewer evaluates the neural decoder (viewer_decoder.h); pbr's
+// microfacet BRDF has no place in its shaders yet.
 void CheckViewable(const Representation& r) {
-  if (r.shading()) {
+  if (r.shading() && !dynamic_cast<const NeuralShading*>(r.shading())) {
     throw Error(
         fmt::format("the viewer has no {} shading: leave {} out of the viewer (its "
                     "maps export with `photomat export`)",
@@ -285,15 +288,22 @@ nlohmann::json MethodJson(const fs::path& temp, const Representation& r,
     basis = ViewerBasisJson(r.basis());
   }
   const auto encoding = options.value_encodings.find(r.method());
-  return {{"name", r.method()},
-          {"label", MethodLabel(r.method())},
-          {"layout", r.layout().ToJson()},
-          {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
-                                                                        : encoding->second)},
-          {"channels", r.maps().channel_names()},
-          {"data", std::move(data)},
-          {"basis", std::move(basis)},
-          {"check", CheckJson(r.basis(), coefficient_table)}};
+  nlohmann::json json = {
+      {"name", r.method()},
+      {"label", MethodLabel(r.method())},
+      {"layout", r.layout().ToJson()},
+      {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
+                                                                    : encoding->second)},
+      {"channels", r.maps().channel_names()},
+      {"data", std::move(data)},
+      {"basis", std::move(basis)},
+      {"check", CheckJson(r.basis(), coefficient_table)}};
+  if (const auto* neural = dynamic_cast<const NeuralShading*>(r.shading())) {
+    const std::string file = fmt::format("maps/{}.decoder.f32", stem);
+    WriteTextFileAtomically(temp / file, ViewerDecoderTexture(neural->decoder()));
+    json["shading"] = ViewerDecoderJson(neural->decoder(), file);
+  }
+  return json;
 }
 
 void WriteManifest(const fs::path& temp, const ViewerExportOptions& options, int width, int height,
@@ -424,6 +434,7 @@ bool ViewerEvaluatesExactly(const LightBasis& basis) {
   return dynamic_cast<const LinearLightBasis*>(&basis) ||
          dynamic_cast<const PtmLightBasis*>(&basis) ||
          dynamic_cast<const InterpolatedLightBasis*>(&basis) ||
+         dynamic_cast<const DirectionLightBasis*>(&basis) ||
          (basis.kind() == "hsh" && basis.ToJson().contains("terms"));
 }
 
@@ -432,6 +443,8 @@ nlohmann::json ViewerBasisJson(const LightBasis& basis) {
     return {{"kind", "linear"}, {"matrix", MatrixToJson(*linear->LinearInLight())}};
   }
   if (dynamic_cast<const PtmLightBasis*>(&basis)) return {{"kind", "ptm"}};
+  // c = l: the light input of the neural decoder.
+  if (dynamic_cast<const DirectionLightBasis*>(&basis)) return {{"kind", "direction"}};
   if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
     return InterpolatedJson(*interpolated);
   }
