@@ -62,8 +62,9 @@ struct ViewerExportOptions {
   // stacks read from .ptm/.rti files, whose values are display codes (relight/stack_file.h
   // StackValueEncoding). The viewer decodes them as `photomat relight` does.
   std::map<std::string, ColourSpace> value_encodings;
-  // Write normal, albedo and height display maps (from the first method that gives normals).
-  // (Whole-image display maps are not made for tiled exports, which may not fit in memory.)
+  // Write normal, albedo and height display maps (from the first method that gives normals):
+  // whole PNGs, or with ExportViewerStreamed one-layer tile pyramids of the streamed export's
+  // maps (viewer_display_pyramids.h). (ExportViewer's tiled form, for .ptm/.rti files, has none.)
   bool display_maps = true;
   // Whether methods are written as tile pyramids (viewer_pyramid.h), and their tiles' size.
   ViewerTiling tiling = ViewerTiling::kAuto;
@@ -85,8 +86,10 @@ void ExportViewer(const std::filesystem::path& folder,
 // The viewer of the map stacks at `stacks` (photomat .exr stacks of one sample), every method
 // written as a tile pyramid from the stack read in bands of rows (StackBandReader), never whole:
 // memory is the pyramid's buffers (PyramidWriter::BufferBytes) plus a band, within
-// options.memory_bytes. No display maps. Throws Error naming the stack or folder at fault (also
-// when the budget cannot hold the pyramid's buffers and one row), leaving `folder` as it was.
+// options.memory_bytes. With options.display_maps, the normal, albedo and height views of the
+// first stack that gives normals, as tile pyramids (WriteDisplayPyramids). Throws Error naming the
+// stack or folder at fault (also when the budget cannot hold the pyramid's buffers and one row),
+// leaving `folder` as it was.
 void ExportViewerStreamed(const std::filesystem::path& folder,
                           const std::vector<std::filesystem::path>& stacks,
                           const ViewerExportOptions& options = {});
