@@ -824,6 +824,24 @@ function mapsAt(method, x, y) {
   return (i) => values[((Math.floor(i / 4) * rect.height + y - rect.y) * rect.width + x - rect.x) * 4 + (i % 4)];
 }
 
+// A pixel's relit values (every output channel) from its maps (`maps(i)`) and the light's
+// coefficients `c`: what the method's shader computes.
+function relitValues(method, maps, c) {
+  const { layout, shading } = method.json;
+  if (shading) {
+    const codes = Array.from({ length: shading.coefficients }, (_, j) => maps(j));
+    return evaluateDecoder(shading, method.decoder.values, codes, c[0], c[1]);
+  }
+  const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
+  const out = [];
+  for (let o = 0; o < layout.output_channels; ++o) {
+    let sum = 0;
+    for (let j = 0; j < layout.basis_size; ++j) sum += c[j] * maps(j * perTerm + (layout.basis_per_channel ? o : 0));
+    out.push(layout.has_gain ? sum * maps(layout.basis_size * perTerm + o) : sum);
+  }
+  return out;
+}
+
 function showPixel(event) {
   const box = canvas.getBoundingClientRect();
   const ratio = canvas.width / box.width;
@@ -836,19 +854,7 @@ function showPixel(event) {
     $('pixel-readout').textContent = '';
     return;
   }
-  const { layout, shading } = method.json;
-  const c = method.basis.coefficients(state.light);
-  const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
-  const out = [];
-  if (shading) {
-    const codes = Array.from({ length: shading.coefficients }, (_, j) => maps(j));
-    out.push(...evaluateDecoder(shading, method.decoder.values, codes, c[0], c[1]));
-  }
-  for (let o = 0; o < (shading ? 0 : layout.output_channels); ++o) {
-    let sum = 0;
-    for (let j = 0; j < layout.basis_size; ++j) sum += c[j] * maps(j * perTerm + (layout.basis_per_channel ? o : 0));
-    out.push(layout.has_gain ? sum * maps(layout.basis_size * perTerm + o) : sum);
-  }
+  const out = relitValues(method, maps, method.basis.coefficients(state.light));
   const encoding = method.json.values === 'srgb' ? 'sRGB codes / 255' : 'linear';
   $('pixel-readout').textContent = `pixel ${x}, ${y}: ${out.map((v) => v.toFixed(4)).join(' ')} (${encoding})`;
 }
