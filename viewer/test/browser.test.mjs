@@ -424,4 +424,10 @@ for (const report of fixtures.reports) {
   });
 }
 
+// Fixtures this photomat cannot make (the neural viewers without libtorch) show as skipped tests,
+// with the reason make-fixtures recorded.
+for (const skipped of fixtures.skipped ?? []) {
+  test(`viewer "${skipped.name}"`, { skip: skipped.reason }, () => {});
+}
+
 after(() => console.log(`screenshots: ${screenshots}`));
