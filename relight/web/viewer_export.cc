@@ -16,9 +16,13 @@
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/memory_limits.h"
+#include "relight/export/export.h"
 #include "relight/render/display_image.h"
 #include "relight/render/output_folder.h"
 #include "relight/web/viewer_assets.h"
+#include "relight/web/viewer_decoder.h"
+#include "relight/web/viewer_display_pyramids.h"
+#include "represent/model/neural_decoder.h"
 #include "represent/stack/stack_band_reader.h"
 #include "represent/surface/surface_integration.h"
 
@@ -178,16 +182,18 @@ nlohmann::json WriteDisplayMaps(const fs::path& folder, const Representation& so
 }
 
 // Gradient gives the most direct normals; then the other methods whose normals are defined.
-const Representation* DisplayMapSource(const std::vector<Representation>& representations) {
+// The index into `representations`, or nullopt.
+std::optional<std::size_t> DisplayMapSource(
+    const std::vector<const Representation*>& representations) {
   for (const char* preferred : {"gradient", "3i", "ptm", "ptm-lrgb"}) {
-    for (const Representation& r : representations) {
-      if (r.method() == preferred) return &r;
+    for (std::size_t i = 0; i < representations.size(); ++i) {
+      if (representations[i]->method() == preferred) return i;
     }
   }
-  for (const Representation& r : representations) {
-    if (r.basis().LinearInLight() || r.basis().kind() == "ptm") return &r;
+  for (std::size_t i = 0; i < representations.size(); ++i) {
+    if (GivesDisplayMaps(*representations[i])) return i;
   }
-  return nullptr;
+  return std::nullopt;
 }
 
 nlohmann::json CheckJson(const LightBasis& basis, const std::optional<CoefficientTable>& table) {
@@ -230,9 +236,10 @@ void CheckSameSample(const std::vector<Representation>& representations, bool ti
   }
 }
 
-// Stacks with a nonlinear shading (pbr, neural) have no place in the viewer's shader.
+// Of the nonlinear shadings the viewer evaluates the neural decoder (viewer_decoder.h); pbr's
+// microfacet BRDF has no place in its shaders yet.
 void CheckViewable(const Representation& r) {
-  if (r.shading()) {
+  if (r.shading() && !dynamic_cast<const NeuralShading*>(r.shading())) {
     throw Error(
         fmt::format("the viewer has no {} shading: leave {} out of the viewer (its "
                     "maps export with `photomat export`)",
@@ -285,15 +292,22 @@ nlohmann::json MethodJson(const fs::path& temp, const Representation& r,
     basis = ViewerBasisJson(r.basis());
   }
   const auto encoding = options.value_encodings.find(r.method());
-  return {{"name", r.method()},
-          {"label", MethodLabel(r.method())},
-          {"layout", r.layout().ToJson()},
-          {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
-                                                                        : encoding->second)},
-          {"channels", r.maps().channel_names()},
-          {"data", std::move(data)},
-          {"basis", std::move(basis)},
-          {"check", CheckJson(r.basis(), coefficient_table)}};
+  nlohmann::json json = {
+      {"name", r.method()},
+      {"label", MethodLabel(r.method())},
+      {"layout", r.layout().ToJson()},
+      {"values", ToString(encoding == options.value_encodings.end() ? ColourSpace::kLinear
+                                                                    : encoding->second)},
+      {"channels", r.maps().channel_names()},
+      {"data", std::move(data)},
+      {"basis", std::move(basis)},
+      {"check", CheckJson(r.basis(), coefficient_table)}};
+  if (const auto* neural = dynamic_cast<const NeuralShading*>(r.shading())) {
+    const std::string file = fmt::format("maps/{}.decoder.f32", stem);
+    WriteTextFileAtomically(temp / file, ViewerDecoderTexture(neural->decoder()));
+    json["shading"] = ViewerDecoderJson(neural->decoder(), file);
+  }
+  return json;
 }
 
 void WriteManifest(const fs::path& temp, const ViewerExportOptions& options, int width, int height,
@@ -424,6 +438,7 @@ bool ViewerEvaluatesExactly(const LightBasis& basis) {
   return dynamic_cast<const LinearLightBasis*>(&basis) ||
          dynamic_cast<const PtmLightBasis*>(&basis) ||
          dynamic_cast<const InterpolatedLightBasis*>(&basis) ||
+         dynamic_cast<const DirectionLightBasis*>(&basis) ||
          (basis.kind() == "hsh" && basis.ToJson().contains("terms"));
 }
 
@@ -432,6 +447,8 @@ nlohmann::json ViewerBasisJson(const LightBasis& basis) {
     return {{"kind", "linear"}, {"matrix", MatrixToJson(*linear->LinearInLight())}};
   }
   if (dynamic_cast<const PtmLightBasis*>(&basis)) return {{"kind", "ptm"}};
+  // c = l: the light input of the neural decoder.
+  if (dynamic_cast<const DirectionLightBasis*>(&basis)) return {{"kind", "direction"}};
   if (const auto* interpolated = dynamic_cast<const InterpolatedLightBasis*>(&basis)) {
     return InterpolatedJson(*interpolated);
   }
@@ -476,8 +493,10 @@ void ExportViewer(const fs::path& folder, const std::vector<Representation>& rep
     }
     nlohmann::json views = nlohmann::json::array();
     if (options.display_maps && !tiled) {
-      if (const Representation* source = DisplayMapSource(representations)) {
-        views = WriteDisplayMaps(temp, *source);
+      std::vector<const Representation*> all;
+      for (const Representation& r : representations) all.push_back(&r);
+      if (const std::optional<std::size_t> source = DisplayMapSource(all)) {
+        views = WriteDisplayMaps(temp, representations[*source]);
       }
     }
     WriteManifest(temp, options, representations.front().width(), representations.front().height(),
@@ -519,6 +538,20 @@ void ExportViewerStreamed(const fs::path& folder, const std::vector<fs::path>& s
     band_rows.push_back(ViewerBandRows(budget, *reader, layout));
     tile_bytes += layout.FileBytes(reader->header().representation.maps().channels());
   }
+  // The display maps' source: a stack that gives normals, exported (streamed) beside the tiles.
+  std::optional<std::size_t> display_source;
+  if (options.display_maps) {
+    std::vector<const Representation*> all;
+    for (const auto& reader : readers) all.push_back(&reader->header().representation);
+    display_source = DisplayMapSource(all);
+  }
+  if (display_source) {
+    const StackBandReader& source = *readers[*display_source];
+    const Representation& r = source.header().representation;
+    tile_bytes += 3 * layout.FileBytes(3) + ExportOutputBytes(source.width(), source.height(),
+                                                              r.maps().channels(),
+                                                              r.output_channels(), false);
+  }
   CheckDiskSpace(folder.parent_path().empty() ? fs::path(".") : folder.parent_path(), tile_bytes,
                  "the viewer's tiles");
   NullProgress no_progress;
@@ -547,8 +580,14 @@ void ExportViewerStreamed(const fs::path& folder, const std::vector<fs::path>& s
                                     {"pyramid", PyramidJson(stem, layout)}}));
       AddCaptureLights(capture_lights, r);
     }
+    nlohmann::json views = nlohmann::json::array();
+    if (display_source) {
+      // A fresh reader: the display maps' export makes its own passes over the stack.
+      StackBandReader source(readers[*display_source]->path());
+      views = WriteDisplayPyramids(temp, source, layout, options.memory_bytes, options.progress);
+    }
     WriteManifest(temp, options, readers.front()->width(), readers.front()->height(),
-                  capture_lights, std::move(methods), nlohmann::json::array());
+                  capture_lights, std::move(methods), std::move(views));
   });
 }
 

@@ -29,6 +29,12 @@ namespace photomat {
 //   maps/<method>.f32                              the maps, float32 little-endian
 //   maps/normal.png, albedo.png, height.png       display maps, when a method gives normals
 //   maps/<method>/levels/<L>/<column>_<row>.f32   a tiled method's pyramid (viewer_pyramid.h)
+//   maps/<method>.decoder.f32                      a neural method's decoder (viewer_decoder.h)
+//
+// A `neural` method (NeuralShading) is the one nonlinear shading the viewer shows: its maps are
+// the k coefficient maps as above, its basis is the light direction ({"kind": "direction"}), and
+// its description has "shading": ViewerDecoderJson, from which a fragment shader evaluates the
+// decoder per pixel. (pbr's microfacet shading is refused.)
 //
 // A method's maps are stored as ceil(n / 4) RGBA layers of width x height texels (layer-major,
 // rows from the top, map 4 * layer + component; unused components 0), uploaded as one RGBA32F
@@ -56,8 +62,9 @@ struct ViewerExportOptions {
   // stacks read from .ptm/.rti files, whose values are display codes (relight/stack_file.h
   // StackValueEncoding). The viewer decodes them as `photomat relight` does.
   std::map<std::string, ColourSpace> value_encodings;
-  // Write normal, albedo and height display maps (from the first method that gives normals).
-  // (Whole-image display maps are not made for tiled exports, which may not fit in memory.)
+  // Write normal, albedo and height display maps (from the first method that gives normals):
+  // whole PNGs, or with ExportViewerStreamed one-layer tile pyramids of the streamed export's
+  // maps (viewer_display_pyramids.h). (ExportViewer's tiled form, for .ptm/.rti files, has none.)
   bool display_maps = true;
   // Whether methods are written as tile pyramids (viewer_pyramid.h), and their tiles' size.
   ViewerTiling tiling = ViewerTiling::kAuto;
@@ -79,20 +86,24 @@ void ExportViewer(const std::filesystem::path& folder,
 // The viewer of the map stacks at `stacks` (photomat .exr stacks of one sample), every method
 // written as a tile pyramid from the stack read in bands of rows (StackBandReader), never whole:
 // memory is the pyramid's buffers (PyramidWriter::BufferBytes) plus a band, within
-// options.memory_bytes. No display maps. Throws Error naming the stack or folder at fault (also
-// when the budget cannot hold the pyramid's buffers and one row), leaving `folder` as it was.
+// options.memory_bytes. With options.display_maps, the normal, albedo and height views of the
+// first stack that gives normals, as tile pyramids (WriteDisplayPyramids). Throws Error naming the
+// stack or folder at fault (also when the budget cannot hold the pyramid's buffers and one row),
+// leaving `folder` as it was.
 void ExportViewerStreamed(const std::filesystem::path& folder,
                           const std::vector<std::filesystem::path>& stacks,
                           const ViewerExportOptions& options = {});
 
-// True when basis.js has the basis's formula: linear, PTM, interpolated (Eigen-k) and
-// hemispherical harmonics (kind "hsh", {"terms": 4, 9 or 16}). Others go through the table.
+// True when basis.js has the basis's formula: linear, PTM, interpolated (Eigen-k), the light
+// direction (a shading's input) and hemispherical harmonics (kind "hsh", {"terms": 4, 9 or 16}).
+// Others go through the table.
 bool ViewerEvaluatesExactly(const LightBasis& basis);
 
 // A light basis that ViewerEvaluatesExactly, as basis.js reads it (README "Web viewer and
 // evaluation report"):
 //   {"kind": "linear", "matrix": [[...] x k]}                       c = A l
 //   {"kind": "ptm"}                                                  (u^2, v^2, uv, u, v, 1)
+//   {"kind": "direction"}                                            c = l
 //   {"kind": "interpolated", "scheme": "slant-rings" | "triangulation", "values": [[k] per node],
 //    "nodes": [[x, y, z]...], "rings": [{"slant": deg, "by_tilt": [[tilt, node]...]}],
 //    "pole_slant_deg": 0.5, "projection_scale": 1000, "projected": [[u, v]...],

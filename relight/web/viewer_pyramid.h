@@ -31,11 +31,12 @@ namespace photomat {
 // contribution). The cost is size: 4 bytes per coefficient, uncompressed (a server's gzip halves
 // it).
 //
-// Coarser levels average the coefficient planes, not relit images: every method the viewer shows
-// is linear in its maps (out = sum_j c_j(l) B_j, or with a gain map a product the viewer also
+// Coarser levels average the coefficient planes, not relit images: every linear method the viewer
+// shows is linear in its maps (out = sum_j c_j(l) B_j, or with a gain map a product the viewer also
 // forms per pixel), so the average of a block's coefficients relights to the average of the
 // block's relit values (exactly for methods without a gain, and for gain methods to the product
-// of averages). Nonlinear shadings (pbr, neural) are refused by the viewer anyway.
+// of averages). A neural stack's decoder is not linear: its coarser levels relight to the
+// decoding of averaged coefficients, close to but not exactly the average (README). pbr is refused.
 
 // Appends `value` as float32 little-endian: the number format of every viewer data file.
 void AppendFloat32(std::string& bytes, float value);

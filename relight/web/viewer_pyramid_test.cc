@@ -216,6 +216,7 @@ TEST(ViewerPyramidTest, StreamedExportWritesThePyramidOfEveryStackInBands) {
   }
   ViewerExportOptions options;
   options.tile_size = 16;
+  options.display_maps = false;  // (viewer_display_pyramids_test.cc)
   const PyramidLayout layout(40, 40, 16);
   // The pyramid's buffers and a few rows: bands of a few rows.
   options.memory_bytes = PyramidWriter::BufferBytes(layout, 18) + 40 * 4 * 40 * 5;

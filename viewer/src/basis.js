@@ -242,6 +242,10 @@ export function makeBasis(json, table = null) {
         },
       };
       break;
+    case 'direction':
+      // c = l: the light input of a shading (the neural decoder reads lx, ly).
+      basis = { size: 3, coefficients: (l) => Float64Array.of(l[0], l[1], l[2]) };
+      break;
     case 'interpolated':
       basis = interpolatedBasis(json);
       break;

@@ -1,6 +1,7 @@
 // photomat's web relighting viewer. Reads viewer.json (written by relight/viewer_export.cc) and
 // relights each method with one WebGL2 fragment shader: out_c = gain_c * sum_j c_j(l) B_j,c, the
-// rule of represent/representation.h, with the maps as float32 texels and c(l) from basis.js.
+// rule of represent/representation.h, with the maps as float32 texels and c(l) from basis.js; a
+// neural method's shader evaluates its decoder instead (weights in a float texture).
 // No network access beyond the folder it is served from; no libraries.
 // Large stacks come as deep-zoom pyramids (relight/web/viewer_pyramid.h): the tiles in view (and
 // a margin of one tile) of the level the zoom asks for are fetched, kept in a bounded LRU cache
@@ -35,25 +36,18 @@ ivec2 ImagePixel() {
 bool Outside(ivec2 p) { return any(lessThan(p, ivec2(0))) || any(greaterThanEqual(p, u_size)); }
 `;
 
-// The relighting shader of one method layout (MapLayout in represent/representation.h).
-// `srgbValues`: the relit values are display codes (stacks from .ptm/.rti files), decoded to
+// The frame every relighting shader shares: the tile clipping, the maps of the pixel (map
+// 4 * layer + component of the RGBA32F array texture) and the output transfer. `colourBody` is GLSL
+// that sets `vec3 colour` (linear RGB, or grey in all three) from `maps`; `declarations` come before
+// main. `srgbValues`: the relit values are display codes (stacks from .ptm/.rti files), decoded to
 // linear first as `photomat relight` does.
-function relightShader(layout, layers, srgbValues) {
-  const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
-  const gainOffset = layout.basis_size * perTerm;
+function relightFrame(layers, srgbValues, declarations, colourBody) {
   return `#version 300 es
-#define TERMS ${layout.basis_size}
-#define CHANNELS ${layout.output_channels}
 #define LAYERS ${layers}
-#define PER_TERM ${perTerm}
-#define PER_CHANNEL ${layout.basis_per_channel ? 1 : 0}
-#define HAS_GAIN ${layout.has_gain ? 1 : 0}
-#define GAIN_OFFSET ${gainOffset}
 #define VALUES_SRGB ${srgbValues ? 1 : 0}
 precision highp sampler2DArray;
 ${COMMON_GLSL}
 uniform sampler2DArray u_maps;     // map 4 * layer + component
-uniform float u_coefficients[TERMS];
 uniform float u_exposure;          // linear scale
 // The texture is a tile of a pyramid level (the whole image: level 0, one tile of it all).
 uniform float u_level_scale;       // image pixels per level pixel, 2^level
@@ -72,7 +66,7 @@ float Linear(float v) {
   v = clamp(v, 0.0, 1.0);
   return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
-
+${declarations}
 void main() {
   vec2 canvas = vec2(gl_FragCoord.x, u_canvas_height - gl_FragCoord.y);
   ivec2 q = ivec2(floor((canvas - u_origin) / (u_zoom * u_level_scale)));
@@ -88,6 +82,27 @@ void main() {
     maps[4 * layer + 3] = t.a;
   }
   vec3 colour = vec3(0.0);
+${colourBody}
+  if (VALUES_SRGB == 1) colour = vec3(Linear(colour.r), Linear(colour.g), Linear(colour.b));
+  colour *= u_exposure;
+  o_colour = vec4(Srgb(colour.r), Srgb(colour.g), Srgb(colour.b), 1.0);
+}`;
+}
+
+// The relighting shader of one linear method layout (MapLayout in represent/representation.h):
+// out_c = gain_c * sum_j c_j(l) B_j,c.
+function relightShader(layout, layers, srgbValues) {
+  const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
+  const gainOffset = layout.basis_size * perTerm;
+  return relightFrame(layers, srgbValues, `
+#define TERMS ${layout.basis_size}
+#define CHANNELS ${layout.output_channels}
+#define PER_TERM ${perTerm}
+#define PER_CHANNEL ${layout.basis_per_channel ? 1 : 0}
+#define HAS_GAIN ${layout.has_gain ? 1 : 0}
+#define GAIN_OFFSET ${gainOffset}
+uniform float u_coefficients[TERMS];
+`, `
   for (int o = 0; o < CHANNELS && o < 3; ++o) {
     float sum = 0.0;
     for (int j = 0; j < TERMS; ++j) {
@@ -95,11 +110,103 @@ void main() {
     }
     colour[o] = HAS_GAIN == 1 ? sum * maps[GAIN_OFFSET + o] : sum;
   }
-  if (CHANNELS == 1) colour = vec3(colour.r);
-  if (VALUES_SRGB == 1) colour = vec3(Linear(colour.r), Linear(colour.g), Linear(colour.b));
-  colour *= u_exposure;
-  o_colour = vec4(Srgb(colour.r), Srgb(colour.g), Srgb(colour.b), 1.0);
-}`;
+  if (CHANNELS == 1) colour = vec3(colour.r);`);
+}
+
+// The relighting shader of a `neural` method: NeuralShading's decoder (represent/model/
+// neural_decoder.h) per fragment, from the pixel's k coefficient maps and the light's (lx, ly)
+// (u_coefficients: the "direction" basis, c = l). The weights are the RGBA32F texture of
+// relight/web/viewer_decoder.h: one row per neuron, texel t holding its weights 4t .. 4t + 3 and
+// the texel after the last holding its bias; so each neuron is a few vec4 dot products. ELU
+// (alpha 1) after every layer but the last, whose outputs are scaled by output_scale.
+function neuralShader(shading, layers, srgbValues) {
+  const widest = Math.max(shading.coefficients + 2, ...shading.layers.map((l) => l.outputs));
+  const chunks = Math.ceil(widest / 4);
+  let body = `
+  float x[${4 * chunks}];
+  for (int i = 0; i < ${4 * chunks}; ++i) x[i] = 0.0;
+  for (int j = 0; j < ${shading.coefficients}; ++j) x[j] = maps[j];
+  x[${shading.coefficients}] = u_coefficients[0];
+  x[${shading.coefficients + 1}] = u_coefficients[1];
+  vec4 a[${chunks}];`;
+  shading.layers.forEach((layer, l) => {
+    const inputs = Math.ceil(layer.inputs / 4);
+    const activation = l + 1 < shading.layers.length ? 'Elu(sum)' : 'sum';
+    body += `
+  // layer ${l}: ${layer.inputs} -> ${layer.outputs}
+  for (int t = 0; t < ${inputs}; ++t) a[t] = vec4(x[4 * t], x[4 * t + 1], x[4 * t + 2], x[4 * t + 3]);
+  for (int i = 0; i < ${4 * chunks}; ++i) x[i] = 0.0;
+  for (int o = 0; o < ${layer.outputs}; ++o) {
+    int row = ${layer.first_row} + o;
+    float sum = texelFetch(u_decoder, ivec2(${inputs}, row), 0).r;
+    for (int t = 0; t < ${inputs}; ++t) sum += dot(texelFetch(u_decoder, ivec2(t, row), 0), a[t]);
+    x[o] = ${activation};
+  }`;
+  });
+  body += `
+  for (int o = 0; o < ${shading.outputs} && o < 3; ++o) colour[o] = x[o] * ${glslFloat(shading.output_scale)};
+  if (${shading.outputs} == 1) colour = vec3(colour.r);`;
+  return relightFrame(layers, srgbValues, `
+uniform float u_coefficients[3];
+uniform highp sampler2D u_decoder;  // the decoder's weights and biases
+// ELU with alpha 1 (torch::nn::ELU's default).
+float Elu(float v) { return v > 0.0 ? v : exp(v) - 1.0; }
+`, body);
+}
+
+// A number as a GLSL float literal, to float32 precision (9 significant digits round-trip).
+function glslFloat(value) {
+  const text = Math.fround(value).toPrecision(9);
+  return /[.e]/.test(text) ? text : `${text}.0`;
+}
+
+// The shader of a method: its decoder's for a neural method, else the linear rule's.
+function methodProgram(method) {
+  const { layout, data, shading, values } = method.json;
+  if (shading) {
+    if (shading.kind !== 'neural' || shading.activation !== 'elu') {
+      throw new Error(`${method.json.name}: the viewer has no ${shading.kind} shading`);
+    }
+    return program(neuralShader(shading, data.layers, values === 'srgb'));
+  }
+  return program(relightShader(layout, data.layers, values === 'srgb'));
+}
+
+// A neural method's decoder texture (relight/web/viewer_decoder.h), and its values for the pixel
+// readout.
+async function loadDecoder(method) {
+  const { shading } = method.json;
+  if (!shading || method.decoder) return;
+  const { width, height } = shading.texture;
+  const values = float32s(await fetchChecked(shading.file, 'buffer'), shading.file);
+  if (values.length !== width * height * 4) {
+    throw new Error(`${shading.file}: ${values.length} values, expected ${width * height * 4}`);
+  }
+  const texture = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_2D, texture);
+  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 4);
+  gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, width, height, 0, gl.RGBA, gl.FLOAT, values);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+  method.decoder = { texture, values };
+}
+
+// The decoder on the CPU, for the pixel readout: what neuralShader computes.
+function evaluateDecoder(shading, weights, codes, lx, ly) {
+  const width = shading.texture.width;
+  let x = [...codes, lx, ly];
+  shading.layers.forEach((layer, l) => {
+    const chunks = Math.ceil(layer.inputs / 4);
+    const out = [];
+    for (let o = 0; o < layer.outputs; ++o) {
+      const row = (layer.first_row + o) * width * 4;
+      let sum = weights[row + 4 * chunks];
+      for (let i = 0; i < layer.inputs; ++i) sum += weights[row + i] * x[i];
+      out.push(l + 1 < shading.layers.length && sum <= 0 ? Math.expm1(sum) : sum);
+    }
+    x = out;
+  });
+  return x.map((v) => v * shading.output_scale);
 }
 
 // Normal, albedo and height maps: 8-bit PNG codes shown as they are.
@@ -109,6 +216,25 @@ uniform sampler2D u_image;
 void main() {
   ivec2 p = ImagePixel();
   o_colour = Outside(p) ? kBackground : vec4(texelFetch(u_image, p, 0).rgb, 1.0);
+}`;
+
+// A deep-zoom view's tile (relight/web/viewer_display_pyramids.h): display codes in [0, 1] shown as
+// they are (one channel: grey), clipped to the tile's pixels like the relit tiles.
+const VIEW_TILE_SHADER = `#version 300 es
+precision highp sampler2DArray;
+${COMMON_GLSL}
+uniform sampler2DArray u_maps;
+uniform float u_level_scale;
+uniform ivec2 u_tile_origin;
+uniform ivec2 u_core_min;
+uniform ivec2 u_core_max;
+uniform int u_grey;
+void main() {
+  vec2 canvas = vec2(gl_FragCoord.x, u_canvas_height - gl_FragCoord.y);
+  ivec2 q = ivec2(floor((canvas - u_origin) / (u_zoom * u_level_scale)));
+  if (any(lessThan(q, u_core_min)) || any(greaterThanEqual(q, u_core_max))) discard;
+  vec4 t = texelFetch(u_maps, ivec3(q - u_tile_origin, 0), 0);
+  o_colour = vec4(u_grey == 1 ? vec3(t.r) : t.rgb, 1.0);
 }`;
 
 const state = {
@@ -129,6 +255,7 @@ const state = {
 let gl = null;
 let canvas = null;
 let mapProgram = null;
+let viewTileProgram = null;
 
 // IMPLEMENTER CHOICE: tiles of the level in view and one tile around it are fetched (the margin
 // hides the edges while panning), at most 6 at once (a browser's connections per server); the
@@ -216,7 +343,8 @@ async function loadMethodData(method) {
       // Float textures are not filterable everywhere; texelFetch reads exact texels anyway.
       gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
       gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-      method.program = program(relightShader(method.json.layout, layers, method.json.values === 'srgb'));
+      await loadDecoder(method);
+      method.program = methodProgram(method);
       method.values = data; // for the pixel readout
       method.texture = texture;
     })();
@@ -326,10 +454,15 @@ function pumpTiles() {
   }
 }
 
-// What the view needs of the current method: its level's tiles in view and the margin.
+// What is shown: the current method when relit, else the current view.
+function shownSource() {
+  return state.view === 'relit' ? state.methods.get(state.method) : state.views.get(state.view);
+}
+
+// What the view needs of the method or view shown: its level's tiles in view and the margin.
 function updateWantedTiles() {
-  const method = state.methods.get(state.method);
-  if (state.view !== 'relit' || !method?.json.data.pyramid || !canvas.width) {
+  const method = shownSource();
+  if (!method?.json.data?.pyramid || !canvas.width) {
     tiles.wanted = [];
     return;
   }
@@ -355,9 +488,8 @@ async function loadPyramid(method) {
   if (layers > gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS)) {
     throw new Error(`${method.json.name}: ${layers} texture layers exceed this browser's limit`);
   }
-  if (!method.program) {
-    method.program = program(relightShader(method.json.layout, layers, method.json.values === 'srgb'));
-  }
+  await loadDecoder(method);
+  if (!method.program) method.program = methodProgram(method);
   await loadTile(method, pyramid.levels - 1, 0, 0);
   method.ready = true;
 }
@@ -403,6 +535,11 @@ function tilesPending() {
 }
 
 async function loadView(view) {
+  if (view.json.data?.pyramid) {
+    await loadTile(view, view.json.data.pyramid.levels - 1, 0, 0);
+    view.ready = true;
+    return;
+  }
   if (view.texture) return;
   if (!view.loading) {
     view.loading = (async () => {
@@ -458,6 +595,11 @@ function draw() {
     if (!method || !(method.texture || method.ready)) return;
     p = method.program;
     gl.useProgram(p.program);
+    if (method.decoder) {
+      gl.activeTexture(gl.TEXTURE1);
+      gl.bindTexture(gl.TEXTURE_2D, method.decoder.texture);
+      gl.uniform1i(p.uniforms.u_decoder, 1);
+    }
     gl.activeTexture(gl.TEXTURE0);
     gl.uniform1i(p.uniforms.u_maps, 0);
     gl.uniform1fv(p.uniforms.u_coefficients, Float32Array.from(method.basis.coefficients(state.light)));
@@ -467,14 +609,26 @@ function draw() {
       drawPyramid(method, p);
       return;
     }
-    // The whole image: one tile of level 0.
-    gl.bindTexture(gl.TEXTURE_2D_ARRAY, method.texture);
-    gl.uniform1f(p.uniforms.u_level_scale, 1);
-    gl.uniform2i(p.uniforms.u_tile_origin, 0, 0);
-    gl.uniform2i(p.uniforms.u_core_min, 0, 0);
-    gl.uniform2i(p.uniforms.u_core_max, state.manifest.width, state.manifest.height);
+    // The whole image: one tile of level 0, scissored to the image's pixels on the canvas (a
+    // neural decoder costs thousands of operations per fragment: none is spent off the image).
+    setViewUniforms(p);
+    const { width, height } = state.manifest;
+    gl.enable(gl.SCISSOR_TEST);
+    drawTile(p, { texture: method.texture, level: 0, rect: { x: 0, y: 0, core: [0, 0, width, height] } }, state.zoom);
+    gl.disable(gl.SCISSOR_TEST);
+    return;
   } else {
     const view = state.views.get(state.view);
+    if (view?.ready) {
+      p = viewTileProgram;
+      gl.useProgram(p.program);
+      gl.activeTexture(gl.TEXTURE0);
+      gl.uniform1i(p.uniforms.u_maps, 0);
+      gl.uniform1i(p.uniforms.u_grey, view.json.data.maps === 1 ? 1 : 0);
+      setViewUniforms(p);
+      drawPyramid(view, p);
+      return;
+    }
     if (!view || !view.texture) return;
     p = mapProgram;
     gl.useProgram(p.program);
@@ -670,6 +824,24 @@ function mapsAt(method, x, y) {
   return (i) => values[((Math.floor(i / 4) * rect.height + y - rect.y) * rect.width + x - rect.x) * 4 + (i % 4)];
 }
 
+// A pixel's relit values (every output channel) from its maps (`maps(i)`) and the light's
+// coefficients `c`: what the method's shader computes.
+function relitValues(method, maps, c) {
+  const { layout, shading } = method.json;
+  if (shading) {
+    const codes = Array.from({ length: shading.coefficients }, (_, j) => maps(j));
+    return evaluateDecoder(shading, method.decoder.values, codes, c[0], c[1]);
+  }
+  const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
+  const out = [];
+  for (let o = 0; o < layout.output_channels; ++o) {
+    let sum = 0;
+    for (let j = 0; j < layout.basis_size; ++j) sum += c[j] * maps(j * perTerm + (layout.basis_per_channel ? o : 0));
+    out.push(layout.has_gain ? sum * maps(layout.basis_size * perTerm + o) : sum);
+  }
+  return out;
+}
+
 function showPixel(event) {
   const box = canvas.getBoundingClientRect();
   const ratio = canvas.width / box.width;
@@ -682,15 +854,7 @@ function showPixel(event) {
     $('pixel-readout').textContent = '';
     return;
   }
-  const { layout } = method.json;
-  const c = method.basis.coefficients(state.light);
-  const perTerm = layout.basis_per_channel ? layout.output_channels : 1;
-  const out = [];
-  for (let o = 0; o < layout.output_channels; ++o) {
-    let sum = 0;
-    for (let j = 0; j < layout.basis_size; ++j) sum += c[j] * maps(j * perTerm + (layout.basis_per_channel ? o : 0));
-    out.push(layout.has_gain ? sum * maps(layout.basis_size * perTerm + o) : sum);
-  }
+  const out = relitValues(method, maps, method.basis.coefficients(state.light));
   const encoding = method.json.values === 'srgb' ? 'sRGB codes / 255' : 'linear';
   $('pixel-readout').textContent = `pixel ${x}, ${y}: ${out.map((v) => v.toFixed(4)).join(' ')} (${encoding})`;
 }
@@ -704,7 +868,9 @@ async function selectMethod(name) {
   $('method').value = name;
   const layout = method.json.layout;
   const pyramid = method.json.data.pyramid;
-  $('method-info').textContent = `${method.json.channels.length} maps, ${layout.basis_size} light terms` +
+  const terms = method.json.shading ? `a decoder of ${method.json.shading.layers.length} layers`
+    : `${layout.basis_size} light terms`;
+  $('method-info').textContent = `${method.json.channels.length} maps, ${terms}` +
     (method.json.basis.kind === 'table' ? ' (coefficients from a slant/tilt table)' : '') +
     (pyramid ? `; deep-zoom tiles of ${pyramid.tile_size} px, ${pyramid.levels} levels` : '');
   setStatus(`loading ${method.json.label}…`);
@@ -845,6 +1011,7 @@ async function start() {
   if (!gl) throw new Error('this browser has no WebGL2');
   gl.bindVertexArray(gl.createVertexArray());
   mapProgram = program(MAP_SHADER);
+  viewTileProgram = program(VIEW_TILE_SHADER);
 
   for (const m of manifest.methods) {
     const table = m.basis.kind === 'table' ? float32s(await fetchChecked(m.basis.file, 'buffer'), m.basis.file) : null;
@@ -904,7 +1071,7 @@ window.photomatViewer = {
   // Deep-zoom: the tiles the view wants that have not loaded yet.
   tilesPending: () => tilesPending(),
   level: () => {
-    const pyramid = state.methods.get(state.method)?.json.data.pyramid;
+    const pyramid = shownSource()?.json.data?.pyramid;
     return pyramid ? levelForZoom(pyramid) : 0;
   },
   // Draws now and returns canvas pixels [x, x + width) x [y, y + height) (RGBA, rows from the top).

@@ -5,6 +5,7 @@
 //  table/      the grid's PTM and Gradient with their coefficients from the (slant, tilt) table
 //  files/      a .ptm and an HSH .rti exported from the grid's fits (values are display codes)
 //  deepzoom/   a viewer written as deep-zoom tiles (--viewer-tiles always)
+//  neural/     a tiny trained neural basis (the decoder as a fragment shader), whole and tiled
 // and, for each viewer, method and test light, photomat's CPU relighting
 // (`photomat relight STACK --light S,T --out X.png`), which the viewer's canvas must reproduce.
 // Writes OUT/fixtures.json describing it all.
@@ -127,10 +128,26 @@ if (all.includes('hsh9')) {
 
 // Exports `stacks` (a fit folder or one .exr) with `photomat export --viewer ... exportArgs` and
 // relights each method under two lights as 8-bit sRGB (the level-0 comparison) and 16-bit linear
-// PNG (box-averaged for level 1).
-function addDeepZoom(name, stacks, methods, exportArgs) {
+// PNG (box-averaged for level 1). When the viewer has normal/albedo/height views (from the stack
+// `viewsFrom` names: null for none, undefined to take what the export wrote), the same maps
+// exported by `photomat export --stream` are their references.
+function addDeepZoom(name, stacks, methods, exportArgs, viewsFrom = undefined) {
   const folder = path.join(out, name);
   run(photomat, ['export', stacks, '--viewer', path.join(folder, 'viewer'), ...exportArgs]);
+  const manifest = JSON.parse(readFileSync(path.join(folder, 'viewer', 'viewer.json'), 'utf8'));
+  const views = manifest.views.map((v) => v.name);
+  let viewReferences = null;
+  if (views.length) {
+    const maps = path.join(folder, 'export');
+    const source = manifest.views[0].source;
+    run(photomat, ['export', stacks, ...(stacks.endsWith('.exr') ? [] : ['--method', source]), '--out', maps,
+      '--stream', '--no-gltf']);
+    viewReferences = { normal: path.join(maps, 'normal.png'), albedo: path.join(maps, 'albedo.png'),
+      height: path.join(maps, 'height.png') };
+  }
+  if (viewsFrom !== undefined && (viewsFrom !== null) !== (views.length > 0)) {
+    throw new Error(`${name}: expected ${viewsFrom ? `views from ${viewsFrom}` : 'no views'}, the export wrote [${views}]`);
+  }
   const references = [];
   for (const method of methods) {
     for (const [slant, tilt] of [[30, 0], [52.5, 77]]) {
@@ -143,7 +160,8 @@ function addDeepZoom(name, stacks, methods, exportArgs) {
       references.push({ method, slant, tilt, png8: `${reference}.png8.png`, png16: `${reference}.png16.png` });
     }
   }
-  fixtures.deepzoom.push({ name, url: `${name}/viewer/index.html`, folder: path.join(folder, 'viewer'), methods, references });
+  fixtures.deepzoom.push({ name, url: `${name}/viewer/index.html`, folder: path.join(folder, 'viewer'), methods, references,
+    views, viewReferences });
 }
 
 // deepzoom: a 256 x 192 capture whose viewer is forced into deep-zoom tiles of 32 px (4 levels;
@@ -153,12 +171,37 @@ const deep = path.join(out, 'deepzoom');
 run(photomat, ['generate', '--out', path.join(deep, 'capture'), '--size', '256x192', '--pattern', 'bricks',
   '--relief', '45', '--seed', '7']);
 run(photomat, ['fit', path.join(deep, 'capture'), '--method', 'gradient,ptm', '--out', path.join(deep, 'stacks')]);
-addDeepZoom('deepzoom', path.join(deep, 'stacks'), ['gradient', 'ptm'], ['--viewer-tiles', 'always', '--viewer-tile-size', '32']);
-// PHOTOMAT_DEEPZOOM_STACK=STACK.exr METHOD: a large stack (the benchmark's), exported as
-// `photomat export --viewer` does by default (tiled above 4096 x 4096 pixels).
+addDeepZoom('deepzoom', path.join(deep, 'stacks'), ['gradient', 'ptm'], ['--viewer-tiles', 'always', '--viewer-tile-size', '32'],
+  'gradient');
+// neural: a tiny neural basis (NeuralRTI's decoder, k = 9, 8 seeded epochs on 1,920 of 12,288 pixels:
+// a few seconds) trained on a small specular capture, shown whole and as deep-zoom tiles; the
+// viewer's decoder shader must reproduce `photomat relight`'s Eigen decoder. Skipped, with the
+// reason, where photomat was built without libtorch.
+fixtures.skipped = [];
+const neural = path.join(out, 'neural');
+run(photomat, ['generate', '--out', path.join(neural, 'capture'), '--size', '128x96', '--pattern', 'bricks',
+  '--relief', '45', '--specular', '0.3', '--seed', '9']);
+try {
+  run(photomat, ['fit', path.join(neural, 'capture'), '--method', 'neural', '--out', path.join(neural, 'stacks'),
+    '--neural-epochs', '8', '--neural-sample-pixels', '1920', '--neural-threads', '2', '--seed', '1']);
+} catch (error) {
+  if (!/built without/.test(error.message)) throw error;
+  const reason = error.message.split('\n').find((line) => /built without/.test(line)).trim();
+  console.log(`make-fixtures: SKIPPED the neural viewer: ${reason}`);
+  fixtures.skipped.push({ name: 'neural', reason });
+}
+if (existsSync(path.join(neural, 'stacks', 'neural.exr'))) {
+  addViewer('neural', path.join(neural, 'stacks'));
+  addDeepZoom('deepzoom-neural', path.join(neural, 'stacks', 'neural.exr'), ['neural'],
+    ['--viewer-tiles', 'always', '--viewer-tile-size', '32'], null);
+}
+
+// PHOTOMAT_DEEPZOOM_STACK=STACK.exr METHOD: a large stack (bench/deepzoom_48mp's), exported as
+// tiles (what `photomat export --viewer` does by default above 4096 x 4096 pixels; `always`, so
+// that a smaller stack can check the benchmark script too).
 if (process.env.PHOTOMAT_DEEPZOOM_STACK) {
   const [stack, method] = process.env.PHOTOMAT_DEEPZOOM_STACK.split(' ');
-  addDeepZoom('deepzoom-large', path.resolve(stack), [method], []);
+  addDeepZoom('deepzoom-large', path.resolve(stack), [method], ['--viewer-tiles', 'always']);
 }
 
 writeFileSync(path.join(out, 'fixtures.json'), `${JSON.stringify(fixtures, null, 2)}\n`);
