@@ -186,6 +186,14 @@ TEST(ExportCliTest, CompactStacksAreWrittenAndReadWhereverStacksAre) {
   run = RunPhotomat("export " + compact + " --viewer " + (dir / "viewer").string());
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_TRUE(fs::exists(dir / "viewer" / "viewer.json"));
+  EXPECT_TRUE(fs::exists(dir / "viewer" / "maps" / "normal.png"));
+  // --viewer-without-maps leaves the normal, albedo and height views out.
+  run = RunPhotomat("export " + fit + " --viewer " + (dir / "bare").string() +
+                    " --viewer-without-maps");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_TRUE(fs::exists(dir / "bare" / "viewer.json"));
+  EXPECT_FALSE(fs::exists(dir / "bare" / "maps" / "normal.png"));
+  EXPECT_FALSE(fs::exists(dir / "bare" / "maps" / "height.png"));
   run = RunPhotomat("export " + capture + " --method hsh9 --compact " + compact +
                     " --compact-coding jpeg --compact-quality 98");
   ASSERT_EQ(run.exit_code, 0) << run.output;

@@ -44,6 +44,7 @@ struct ExportCommandOptions {
   std::filesystem::path viewer;
   std::string viewer_tiles = "auto";
   int viewer_tile_size = kViewerTileSize;
+  bool viewer_without_maps = false;
   std::size_t memory_mb = 0;
   bool stream = false;
   std::filesystem::path relight_web;
@@ -260,6 +261,7 @@ ViewerExportOptions ViewerOptions(const ExportCommandOptions& options) {
   viewer.title = PublishedName(options.input);
   viewer.tiling = ParseViewerTiling(options.viewer_tiles);
   viewer.tile_size = options.viewer_tile_size;
+  viewer.display_maps = !options.viewer_without_maps;
   viewer.memory_bytes = options.memory_mb << 20;
   return viewer;
 }
@@ -516,6 +518,10 @@ void AddExportCommand(CLI::App& app) {
       ->add_option("--viewer-tile-size", options->viewer_tile_size,
                    "Pixels a side of the viewer's tiles")
       ->capture_default_str();
+  command->add_flag("--viewer-without-maps", options->viewer_without_maps,
+                    "Leave the normal, albedo and height views out of the viewer (for deep-zoom "
+                    "tiles they take a streamed export of the maps, whose tiled Poisson height "
+                    "costs more than the tiles themselves)");
   command->add_option(
       "--memory", options->memory_mb,
       fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); a stack whose "

@@ -26,6 +26,7 @@ set(PHOTOMAT_FUZZ_PARSER_SOURCES
     represent/model/shading.cc
     represent/model/neural_decoder.cc
     relight/formats/header_reader.cc
+    relight/formats/positioned_file.cc
     relight/formats/ptm_file.cc
     relight/formats/ptm_jpeg.cc
     relight/formats/rti_file.cc)
