@@ -17,7 +17,8 @@
 //
 //   held_out_lights [SET ...] [--every K] [--methods ptm,hsh9,rbf,bilinear,rbf:-1,...]
 //                   [--float] [--relight-cli PATH|none] [--planes N] [--grid-size G]
-//                   [--rbf-width DEG] [--rbf-regularisation R]
+//                   [--rbf-width DEG] [--rbf-regularisation R] [--rbf-tail affine|quadratic]
+//                   [--leave-out one|block]
 //
 // A method NAME:K fits with K PCA planes per channel (0: uncompressed, -1: chosen by leave-one-out
 // on the training lights); the other options apply
@@ -27,6 +28,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -42,8 +44,10 @@
 #include "relight/formats/stack_file.h"
 #include "represent/evaluation/evaluation.h"
 #include "represent/fitting/fit.h"
+#include "represent/fitting/light_profile_fit.h"
 #include "represent/fitting/observations.h"
 #include "represent/model/light_interpolation.h"
+#include "represent/model/light_profile_basis.h"
 
 namespace photomat {
 namespace {
@@ -55,6 +59,7 @@ struct Arguments {
   int every = 8;
   std::string methods = "ptm,hsh9,rbf,bilinear";
   bool linear_jpeg = true;
+  bool oracle = false;
   std::optional<fs::path> relight_cli;
   LightProfileOptions profile;
 };
@@ -72,6 +77,8 @@ Arguments Parse(int argc, char** argv) {
       arguments.every = std::stoi(value());
     } else if (a == "--methods") {
       arguments.methods = value();
+    } else if (a == "--oracle") {
+      arguments.oracle = true;
     } else if (a == "--float") {
       arguments.linear_jpeg = false;
     } else if (a == "--relight-cli") {
@@ -85,6 +92,12 @@ Arguments Parse(int argc, char** argv) {
       arguments.profile.rbf_width_degrees = std::stod(value());
     } else if (a == "--rbf-regularisation") {
       arguments.profile.rbf_regularisation = std::stod(value());
+    } else if (a == "--rbf-tail") {
+      arguments.profile.rbf_tail = RbfTailFromString(value());
+    } else if (a == "--leave-out") {
+      const std::string scheme = value();
+      if (scheme != "one" && scheme != "block") throw Error("--leave-out: expected one or block");
+      arguments.profile.leave_out = scheme == "block" ? LeaveOut::kBlock : LeaveOut::kOne;
     } else if (a.starts_with("--")) {
       throw Error(fmt::format("unknown option {}", a));
     } else {
@@ -280,6 +293,103 @@ void PrintTable(const std::string& title, const std::vector<Row>& rows) {
   }
 }
 
+// --oracle: what the held-out lights themselves would choose (never used to choose; it shows how
+// far the training lights' choice is from the best available). The mean held-out PSNR of every
+// rbf and bilinear candidate and plane count, from the Gram matrix of every light (the PCA over
+// the training lights, the interpolation's weights from them), without the fit's clamp to
+// [0, peak].
+void PrintOracle(const Observations& observations, const std::vector<LightDirection>& lights,
+                 const HoldOut& hold_out, double peak, int grid_size) {
+  const Eigen::MatrixXd& gram = observations.Gram();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(
+      gram(hold_out.selected, hold_out.selected));
+  const Eigen::MatrixXd axes = solver.eigenvectors().rowwise().reverse();
+  const Eigen::VectorXd eigenvalues = solver.eigenvalues().reverse();
+  const Eigen::MatrixXd cross = axes.transpose() * gram(hold_out.selected, hold_out.held_out);
+  const double count = static_cast<double>(observations.matrix().rows());
+  std::vector<LightDirection> training;
+  for (int i : hold_out.selected) training.push_back(lights[i]);
+  // Mean PSNR per plane count 1..16 and uncompressed (last) of weights (held x training).
+  const auto psnr = [&](const Eigen::MatrixXd& weights) {
+    std::vector<double> mean(17, 0.0);
+    for (Eigen::Index h = 0; h < weights.rows(); ++h) {
+      const Eigen::VectorXd a = axes.transpose() * weights.row(h).transpose();
+      double error = gram(hold_out.held_out[h], hold_out.held_out[h]);
+      for (Eigen::Index j = 0; j < a.size(); ++j) {
+        error += eigenvalues[j] * a[j] * a[j] - 2.0 * a[j] * cross(j, h);
+        const Eigen::Index entry = j < 16 ? j : (j == a.size() - 1 ? 16 : -1);
+        if (entry >= 0) mean[entry] += 10.0 * std::log10(peak * peak * count / error);
+      }
+    }
+    for (double& m : mean) m /= static_cast<double>(weights.rows());
+    return mean;
+  };
+  const auto print = [](const std::string& label, const std::vector<double>& mean) {
+    const auto best = std::max_element(mean.begin(), mean.end() - 1);
+    fmt::print(
+        "oracle {}: k=4 {:.2f}, k=6 {:.2f}, k=9 {:.2f}, k=16 {:.2f}, all {:.2f}, best k={} "
+        "{:.2f}\n",
+        label, mean[3], mean[5], mean[8], mean[15], mean[16], best - mean.begin() + 1, *best);
+  };
+  for (RbfTail tail : {RbfTail::kAffine, RbfTail::kQuadratic}) {
+    for (double width : {4.4, 6.2, 8.8, 12.4, 17.5, 24.8}) {
+      for (double regularisation : {0.0, 1e-3, 1e-2, 1e-1, 1.0}) {
+        try {
+          const RbfInterpolation rbf(training, width, regularisation, tail);
+          Eigen::MatrixXd weights(hold_out.held_out.size(), training.size());
+          for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+            weights.row(h) = rbf.Weights(lights[hold_out.held_out[h]]).transpose();
+          }
+          print(fmt::format("rbf {} width {} reg {}", ToString(tail), width, regularisation),
+                psnr(weights));
+        } catch (const Error&) {
+        }
+      }
+    }
+  }
+  const auto rbf_weights = [&](double width, double regularisation, RbfTail tail) {
+    const RbfInterpolation rbf(training, width, regularisation, tail);
+    Eigen::MatrixXd weights(hold_out.held_out.size(), training.size());
+    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+      weights.row(h) = rbf.Weights(lights[hold_out.held_out[h]]).transpose();
+    }
+    return weights;
+  };
+  const auto bilinear_weights = [&](double smoothness) {
+    const Eigen::MatrixXd resampling = BilinearResampling(training, grid_size, smoothness);
+    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(hold_out.held_out.size(), training.size());
+    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+      const LightDirection& l = lights[hold_out.held_out[h]];
+      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
+        weights.row(h) += w * resampling.row(node);
+      }
+    }
+    return weights;
+  };
+  for (double alpha : {0.25, 0.5, 0.75}) {
+    print(fmt::format("mix {} rbf 12.4/0.01 + bilinear 1e-4", alpha),
+          psnr(alpha * rbf_weights(12.4, 0.01, RbfTail::kAffine) +
+               (1 - alpha) * bilinear_weights(1e-4)));
+    print(fmt::format("mix {} rbf 8.8/0.01 + bilinear 1e-4", alpha),
+          psnr(alpha * rbf_weights(8.8, 0.01, RbfTail::kAffine) +
+               (1 - alpha) * bilinear_weights(1e-4)));
+    print(fmt::format("mix {} rbf 8.8/0.01 + rbf 17.5/0.01", alpha),
+          psnr(alpha * rbf_weights(8.8, 0.01, RbfTail::kAffine) +
+               (1 - alpha) * rbf_weights(17.5, 0.01, RbfTail::kAffine)));
+  }
+  for (double smoothness : {1e-4, 1e-3, 1e-2, 1e-1, 1.0}) {
+    const Eigen::MatrixXd resampling = BilinearResampling(training, grid_size, smoothness);
+    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(hold_out.held_out.size(), training.size());
+    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+      const LightDirection& l = lights[hold_out.held_out[h]];
+      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
+        weights.row(h) += w * resampling.row(node);
+      }
+    }
+    print(fmt::format("bilinear smoothness {}", smoothness), psnr(weights));
+  }
+}
+
 void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& work) {
   LoadOptions raw_options;
   raw_options.apply_intensities = !arguments.linear_jpeg;
@@ -295,6 +405,10 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
              peak);
   const std::vector<Method> methods = ParseMethods(arguments.methods, arguments.profile);
   for (const HoldOut& hold_out : HoldOuts(set.lights(), arguments.every)) {
+    if (arguments.oracle) {
+      PrintOracle(observations, set.lights(), hold_out, peak, arguments.profile.grid_size);
+      continue;
+    }
     std::vector<Row> rows;
     for (const Method& method : methods) {
       const Representation r =
@@ -309,9 +423,10 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
                                           r.details()["bilinear"]["smoothness"].get<double>());
       }
       if (r.details().contains("rbf")) {
-        rows.back().method += fmt::format(" [width {:.3g} deg, regularisation {:.3g}]",
+        rows.back().method += fmt::format(" [width {:.3g} deg, regularisation {:.3g}, tail {}]",
                                           r.details()["rbf"]["width_deg"].get<double>(),
-                                          r.details()["rbf"]["regularisation"].get<double>());
+                                          r.details()["rbf"]["regularisation"].get<double>(),
+                                          r.details()["rbf"]["tail"].get<std::string>());
       }
     }
     if (arguments.linear_jpeg && arguments.relight_cli) {
