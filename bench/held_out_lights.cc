@@ -21,7 +21,8 @@
 //                   [--leave-out one|block]
 //
 // A method NAME:K fits with K PCA planes per channel (0: uncompressed, -1: chosen by leave-one-out
-// on the training lights); the other options apply
+// on the training lights); a suffix +block chooses by leave-block-out, +quadratic gives rbf the
+// quadratic tail (rbf:-1+block+quadratic); the other options apply
 // to every light-profile method. relight-cli: --relight-cli, else $PHOTOMAT_RELIGHT_CLI, else the
 // build bench/peer_table leaves in ~/.cache/photomat-peers/relight-build.
 #include <OpenImageIO/imageio.h>
@@ -34,6 +35,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -122,10 +124,21 @@ std::vector<Method> ParseMethods(const std::string& list, const LightProfileOpti
     const std::size_t comma = std::min(list.find(',', start), list.size());
     const std::string item = list.substr(start, comma - start);
     start = comma + 1;
-    const std::size_t colon = item.find(':');
-    Method method = Method::Parse(item.substr(0, colon));
-    method.profile = profile;
-    if (colon != std::string::npos) method.profile.planes = std::stoi(item.substr(colon + 1));
+    // Suffixes "+block" (LeaveOut::kBlock) and "+quadratic" (the RBF's quadratic tail).
+    std::string name = item;
+    LightProfileOptions options = profile;
+    for (const auto& [suffix, apply] : std::vector<std::pair<std::string, std::function<void()>>>{
+             {"+block", [&] { options.leave_out = LeaveOut::kBlock; }},
+             {"+quadratic", [&] { options.rbf_tail = RbfTail::kQuadratic; }}}) {
+      if (const std::size_t at = name.find(suffix); at != std::string::npos) {
+        name.erase(at, suffix.size());
+        apply();
+      }
+    }
+    const std::size_t colon = name.find(':');
+    Method method = Method::Parse(name.substr(0, colon));
+    method.profile = options;
+    if (colon != std::string::npos) method.profile.planes = std::stoi(name.substr(colon + 1));
     methods.push_back(method);
   }
   return methods;
@@ -135,10 +148,16 @@ std::vector<Method> ParseMethods(const std::string& list, const LightProfileOpti
 // PCA). The planes a fit took are printed from its details.
 std::string MethodLabel(const Method& method) {
   const bool profile = method.kind == Method::Kind::kRbf || method.kind == Method::Kind::kBilinear;
-  if (!profile || method.profile.planes == LightProfileOptions::kDefaultPlanes) {
-    return method.Name();
+  if (!profile) return method.Name();
+  std::string label = method.Name();
+  if (method.profile.planes != LightProfileOptions::kDefaultPlanes) {
+    label += fmt::format(":{}", method.profile.planes);
   }
-  return fmt::format("{}:{}", method.Name(), method.profile.planes);
+  if (method.profile.leave_out == LeaveOut::kBlock) label += "+block";
+  if (method.kind == Method::Kind::kRbf && method.profile.rbf_tail == RbfTail::kQuadratic) {
+    label += "+quadratic";
+  }
+  return label;
 }
 
 struct HoldOut {
