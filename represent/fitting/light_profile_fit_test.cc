@@ -262,7 +262,7 @@ double ExplicitLeaveOneOutError(const Observations& observations, int planes,
 }
 
 TEST(LightProfileFitTest, LeaveOneOutWithPcaIsThatOfRefittingWithoutEachLight) {
-  // The closed form over folds (LeaveOneOutFolds) against the definition, for rbf and bilinear
+  // The closed form over folds (LeaveOutFolds) against the definition, for rbf and bilinear
   // with 3 planes: the PCA and the interpolation both without light i.
   const auto synthetic = testing::ShadowedSpecularSet(8);
   const Observations observations(synthetic.set);
