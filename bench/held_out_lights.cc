@@ -374,6 +374,54 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
       (t % folds.size() == f ? folds[f].held : folds[f].others).push_back(hold_out.selected[t]);
     }
   }
+  // Edge folds: each training light on the boundary of the training lights' convex hull in
+  // (lx, ly) (within 0.02 of a hull edge) left out alone: extrapolation, as the held-out row.
+  std::vector<Split> edge_folds;
+  {
+    std::vector<Eigen::Vector2d> points;
+    for (int i : hold_out.selected) points.emplace_back(lights[i].x(), lights[i].y());
+    std::vector<int> order(points.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return points[a].x() < points[b].x() ||
+             (points[a].x() == points[b].x() && points[a].y() < points[b].y());
+    });
+    const auto cross = [&](int o, int a, int b) {
+      const Eigen::Vector2d u = points[a] - points[o], v = points[b] - points[o];
+      return u.x() * v.y() - u.y() * v.x();
+    };
+    std::vector<int> hull;
+    for (int pass = 0; pass < 2; ++pass) {
+      const std::size_t start = hull.size();
+      for (int i : order) {
+        while (hull.size() >= start + 2 && cross(hull[hull.size() - 2], hull.back(), i) <= 0) {
+          hull.pop_back();
+        }
+        hull.push_back(i);
+      }
+      hull.pop_back();
+      std::reverse(order.begin(), order.end());
+    }
+    for (std::size_t t = 0; t < points.size(); ++t) {
+      bool edge = false;
+      for (std::size_t e = 0; e < hull.size(); ++e) {
+        const Eigen::Vector2d a = points[hull[e]], b = points[hull[(e + 1) % hull.size()]];
+        const Eigen::Vector2d d = b - a;
+        const double along = std::clamp((points[t] - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+        if ((a + along * d - points[t]).norm() < 0.02) edge = true;
+      }
+      if (!edge) continue;
+      Split fold;
+      fold.held.push_back(hold_out.selected[t]);
+      for (int i : hold_out.selected) {
+        if (i != hold_out.selected[t]) fold.others.push_back(i);
+      }
+      edge_folds.push_back(std::move(fold));
+    }
+  }
+  fmt::print("{} edge folds\n", edge_folds.size());
+  double best_edge = -1e300, best_edge_test = 0.0;
+  std::string best_edge_label;
   const Split test{hold_out.held_out, hold_out.selected};
   double best_score = -1e300, best_test = 0.0;
   std::string best_label;
@@ -386,11 +434,22 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
             score += mean_psnr(fold, factor * spacing, regularisation, planes);
           }
           score /= static_cast<double>(folds.size());
+          double edge_score = 0.0;
+          for (const Split& fold : edge_folds) {
+            edge_score += mean_psnr(fold, factor * spacing, regularisation, planes);
+          }
+          edge_score /= static_cast<double>(std::max<std::size_t>(1, edge_folds.size()));
           const double held = mean_psnr(test, factor * spacing, regularisation, planes);
           const std::string label = fmt::format("rbf {:.3g} deg / {:g}, {} planes",
                                                 factor * spacing, regularisation, planes);
-          fmt::print("clamped leave-block-out {}: score {:.2f}, held out {:.2f}\n", label, score,
-                     held);
+          fmt::print(
+              "clamped leave-block-out {}: score {:.2f}, edge score {:.2f}, held out {:.2f}\n",
+              label, score, edge_score, held);
+          if (edge_score > best_edge) {
+            best_edge = edge_score;
+            best_edge_test = held;
+            best_edge_label = label;
+          }
           if (score > best_score) {
             best_score = score;
             best_test = held;
@@ -403,6 +462,8 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
   }
   fmt::print("chosen by the clamped leave-block-out score: {} (score {:.2f}): held out {:.2f}\n",
              best_label, best_score, best_test);
+  fmt::print("chosen by the clamped edge score: {} (score {:.2f}): held out {:.2f}\n",
+             best_edge_label, best_edge, best_edge_test);
 }
 
 // --oracle: what the held-out lights themselves would choose (never used to choose; it shows how
