@@ -105,8 +105,12 @@ Arguments Parse(int argc, char** argv) {
       arguments.profile.rbf_tail = RbfTailFromString(value());
     } else if (a == "--leave-out") {
       const std::string scheme = value();
-      if (scheme != "one" && scheme != "block") throw Error("--leave-out: expected one or block");
-      arguments.profile.leave_out = scheme == "block" ? LeaveOut::kBlock : LeaveOut::kOne;
+      if (scheme != "one" && scheme != "block" && scheme != "edge") {
+        throw Error("--leave-out: expected one, block or edge");
+      }
+      arguments.profile.leave_out = scheme == "block"  ? LeaveOut::kBlock
+                                    : scheme == "edge" ? LeaveOut::kEdge
+                                                       : LeaveOut::kOne;
     } else if (a.starts_with("--")) {
       throw Error(fmt::format("unknown option {}", a));
     } else {
@@ -131,11 +135,13 @@ std::vector<Method> ParseMethods(const std::string& list, const LightProfileOpti
     const std::size_t comma = std::min(list.find(',', start), list.size());
     const std::string item = list.substr(start, comma - start);
     start = comma + 1;
-    // Suffixes "+block" (LeaveOut::kBlock) and "+quadratic" (the RBF's quadratic tail).
+    // Suffixes "+block", "+edge" (LeaveOut::kBlock, kEdge) and "+quadratic" (the RBF's quadratic
+    // tail).
     std::string name = item;
     LightProfileOptions options = profile;
     for (const auto& [suffix, apply] : std::vector<std::pair<std::string, std::function<void()>>>{
              {"+block", [&] { options.leave_out = LeaveOut::kBlock; }},
+             {"+edge", [&] { options.leave_out = LeaveOut::kEdge; }},
              {"+quadratic", [&] { options.rbf_tail = RbfTail::kQuadratic; }}}) {
       if (const std::size_t at = name.find(suffix); at != std::string::npos) {
         name.erase(at, suffix.size());
@@ -161,6 +167,7 @@ std::string MethodLabel(const Method& method) {
     label += fmt::format(":{}", method.profile.planes);
   }
   if (method.profile.leave_out == LeaveOut::kBlock) label += "+block";
+  if (method.profile.leave_out == LeaveOut::kEdge) label += "+edge";
   if (method.kind == Method::Kind::kRbf && method.profile.rbf_tail == RbfTail::kQuadratic) {
     label += "+quadratic";
   }
@@ -374,50 +381,16 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
       (t % folds.size() == f ? folds[f].held : folds[f].others).push_back(hold_out.selected[t]);
     }
   }
-  // Edge folds: each training light on the boundary of the training lights' convex hull in
-  // (lx, ly) (within 0.02 of a hull edge) left out alone: extrapolation, as the held-out row.
+  // Edge folds: each training light on the boundary of the training lights' hull in (lx, ly)
+  // (HullBoundaryLights) left out alone: extrapolation, as the held-out row.
   std::vector<Split> edge_folds;
-  {
-    std::vector<Eigen::Vector2d> points;
-    for (int i : hold_out.selected) points.emplace_back(lights[i].x(), lights[i].y());
-    std::vector<int> order(points.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-      return points[a].x() < points[b].x() ||
-             (points[a].x() == points[b].x() && points[a].y() < points[b].y());
-    });
-    const auto cross = [&](int o, int a, int b) {
-      const Eigen::Vector2d u = points[a] - points[o], v = points[b] - points[o];
-      return u.x() * v.y() - u.y() * v.x();
-    };
-    std::vector<int> hull;
-    for (int pass = 0; pass < 2; ++pass) {
-      const std::size_t start = hull.size();
-      for (int i : order) {
-        while (hull.size() >= start + 2 && cross(hull[hull.size() - 2], hull.back(), i) <= 0) {
-          hull.pop_back();
-        }
-        hull.push_back(i);
-      }
-      hull.pop_back();
-      std::reverse(order.begin(), order.end());
+  for (int t : HullBoundaryLights(training)) {
+    Split fold;
+    fold.held.push_back(hold_out.selected[t]);
+    for (int i : hold_out.selected) {
+      if (i != fold.held.front()) fold.others.push_back(i);
     }
-    for (std::size_t t = 0; t < points.size(); ++t) {
-      bool edge = false;
-      for (std::size_t e = 0; e < hull.size(); ++e) {
-        const Eigen::Vector2d a = points[hull[e]], b = points[hull[(e + 1) % hull.size()]];
-        const Eigen::Vector2d d = b - a;
-        const double along = std::clamp((points[t] - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-        if ((a + along * d - points[t]).norm() < 0.02) edge = true;
-      }
-      if (!edge) continue;
-      Split fold;
-      fold.held.push_back(hold_out.selected[t]);
-      for (int i : hold_out.selected) {
-        if (i != hold_out.selected[t]) fold.others.push_back(i);
-      }
-      edge_folds.push_back(std::move(fold));
-    }
+    edge_folds.push_back(std::move(fold));
   }
   fmt::print("{} edge folds\n", edge_folds.size());
   double best_edge = -1e300, best_edge_test = 0.0;

@@ -95,7 +95,7 @@ std::vector<LightDirection> Select(const std::vector<LightDirection>& lights,
 LeaveOutFolds::Scores RbfScores(const LeaveOutFolds& folds,
                                 const std::vector<LightDirection>& lights, double width,
                                 double regularisation, RbfTail tail) {
-  if (folds.scheme() == LeaveOut::kOne) {
+  if (folds.scheme() != LeaveOut::kBlock) {
     return folds.Score(RbfLeaveOneOutWeights(lights, width, regularisation, tail));
   }
   return folds.Score([&](const LeaveOutFolds::Fold& fold) -> Eigen::MatrixXd {
@@ -118,7 +118,7 @@ LeaveOutFolds::Scores RbfScores(const LeaveOutFolds& folds,
 LeaveOutFolds::Scores BilinearScores(const LeaveOutFolds& folds,
                                      const std::vector<LightDirection>& lights, int grid_size,
                                      double smoothness) {
-  if (folds.scheme() == LeaveOut::kOne) {
+  if (folds.scheme() != LeaveOut::kBlock) {
     return folds.Score(BilinearLeaveOneOutWeights(lights, grid_size, smoothness));
   }
   return folds.Score([&](const LeaveOutFolds::Fold& fold) -> Eigen::MatrixXd {
@@ -136,7 +136,15 @@ LeaveOutFolds::Scores BilinearScores(const LeaveOutFolds& folds,
 }
 
 std::string_view ToString(LeaveOut scheme) {
-  return scheme == LeaveOut::kBlock ? "leave-block-out" : "leave-one-out";
+  switch (scheme) {
+    case LeaveOut::kBlock:
+      return "leave-block-out";
+    case LeaveOut::kEdge:
+      return "leave-edge-out";
+    case LeaveOut::kOne:
+      break;
+  }
+  return "leave-one-out";
 }
 
 nlohmann::json Number(double value) {
@@ -326,11 +334,61 @@ LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::Vector
 
 }  // namespace
 
-LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme)
+std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights) {
+  constexpr double kTolerance = 0.02;
+  std::vector<Eigen::Vector2d> points;
+  for (const LightDirection& l : lights) points.emplace_back(l.x(), l.y());
+  std::vector<int> order(points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return points[a].x() < points[b].x() ||
+           (points[a].x() == points[b].x() && points[a].y() < points[b].y());
+  });
+  const auto turn = [&](int o, int a, int b) {
+    const Eigen::Vector2d u = points[a] - points[o], v = points[b] - points[o];
+    return u.x() * v.y() - u.y() * v.x();
+  };
+  // Andrew's monotone chain: the lower hull, then the upper (the order reversed).
+  std::vector<int> hull;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t start = hull.size();
+    for (int i : order) {
+      while (hull.size() >= start + 2 && turn(hull[hull.size() - 2], hull.back(), i) <= 0) {
+        hull.pop_back();
+      }
+      hull.push_back(i);
+    }
+    hull.pop_back();
+    std::reverse(order.begin(), order.end());
+  }
+  std::vector<int> boundary;
+  for (std::size_t t = 0; t < points.size(); ++t) {
+    for (std::size_t e = 0; e < hull.size(); ++e) {
+      const Eigen::Vector2d a = points[hull[e]], d = points[hull[(e + 1) % hull.size()]] - a;
+      const double along = d.squaredNorm() > 0.0
+                               ? std::clamp((points[t] - a).dot(d) / d.squaredNorm(), 0.0, 1.0)
+                               : 0.0;
+      if ((a + along * d - points[t]).norm() < kTolerance) {
+        boundary.push_back(static_cast<int>(t));
+        break;
+      }
+    }
+  }
+  return boundary;
+}
+
+LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
+                             const std::vector<LightDirection>& lights)
     : scheme_(scheme), diagonal_(gram.diagonal()) {
   const auto n = static_cast<int>(gram.rows());
   std::vector<std::vector<int>> held_out;
-  if (scheme == LeaveOut::kBlock) {
+  if (scheme == LeaveOut::kEdge) {
+    if (static_cast<int>(lights.size()) != n) {
+      throw Error(
+          fmt::format("leave-edge-out: {} lights for a {}x{} Gram matrix", lights.size(), n, n));
+    }
+    for (int i : HullBoundaryLights(lights)) held_out.push_back({i});
+  } else if (scheme == LeaveOut::kBlock) {
     for (int offset = 0; offset < std::min(kBlockStride, n); ++offset) {
       held_out.emplace_back();
       for (int i = offset; i < n; i += kBlockStride) held_out.back().push_back(i);
@@ -340,9 +398,9 @@ LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme)
     for (int i = 0; i < n; i += stride) held_out.push_back({i});
   }
   plane_entries_ = std::numeric_limits<Eigen::Index>::max();
-  for (std::vector<int>& lights : held_out) {
+  for (std::vector<int>& left_out : held_out) {
     Fold fold;
-    fold.held_out = std::move(lights);
+    fold.held_out = std::move(left_out);
     for (int j = 0; j < n; ++j) {
       if (!std::binary_search(fold.held_out.begin(), fold.held_out.end(), j)) {
         fold.others.push_back(j);
@@ -362,7 +420,7 @@ LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme)
 }
 
 LeaveOutFolds::Scores LeaveOutFolds::Score(const Eigen::MatrixXd& weights) const {
-  if (scheme_ != LeaveOut::kOne || weights.rows() != diagonal_.size() ||
+  if (scheme_ == LeaveOut::kBlock || weights.rows() != diagonal_.size() ||
       weights.cols() != diagonal_.size()) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     return {Eigen::VectorXd::Constant(plane_entries_, nan),
@@ -442,7 +500,7 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
   }
   const RbfTail tail = options.rbf_tail;
   const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));
-  const LeaveOutFolds folds(gram, options.leave_out);
+  const LeaveOutFolds folds(gram, options.leave_out, lights);
   RbfParameters best;
   best.tail = tail;
   best.mean_snr_db = -std::numeric_limits<double>::infinity();
@@ -489,7 +547,7 @@ BilinearParameters ChooseBilinearParameters(const std::vector<LightDirection>& l
     throw Error(source, fmt::format("bilinear: {} lights; at least 2 are needed", lights.size()));
   }
   const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));
-  const LeaveOutFolds folds(gram, options.leave_out);
+  const LeaveOutFolds folds(gram, options.leave_out, lights);
   BilinearParameters best;
   best.mean_snr_db = -std::numeric_limits<double>::infinity();
   best.planes = planes.front();

@@ -36,7 +36,9 @@ class LeaveOutFolds {
   static constexpr int kMaxFolds = 128;
   // kBlock (IMPLEMENTER CHOICE): every 8th light at once, as the held-out benchmark holds out.
   static constexpr int kBlockStride = 8;
-  LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme);
+  // kEdge: one fold per light of HullBoundaryLights(lights). `lights` are the Gram matrix's.
+  LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
+                const std::vector<LightDirection>& lights);
 
   struct Fold {
     std::vector<int> held_out;    // H
@@ -65,7 +67,8 @@ class LeaveOutFolds {
   };
   using FoldWeights = std::function<Eigen::MatrixXd(const Fold&)>;
   Scores Score(const FoldWeights& weights) const;
-  // Leave-one-out only: `weights` n x n, row i the leave-one-out weights of light i (Rippa's).
+  // Folds of one light (kOne, kEdge): `weights` n x n, row i the leave-one-out weights of light i
+  // (Rippa's).
   Scores Score(const Eigen::MatrixXd& weights) const;
 
  private:
@@ -74,6 +77,10 @@ class LeaveOutFolds {
   std::vector<Fold> folds_;
   Eigen::Index plane_entries_ = 1;
 };
+
+// The lights within 0.02 of the boundary of their convex hull in (lx, ly) (IMPLEMENTER CHOICE:
+// the lights a new light beyond the captured ones is extrapolated from), in increasing order.
+std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights);
 
 // The plane counts a fit may take: options.planes > 0 that count, 0 every axis (n - 1 in a fold),
 // kChoosePlanes 1..kMaxChosenPlanes; each capped at the n - 1 a fold has.

@@ -434,6 +434,63 @@ TEST(LightProfileFitTest, LeaveBlockOutIsThatOfRefittingWithoutEachBlock) {
   EXPECT_EQ(r.details()["rbf"]["width_from"], "leave-block-out");
 }
 
+TEST(LightProfileFitTest, HullBoundaryLightsAreTheGridsEdge) {
+  // A 5 x 5 grid in (lx, ly), rows in order: the 16 lights of its outer ring are the boundary.
+  std::vector<LightDirection> lights;
+  for (int row = 0; row < 5; ++row) {
+    for (int column = 0; column < 5; ++column) {
+      const double x = -0.4 + 0.2 * column, y = -0.4 + 0.2 * row;
+      lights.push_back(LightDirection::FromVector({x, y, std::sqrt(1.0 - x * x - y * y)}));
+    }
+  }
+  std::vector<int> expected;
+  for (int i = 0; i < 25; ++i) {
+    if (i / 5 == 0 || i / 5 == 4 || i % 5 == 0 || i % 5 == 4) expected.push_back(i);
+  }
+  EXPECT_EQ(HullBoundaryLights(lights), expected);
+}
+
+TEST(LightProfileFitTest, LeaveEdgeOutIsThatOfRefittingWithoutEachEdgeLight) {
+  // LeaveOut::kEdge: the leave-one-out closed form over the hull's boundary lights only, against
+  // refitting without each of them (3 PCA planes).
+  const auto synthetic = testing::ShadowedSpecularSet(8);
+  const Observations observations(synthetic.set);
+  const auto& lights = synthetic.set.lights();
+  const Eigen::MatrixXd gram = observations.Gram();
+  const Eigen::MatrixXd matrix = observations.matrix().cast<double>();
+  LightProfileOptions options;
+  options.rbf_width_degrees = 24.0;
+  options.rbf_regularisation = 1e-3;
+  options.planes = 3;
+  options.leave_out = LeaveOut::kEdge;
+  const RbfParameters rbf = ChooseRbfParameters(lights, gram, options);
+  const std::vector<int> edge = HullBoundaryLights(lights);
+  ASSERT_FALSE(edge.empty());
+  ASSERT_LT(edge.size(), lights.size());
+  double squares = 0.0, signal = 0.0;
+  for (int i : edge) {
+    std::vector<int> others;
+    std::vector<LightDirection> rest;
+    for (int j = 0; j < static_cast<int>(lights.size()); ++j) {
+      if (j != i) {
+        others.push_back(j);
+        rest.push_back(lights[j]);
+      }
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram(others, others));
+    const Eigen::MatrixXd axes = solver.eigenvectors().rightCols(3);
+    const Eigen::VectorXd w = RbfInterpolation(rest, 24.0, 1e-3).Weights(lights[i]);
+    squares += (matrix(Eigen::all, others) * (axes * (axes.transpose() * w)) - matrix.col(i))
+                   .squaredNorm();
+    signal += gram(i, i);
+  }
+  const double explicit_error = std::sqrt(squares / signal);
+  fmt::print("leave-edge-out ({} of {} lights), 3 planes: rbf {:.8g} (explicit {:.8g})\n",
+             edge.size(), lights.size(), rbf.relative_error, explicit_error);
+  // The same double Gram matrix on both sides: bound 1e-6 relative, as above.
+  EXPECT_NEAR(rbf.relative_error, explicit_error, 1e-6 * explicit_error);
+}
+
 TEST(LightProfileFitTest, BadOptionsAreClearErrors) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBricks, 8);
   Method bilinear = Method::Parse("bilinear");

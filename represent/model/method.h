@@ -19,6 +19,8 @@ enum class RbfTail {
 enum class LeaveOut {
   kOne,    // each light left out alone
   kBlock,  // every 8th light left out at once (8 folds), as a held-out test leaves lights out
+  kEdge,   // each light on the boundary of the lights' hull in (lx, ly) left out alone:
+           // extrapolation, as predicting lights beyond the captured ones
 };
 
 // Options of the light-profile methods, `rbf` and `bilinear`
