@@ -34,7 +34,7 @@ double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights) 
   return nearest[nearest.size() / 2];
 }
 
-// The position in LeaveOneOutFolds::Scores of `planes` (0: every axis).
+// The position in LeaveOutFolds::Scores of `planes` (0: every axis).
 Eigen::Index ScoreIndex(int planes, Eigen::Index fold_size) {
   return (planes == 0 ? fold_size : std::min<Eigen::Index>(planes, fold_size)) - 1;
 }
@@ -42,9 +42,9 @@ Eigen::Index ScoreIndex(int planes, Eigen::Index fold_size) {
 // Rippa's leave-one-out weights of an RBF interpolation, e_i - B_i / B_ii; empty when a diagonal
 // entry vanishes or the system cannot be solved.
 Eigen::MatrixXd RbfLeaveOneOutWeights(const std::vector<LightDirection>& lights, double width,
-                                      double regularisation) {
+                                      double regularisation, RbfTail tail) {
   try {
-    const RbfInterpolation interpolation(lights, width, regularisation);
+    const RbfInterpolation interpolation(lights, width, regularisation, tail);
     const Eigen::MatrixXd& block = interpolation.InverseBlock();
     Eigen::MatrixXd weights = -block;
     for (Eigen::Index i = 0; i < block.rows(); ++i) {
@@ -83,6 +83,70 @@ Eigen::MatrixXd BilinearLeaveOneOutWeights(const std::vector<LightDirection>& li
   return hat;
 }
 
+std::vector<LightDirection> Select(const std::vector<LightDirection>& lights,
+                                   const std::vector<int>& indices) {
+  std::vector<LightDirection> selected;
+  for (int i : indices) selected.push_back(lights[i]);
+  return selected;
+}
+
+// The scores of an RBF candidate: Rippa's closed form for leave-one-out, else each fold's
+// interpolation over its other lights evaluated at its left-out ones.
+LeaveOutFolds::Scores RbfScores(const LeaveOutFolds& folds,
+                                const std::vector<LightDirection>& lights, double width,
+                                double regularisation, RbfTail tail) {
+  if (folds.scheme() != LeaveOut::kBlock) {
+    return folds.Score(RbfLeaveOneOutWeights(lights, width, regularisation, tail));
+  }
+  return folds.Score([&](const LeaveOutFolds::Fold& fold) -> Eigen::MatrixXd {
+    try {
+      const RbfInterpolation interpolation(Select(lights, fold.others), width, regularisation,
+                                           tail);
+      Eigen::MatrixXd weights(fold.held_out.size(), fold.others.size());
+      for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
+        weights.row(static_cast<Eigen::Index>(h)) =
+            interpolation.Weights(lights[fold.held_out[h]]).transpose();
+      }
+      return weights;
+    } catch (const Error&) {
+      return {};
+    }
+  });
+}
+
+// The scores of a bilinear smoothness, as RbfScores.
+LeaveOutFolds::Scores BilinearScores(const LeaveOutFolds& folds,
+                                     const std::vector<LightDirection>& lights, int grid_size,
+                                     double smoothness) {
+  if (folds.scheme() != LeaveOut::kBlock) {
+    return folds.Score(BilinearLeaveOneOutWeights(lights, grid_size, smoothness));
+  }
+  return folds.Score([&](const LeaveOutFolds::Fold& fold) -> Eigen::MatrixXd {
+    const Eigen::MatrixXd resampling =
+        BilinearResampling(Select(lights, fold.others), grid_size, smoothness);
+    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(fold.held_out.size(), fold.others.size());
+    for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
+      const LightDirection& l = lights[fold.held_out[h]];
+      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
+        weights.row(static_cast<Eigen::Index>(h)) += w * resampling.row(node);
+      }
+    }
+    return weights;
+  });
+}
+
+std::string_view ToString(LeaveOut scheme) {
+  switch (scheme) {
+    case LeaveOut::kBlock:
+      return "leave-block-out";
+    case LeaveOut::kEdge:
+      return "leave-edge-out";
+    case LeaveOut::kOne:
+      break;
+  }
+  return "leave-one-out";
+}
+
 nlohmann::json Number(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
 }
@@ -93,7 +157,7 @@ struct PlaneChoice {
   double relative_error = std::numeric_limits<double>::quiet_NaN();
   double mean_snr_db = -std::numeric_limits<double>::infinity();
 };
-PlaneChoice BestPlanes(const LeaveOneOutFolds::Scores& scores, const std::vector<int>& planes) {
+PlaneChoice BestPlanes(const LeaveOutFolds::Scores& scores, const std::vector<int>& planes) {
   PlaneChoice best;
   best.planes = planes.front();
   for (int k : planes) {
@@ -105,8 +169,7 @@ PlaneChoice BestPlanes(const LeaveOneOutFolds::Scores& scores, const std::vector
   return best;
 }
 
-nlohmann::json ScoresByPlanes(const LeaveOneOutFolds::Scores& scores,
-                              const std::vector<int>& planes) {
+nlohmann::json ScoresByPlanes(const LeaveOutFolds::Scores& scores, const std::vector<int>& planes) {
   nlohmann::json table = nlohmann::json::array();
   for (int k : planes) {
     const Eigen::Index index = ScoreIndex(k, scores.mean_snr_db.size());
@@ -182,7 +245,9 @@ nlohmann::json PlanesJson(int planes, const PrincipalAxes& axes) {
 }
 
 std::string PlanesFrom(const LightProfileOptions& options) {
-  return options.planes == LightProfileOptions::kChoosePlanes ? "leave-one-out" : "fixed";
+  return options.planes == LightProfileOptions::kChoosePlanes
+             ? std::string(ToString(options.leave_out))
+             : "fixed";
 }
 
 void CheckPlanes(const LightProfileOptions& options, const std::string& method,
@@ -208,8 +273,9 @@ LightProfileModel RbfModel(const Eigen::MatrixXd& gram, const Eigen::VectorXd& c
   details["rbf"] = {
       {"width_deg", chosen.width_degrees},
       {"regularisation", chosen.regularisation},
-      {"width_from", options.rbf_width_degrees ? "option" : "leave-one-out"},
-      {"regularisation_from", options.rbf_regularisation ? "option" : "leave-one-out"},
+      {"tail", ToString(chosen.tail)},
+      {"width_from", options.rbf_width_degrees ? "option" : ToString(options.leave_out)},
+      {"regularisation_from", options.rbf_regularisation ? "option" : ToString(options.leave_out)},
       {"relative_error", Number(chosen.relative_error)},
       {"mean_snr_db", Number(chosen.mean_snr_db)},
       {"leave_one_out", chosen.leave_one_out}};
@@ -217,7 +283,8 @@ LightProfileModel RbfModel(const Eigen::MatrixXd& gram, const Eigen::VectorXd& c
   details["pca"]["planes_from"] = PlanesFrom(options);
   details["pca"]["leave_one_out"] = chosen.by_planes;
   model.basis = std::make_shared<RbfLightBasis>(
-      RbfInterpolation(lights, chosen.width_degrees, chosen.regularisation), axes.basis);
+      RbfInterpolation(lights, chosen.width_degrees, chosen.regularisation, chosen.tail),
+      axes.basis);
   model.details = std::move(details);
   return model;
 }
@@ -256,7 +323,7 @@ LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::Vector
   details["bilinear"] = {
       {"grid_size", g},
       {"smoothness", chosen.smoothness},
-      {"smoothness_from", options.bilinear_smoothness ? "option" : "leave-one-out"},
+      {"smoothness_from", options.bilinear_smoothness ? "option" : ToString(options.leave_out)},
       {"relative_error", Number(chosen.relative_error)},
       {"mean_snr_db", Number(chosen.mean_snr_db)},
       {"leave_one_out", chosen.leave_one_out}};
@@ -267,57 +334,140 @@ LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::Vector
 
 }  // namespace
 
-LeaveOneOutFolds::LeaveOneOutFolds(const Eigen::MatrixXd& gram) : diagonal_(gram.diagonal()) {
-  const auto n = static_cast<int>(gram.rows());
-  const int stride = (n + kMaxFolds - 1) / kMaxFolds;
-  for (int i = 0; i < n; i += stride) {
-    Fold fold;
-    fold.light = i;
-    for (int j = 0; j < n; ++j) {
-      if (j != i) fold.others.push_back(j);
+std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights) {
+  constexpr double kTolerance = 0.02;
+  std::vector<Eigen::Vector2d> points;
+  for (const LightDirection& l : lights) points.emplace_back(l.x(), l.y());
+  std::vector<int> order(points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return points[a].x() < points[b].x() ||
+           (points[a].x() == points[b].x() && points[a].y() < points[b].y());
+  });
+  const auto turn = [&](int o, int a, int b) {
+    const Eigen::Vector2d u = points[a] - points[o], v = points[b] - points[o];
+    return u.x() * v.y() - u.y() * v.x();
+  };
+  // Andrew's monotone chain: the lower hull, then the upper (the order reversed).
+  std::vector<int> hull;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t start = hull.size();
+    for (int i : order) {
+      while (hull.size() >= start + 2 && turn(hull[hull.size() - 2], hull.back(), i) <= 0) {
+        hull.pop_back();
+      }
+      hull.push_back(i);
     }
+    hull.pop_back();
+    std::reverse(order.begin(), order.end());
+  }
+  std::vector<int> boundary;
+  for (std::size_t t = 0; t < points.size(); ++t) {
+    for (std::size_t e = 0; e < hull.size(); ++e) {
+      const Eigen::Vector2d a = points[hull[e]], d = points[hull[(e + 1) % hull.size()]] - a;
+      const double along = d.squaredNorm() > 0.0
+                               ? std::clamp((points[t] - a).dot(d) / d.squaredNorm(), 0.0, 1.0)
+                               : 0.0;
+      if ((a + along * d - points[t]).norm() < kTolerance) {
+        boundary.push_back(static_cast<int>(t));
+        break;
+      }
+    }
+  }
+  return boundary;
+}
+
+LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
+                             const std::vector<LightDirection>& lights)
+    : scheme_(scheme), diagonal_(gram.diagonal()) {
+  const auto n = static_cast<int>(gram.rows());
+  std::vector<std::vector<int>> held_out;
+  if (scheme == LeaveOut::kEdge) {
+    if (static_cast<int>(lights.size()) != n) {
+      throw Error(
+          fmt::format("leave-edge-out: {} lights for a {}x{} Gram matrix", lights.size(), n, n));
+    }
+    for (int i : HullBoundaryLights(lights)) held_out.push_back({i});
+  } else if (scheme == LeaveOut::kBlock) {
+    for (int offset = 0; offset < std::min(kBlockStride, n); ++offset) {
+      held_out.emplace_back();
+      for (int i = offset; i < n; i += kBlockStride) held_out.back().push_back(i);
+    }
+  } else {
+    const int stride = (n + kMaxFolds - 1) / kMaxFolds;
+    for (int i = 0; i < n; i += stride) held_out.push_back({i});
+  }
+  plane_entries_ = std::numeric_limits<Eigen::Index>::max();
+  for (std::vector<int>& left_out : held_out) {
+    Fold fold;
+    fold.held_out = std::move(left_out);
+    for (int j = 0; j < n; ++j) {
+      if (!std::binary_search(fold.held_out.begin(), fold.held_out.end(), j)) {
+        fold.others.push_back(j);
+      }
+    }
+    if (fold.others.empty()) continue;
     const Eigen::MatrixXd rest = gram(fold.others, fold.others);
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(rest);
     if (solver.info() != Eigen::Success) continue;  // leaves this fold out
     fold.axes = solver.eigenvectors().rowwise().reverse();
     fold.eigenvalues = solver.eigenvalues().reverse();
-    const Eigen::VectorXd column = gram(fold.others, i);
-    fold.cross = fold.axes.transpose() * column;
+    fold.cross = fold.axes.transpose() * gram(fold.others, fold.held_out);
+    plane_entries_ = std::min<Eigen::Index>(plane_entries_, fold.others.size());
     folds_.push_back(std::move(fold));
   }
+  if (folds_.empty()) plane_entries_ = std::max(1, n - 1);
 }
 
-LeaveOneOutFolds::Scores LeaveOneOutFolds::Score(const Eigen::MatrixXd& weights) const {
-  const Eigen::Index size = std::max<Eigen::Index>(1, diagonal_.size() - 1);
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  Scores scores{Eigen::VectorXd::Zero(size), Eigen::VectorXd::Zero(size)};
-  if (weights.rows() != diagonal_.size() || folds_.empty()) {
-    return {Eigen::VectorXd::Constant(size, nan), Eigen::VectorXd::Constant(size, nan)};
+LeaveOutFolds::Scores LeaveOutFolds::Score(const Eigen::MatrixXd& weights) const {
+  if (scheme_ == LeaveOut::kBlock || weights.rows() != diagonal_.size() ||
+      weights.cols() != diagonal_.size()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {Eigen::VectorXd::Constant(plane_entries_, nan),
+            Eigen::VectorXd::Constant(plane_entries_, nan)};
   }
+  return Score(
+      [&](const Fold& fold) -> Eigen::MatrixXd { return weights(fold.held_out, fold.others); });
+}
+
+LeaveOutFolds::Scores LeaveOutFolds::Score(const FoldWeights& weights) const {
+  const Eigen::Index size = plane_entries_;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Scores failed{Eigen::VectorXd::Constant(size, nan), Eigen::VectorXd::Constant(size, nan)};
+  Scores scores{Eigen::VectorXd::Zero(size), Eigen::VectorXd::Zero(size)};
+  if (folds_.empty()) return failed;
   double total = 0.0;
+  int left_out = 0;
   for (const Fold& fold : folds_) {
-    const Eigen::VectorXd w = weights(fold.light, fold.others).transpose();
-    if (!w.allFinite()) {
-      return {Eigen::VectorXd::Constant(size, nan), Eigen::VectorXd::Constant(size, nan)};
+    const Eigen::MatrixXd w = weights(fold);
+    const auto held = static_cast<Eigen::Index>(fold.held_out.size());
+    const auto others = static_cast<Eigen::Index>(fold.others.size());
+    if (w.rows() != held || w.cols() != others || !w.allFinite()) return failed;
+    for (Eigen::Index h = 0; h < held; ++h) {
+      const Eigen::VectorXd a = fold.axes.transpose() * w.row(h).transpose();
+      const double signal = diagonal_[fold.held_out[h]];
+      double error = signal;
+      // Entry j < size - 1: j + 1 planes; the last entry: every axis of the fold.
+      for (Eigen::Index j = 0; j < others; ++j) {
+        error += fold.eigenvalues[j] * a[j] * a[j] - 2.0 * a[j] * fold.cross(j, h);
+        if (j < size - 1 || j == others - 1) {
+          const Eigen::Index entry = std::min(j, size - 1);
+          const double positive = std::max(error, 1e-300);
+          scores.relative_error[entry] += positive;
+          // An empty image (signal 0) predicted exactly carries no information: 0 dB.
+          scores.mean_snr_db[entry] += signal > 0.0 ? 10.0 * std::log10(signal / positive) : 0.0;
+        }
+      }
+      total += signal;
+      ++left_out;
     }
-    const Eigen::VectorXd a = fold.axes.transpose() * w;
-    const double signal = diagonal_[fold.light];
-    double error = signal;
-    for (Eigen::Index j = 0; j < size; ++j) {
-      error += fold.eigenvalues[j] * a[j] * a[j] - 2.0 * a[j] * fold.cross[j];
-      const double positive = std::max(error, 1e-300);
-      scores.relative_error[j] += positive;
-      // An empty image (signal 0) predicted exactly carries no information: 0 dB.
-      scores.mean_snr_db[j] += signal > 0.0 ? 10.0 * std::log10(signal / positive) : 0.0;
-    }
-    total += signal;
   }
   if (total > 0.0) {
     scores.relative_error = (scores.relative_error / total).cwiseSqrt();
   } else {
     scores.relative_error.setZero();
   }
-  scores.mean_snr_db /= static_cast<double>(folds_.size());
+  scores.mean_snr_db /= static_cast<double>(left_out);
   return scores;
 }
 
@@ -348,15 +498,17 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
   } else {
     regularisations.assign(kRegularisations.begin(), kRegularisations.end());
   }
+  const RbfTail tail = options.rbf_tail;
   const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));
-  const LeaveOneOutFolds folds(gram);
+  const LeaveOutFolds folds(gram, options.leave_out, lights);
   RbfParameters best;
+  best.tail = tail;
   best.mean_snr_db = -std::numeric_limits<double>::infinity();
   best.leave_one_out = nlohmann::json::array();
   for (double width : widths) {
     for (double regularisation : regularisations) {
       const PlaneChoice choice =
-          BestPlanes(folds.Score(RbfLeaveOneOutWeights(lights, width, regularisation)), planes);
+          BestPlanes(RbfScores(folds, lights, width, regularisation, tail), planes);
       best.leave_one_out.push_back({{"width_deg", width},
                                     {"regularisation", regularisation},
                                     {"planes", choice.planes},
@@ -373,13 +525,12 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
   }
   if (std::isfinite(best.mean_snr_db)) {
     best.by_planes = ScoresByPlanes(
-        folds.Score(RbfLeaveOneOutWeights(lights, best.width_degrees, best.regularisation)),
-        planes);
+        RbfScores(folds, lights, best.width_degrees, best.regularisation, best.tail), planes);
   }
   if (!std::isfinite(best.mean_snr_db)) {
     // Rebuild the first candidate to report why it fails (or the options' fault).
     try {
-      RbfInterpolation(lights, widths.front(), regularisations.front());
+      RbfInterpolation(lights, widths.front(), regularisations.front(), tail);
     } catch (const Error& error) {
       throw Error(source, error.fault());
     }
@@ -396,7 +547,7 @@ BilinearParameters ChooseBilinearParameters(const std::vector<LightDirection>& l
     throw Error(source, fmt::format("bilinear: {} lights; at least 2 are needed", lights.size()));
   }
   const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));
-  const LeaveOneOutFolds folds(gram);
+  const LeaveOutFolds folds(gram, options.leave_out, lights);
   BilinearParameters best;
   best.mean_snr_db = -std::numeric_limits<double>::infinity();
   best.planes = planes.front();
@@ -404,8 +555,8 @@ BilinearParameters ChooseBilinearParameters(const std::vector<LightDirection>& l
   std::vector<double> smoothnesses(kBilinearSmoothnesses.begin(), kBilinearSmoothnesses.end());
   if (options.bilinear_smoothness) smoothnesses = {*options.bilinear_smoothness};
   for (double smoothness : smoothnesses) {
-    const LeaveOneOutFolds::Scores scores =
-        folds.Score(BilinearLeaveOneOutWeights(lights, options.grid_size, smoothness));
+    const LeaveOutFolds::Scores scores =
+        BilinearScores(folds, lights, options.grid_size, smoothness);
     const PlaneChoice choice = BestPlanes(scores, planes);
     best.leave_one_out.push_back({{"smoothness", smoothness},
                                   {"planes", choice.planes},

@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <span>
@@ -19,65 +20,87 @@ namespace photomat {
 // The fits of the light-profile methods `rbf` and `bilinear`
 // (represent/model/light_profile_basis.h, README "RBF and bilinear").
 
-// Leave-one-out over the capture of a whole light-profile fit, interpolation and PCA together,
-// from the Gram matrix G = P^T P of the fitted profiles alone (no pass over the pixels). Fold i
-// drops light i: its PCA axes V are the eigenvectors of G without row and column i (light i's
-// values must not shape the axes that predict it), and the interpolation's leave-one-out weights
-// w_i (n entries, 0 at i) predict light i from the others as p^T V V^T w_i. With the fold's
-// eigenvalues s_j, the error summed over every profile row with k planes is
-//   G_ii + sum_{j <= k} (s_j a_j^2 - 2 a_j b_j),   a = V^T w_i, b = V^T G_{-i,i},
+// Leave-out scores over the capture of a whole light-profile fit, interpolation and PCA together,
+// from the Gram matrix G = P^T P of the fitted profiles alone (no pass over the pixels). A fold
+// leaves out a set H of lights (LeaveOut::kOne: one light; kBlock: every kBlockStride-th light
+// from an offset, so kBlockStride folds, as a held-out test leaves lights out): its PCA axes V are
+// the eigenvectors of G over the other lights O (the left-out values must not shape the axes that
+// predict them), and the interpolation's weights w_h over O (the fit on O alone, evaluated at
+// light h) predict light h as p_O^T V V^T w_h. With the fold's eigenvalues s_j, the error of h
+// summed over every profile row with k planes is
+//   G_hh + sum_{j <= k} (s_j a_j^2 - 2 a_j b_j),   a = V^T w_h, b = V^T G_{O,h},
 // so one eigen-decomposition per fold serves every k and every interpolation candidate.
-class LeaveOneOutFolds {
+class LeaveOutFolds {
  public:
-  // Folds over every light, or over every ceil(n / kMaxFolds)-th light of larger captures.
+  // kOne: folds over every light, or over every ceil(n / kMaxFolds)-th light of larger captures.
   static constexpr int kMaxFolds = 128;
-  explicit LeaveOneOutFolds(const Eigen::MatrixXd& gram);
+  // kBlock (IMPLEMENTER CHOICE): every 8th light at once, as the held-out benchmark holds out.
+  static constexpr int kBlockStride = 8;
+  // kEdge: one fold per light of HullBoundaryLights(lights). `lights` are the Gram matrix's.
+  LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
+                const std::vector<LightDirection>& lights);
 
-  // Per plane count, entry k - 1 for k = 1..n - 1 (k = n - 1: every axis of the fold, no PCA):
-  //  - relative_error: sqrt(the error summed over the folds / the folds' G_ii);
-  //  - mean_snr_db: the mean over the folds of 10 log10(G_ii / error_i), the left-out images'
-  //    signal-to-error ratio in dB. IMPLEMENTER CHOICE: the fits choose by this one, the mean of
-  //    per-image decibels as the held-out benchmark's mean PSNR (with a fixed peak, PSNR and this
-  //    differ by a constant per image); the summed error is dominated by the few hardest lights
-  //    (on DiLiGenT ball, highlights), where more planes help, and chose 14 to 16 planes where
-  //    most lights are predicted better by 4 to 6.
-  // `weights` is n x n, row i the leave-one-out weights of light i. NaN throughout when a fold's
-  // weights are not finite.
+  struct Fold {
+    std::vector<int> held_out;    // H
+    std::vector<int> others;      // O, increasing
+    Eigen::MatrixXd axes;         // |O| x |O|, by decreasing eigenvalue
+    Eigen::VectorXd eigenvalues;  // decreasing
+    Eigen::MatrixXd cross;        // axes^T G_{O,H}, |O| x |H|
+  };
+  const std::vector<Fold>& folds() const { return folds_; }
+  LeaveOut scheme() const { return scheme_; }
+
+  // Per plane count, entry k - 1 for k = 1..m, m the smallest |O| of a fold (k = m: every axis
+  // of each fold, no PCA):
+  //  - relative_error: sqrt(the error summed over the left-out lights / their G_hh);
+  //  - mean_snr_db: the mean over the left-out lights of 10 log10(G_hh / error_h), the left-out
+  //    images' signal-to-error ratio in dB. IMPLEMENTER CHOICE: the fits choose by this one, the
+  //    mean of per-image decibels as the held-out benchmark's mean PSNR (with a fixed peak, PSNR
+  //    and this differ by a constant per image); the summed error is dominated by the few hardest
+  //    lights (on DiLiGenT ball, highlights), where more planes help, and chose 14 to 16 planes
+  //    where most lights are predicted better by 4 to 6.
+  // `weights(fold)` is |H| x |O|, row h the weights of left-out light h over the fold's others.
+  // NaN throughout when a fold's weights are not finite or have the wrong size.
   struct Scores {
     Eigen::VectorXd relative_error;
     Eigen::VectorXd mean_snr_db;
   };
+  using FoldWeights = std::function<Eigen::MatrixXd(const Fold&)>;
+  Scores Score(const FoldWeights& weights) const;
+  // Folds of one light (kOne, kEdge): `weights` n x n, row i the leave-one-out weights of light i
+  // (Rippa's).
   Scores Score(const Eigen::MatrixXd& weights) const;
 
  private:
-  struct Fold {
-    int light;
-    std::vector<int> others;
-    Eigen::MatrixXd axes;         // (n - 1) x (n - 1), by decreasing eigenvalue
-    Eigen::VectorXd eigenvalues;  // decreasing
-    Eigen::VectorXd cross;        // axes^T G_{-i,i}
-  };
+  LeaveOut scheme_;
   Eigen::VectorXd diagonal_;
   std::vector<Fold> folds_;
+  Eigen::Index plane_entries_ = 1;
 };
+
+// The lights within 0.02 of the boundary of their convex hull in (lx, ly) (IMPLEMENTER CHOICE:
+// the lights a new light beyond the captured ones is extrapolated from), in increasing order.
+std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights);
 
 // The plane counts a fit may take: options.planes > 0 that count, 0 every axis (n - 1 in a fold),
 // kChoosePlanes 1..kMaxChosenPlanes; each capped at the n - 1 a fold has.
 std::vector<int> CandidatePlanes(const LightProfileOptions& options, int lights);
 
-// The RBF's kernel width and regularisation and the PCA's plane count: the options' values where
-// set, otherwise those of least leave-one-out error over the capture itself (LeaveOneOutFolds;
-// the interpolation's leave-one-out weights are Rippa's, e_i - B_i / B_ii with B the system
-// inverse's n x n block). Candidates (IMPLEMENTER CHOICE): widths 0.25 .. 4 times the median
-// angle from a light to its nearest neighbour (9 steps of sqrt 2), regularisation 0 and
-// 1e-5 .. 1 (decades; the kernel matrix's diagonal is 1), CandidatePlanes. `leave_one_out` lists
+// The RBF's kernel width, regularisation and tail and the PCA's plane count: the options' values
+// where set, otherwise those of best score over the capture itself (LeaveOutFolds with
+// options.leave_out; the interpolation's leave-one-out weights are Rippa's, e_i - B_i / B_ii with
+// B the system inverse's n x n block; a block fold solves the interpolation without its lights).
+// Candidates (IMPLEMENTER CHOICE): widths 0.25 .. 4 times the median angle from a light to its
+// nearest neighbour (9 steps of sqrt 2), regularisation 0 and 1e-5 .. 1 (decades; the kernel
+// matrix's diagonal is 1), CandidatePlanes; the tail is options.rbf_tail. `leave_one_out` lists
 // every width and regularisation with its best plane count and scores.
 struct RbfParameters {
   double width_degrees = 0.0;
   double regularisation = 0.0;
+  RbfTail tail = RbfTail::kAffine;
   int planes = 0;  // as LightProfileOptions::planes: 0 no PCA
   double relative_error = 0.0;
-  double mean_snr_db = 0.0;  // the choice's LeaveOneOutFolds score
+  double mean_snr_db = 0.0;  // the choice's LeaveOutFolds score
   // [{"width_deg", "regularisation", "planes", "relative_error", "mean_snr_db"}...]
   nlohmann::json leave_one_out;
   // The chosen width and regularisation's relative error per plane count: [{"planes", ...}...]
@@ -97,9 +120,10 @@ inline constexpr double kBilinearSmoothness = 1e-4;
 Eigen::MatrixXd BilinearResampling(const std::vector<LightDirection>& lights, int grid_size,
                                    double smoothness = kBilinearSmoothness);
 
-// The bilinear fit's smoothness and plane count of least leave-one-out error (LeaveOneOutFolds;
-// the leave-one-out weights of a penalised least-squares fit are (H_i - H_ii e_i) / (1 - H_ii),
-// H = b(L) R its hat matrix). Smoothness candidates (IMPLEMENTER CHOICE): options.
+// The bilinear fit's smoothness and plane count of best score (LeaveOutFolds with
+// options.leave_out; the leave-one-out weights of a penalised least-squares fit are
+// (H_i - H_ii e_i) / (1 - H_ii), H = b(L) R its hat matrix; a block fold resamples without its
+// lights). Smoothness candidates (IMPLEMENTER CHOICE): options.
 // bilinear_smoothness if set, else 1e-4 .. 10 (decades); planes: CandidatePlanes.
 struct BilinearParameters {
   double smoothness = kBilinearSmoothness;

@@ -81,8 +81,11 @@ std::shared_ptr<const LightBasis> LightBasisFromJson(const JsonReader& json) {
       for (Eigen::Index i = 0; i < lights.rows(); ++i) {
         nodes.push_back(LightDirection::FromVector(lights.row(i).transpose()));
       }
+      const RbfTail tail =
+          json.Has("tail") ? RbfTailFromString(json["tail"].String()) : RbfTail::kAffine;
       return std::make_shared<RbfLightBasis>(
-          RbfInterpolation(nodes, json["width_deg"].Number(), json["regularisation"].Number()),
+          RbfInterpolation(nodes, json["width_deg"].Number(), json["regularisation"].Number(),
+                           tail),
           pca);
     }
     if (kind == "interpolated") {

@@ -20,13 +20,21 @@ constexpr double kMinimumReciprocalCondition = 1e-13;
 // by the nodes (e.g. lz on one ring of equal slant).
 constexpr double kTailRankLimit = 1e-6;
 
-Eigen::Vector4d AffineTerms(const LightDirection& l) { return {1.0, l.x(), l.y(), l.z()}; }
+Eigen::VectorXd TailTerms(RbfTail tail, const LightDirection& l) {
+  if (tail == RbfTail::kAffine) return Eigen::Vector4d(1.0, l.x(), l.y(), l.z());
+  Eigen::VectorXd terms(7);
+  terms << 1.0, l.x(), l.y(), l.z(), l.x() * l.x(), l.y() * l.y(), l.x() * l.y();
+  return terms;
+}
 
 }  // namespace
 
 RbfInterpolation::RbfInterpolation(std::vector<LightDirection> nodes, double width_degrees,
-                                   double regularisation)
-    : nodes_(std::move(nodes)), width_degrees_(width_degrees), regularisation_(regularisation) {
+                                   double regularisation, RbfTail tail)
+    : nodes_(std::move(nodes)),
+      width_degrees_(width_degrees),
+      regularisation_(regularisation),
+      tail_kind_(tail) {
   const auto n = static_cast<Eigen::Index>(nodes_.size());
   if (n < 2) throw Error(fmt::format("rbf: {} lights; the interpolation needs at least 2", n));
   if (!(width_degrees_ > 0.0 && width_degrees_ <= 180.0)) {
@@ -37,11 +45,15 @@ RbfInterpolation::RbfInterpolation(std::vector<LightDirection> nodes, double wid
         fmt::format("rbf: regularisation {} must be a finite number >= 0", regularisation_));
   }
   chord_width_ = 2.0 * std::sin(width_degrees_ * M_PI / 360.0);
-  Eigen::MatrixXd terms(n, 4);
-  for (Eigen::Index i = 0; i < n; ++i) terms.row(i) = AffineTerms(nodes_[i]).transpose();
+  const auto term_count = TailTerms(tail_kind_, nodes_[0]).size();
+  Eigen::MatrixXd terms(n, term_count);
+  for (Eigen::Index i = 0; i < n; ++i) terms.row(i) = TailTerms(tail_kind_, nodes_[i]).transpose();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(terms, Eigen::ComputeFullV);
   Eigen::Index rank = 0;
-  while (rank < 4 && svd.singularValues()[rank] > kTailRankLimit * svd.singularValues()[0]) ++rank;
+  while (rank < svd.singularValues().size() &&
+         svd.singularValues()[rank] > kTailRankLimit * svd.singularValues()[0]) {
+    ++rank;
+  }
   rank = std::min(rank, n - 1);  // keep at least one kernel degree of freedom
   tail_ = svd.matrixV().leftCols(rank);
 
@@ -73,7 +85,7 @@ Eigen::VectorXd RbfInterpolation::Features(const LightDirection& light) const {
   for (Eigen::Index i = 0; i < n; ++i) {
     features[i] = std::exp(-(light.vector() - nodes_[i].vector()).squaredNorm() * scale);
   }
-  features.tail(tail_.cols()) = tail_.transpose() * AffineTerms(light);
+  features.tail(tail_.cols()) = tail_.transpose() * TailTerms(tail_kind_, light);
   return features;
 }
 
@@ -94,7 +106,18 @@ nlohmann::json RbfLightBasis::ToJson() const {
           {"lights", std::move(lights)},
           {"width_deg", interpolation_.width_degrees()},
           {"regularisation", interpolation_.regularisation()},
+          {"tail", ToString(interpolation_.tail())},
           {"pca", MatrixToJson(pca_)}};
+}
+
+std::string_view ToString(RbfTail tail) {
+  return tail == RbfTail::kQuadratic ? "quadratic" : "affine";
+}
+
+RbfTail RbfTailFromString(std::string_view name) {
+  if (name == "affine") return RbfTail::kAffine;
+  if (name == "quadratic") return RbfTail::kQuadratic;
+  throw Error(fmt::format("rbf: tail \"{}\"; expected \"affine\" or \"quadratic\"", name));
 }
 
 BilinearLightBasis::BilinearLightBasis(int grid_size, Eigen::MatrixXd pca)

@@ -54,6 +54,41 @@ TEST(RbfInterpolationTest, ReproducesAffineFunctionsOfTheLightEverywhere) {
   }
 }
 
+TEST(RbfInterpolationTest, TheQuadraticTailReproducesPtmFunctionsEverywhere) {
+  // The quadratic tail is a least-squares base under the Gaussians: a profile in PTM's span
+  // (a quadratic of lx, ly) is interpolated exactly at any light, with or without regularisation,
+  // and the nodes are still reproduced exactly without it.
+  const auto lights = StaggeredLights();
+  const auto truth = [](const LightDirection& l) {
+    return 0.3 + 0.5 * l.x() - 0.2 * l.y() + 0.7 * l.x() * l.x() - 0.4 * l.y() * l.y() +
+           0.6 * l.x() * l.y();
+  };
+  Eigen::VectorXd profile(static_cast<Eigen::Index>(lights.size()));
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    profile[static_cast<Eigen::Index>(i)] = truth(lights[i]);
+  }
+  for (double regularisation : {0.0, 1e-2}) {
+    const RbfInterpolation rbf(lights, 30.0, regularisation, RbfTail::kQuadratic);
+    EXPECT_EQ(rbf.tail(), RbfTail::kQuadratic);
+    for (const auto& light :
+         {LightDirection::FromSlantTilt(0, 0), LightDirection::FromSlantTilt(33, 101),
+          LightDirection::FromSlantTilt(80, 250)}) {
+      // Measured: below 1e-12; bound 1e-9.
+      EXPECT_NEAR(rbf.Weights(light).dot(profile), truth(light), 1e-9) << regularisation;
+    }
+  }
+  // The affine tail does not reproduce it between the lights.
+  const RbfInterpolation affine(lights, 30.0, 1e-2);
+  const auto light = LightDirection::FromSlantTilt(80, 250);
+  EXPECT_GT(std::abs(affine.Weights(light).dot(profile) - truth(light)), 1e-3);
+  const RbfInterpolation exact(lights, 25.0, 0.0, RbfTail::kQuadratic);
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    Eigen::VectorXd unit = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(lights.size()));
+    unit[static_cast<Eigen::Index>(i)] = 1.0;
+    EXPECT_LT((exact.Weights(lights[i]) - unit).cwiseAbs().maxCoeff(), 1e-9) << "light " << i;
+  }
+}
+
 TEST(RbfInterpolationTest, OneRingOfLightsStillSolves) {
   // Equal slants fix lz: the tail drops the term the lights do not determine.
   std::vector<LightDirection> ring;
@@ -106,16 +141,29 @@ TEST(LightProfileBasisTest, JsonRoundTripGivesTheSameCoefficients) {
     for (int j = 0; j < 3; ++j) pca(i, j) = std::sin(0.7 * static_cast<double>(i) + j);
   }
   const RbfLightBasis rbf(RbfInterpolation(lights, 22.0, 1e-3), pca);
+  const RbfLightBasis quadratic(RbfInterpolation(lights, 22.0, 1e-3, RbfTail::kQuadratic), pca);
   Eigen::MatrixXd grid_pca(16, 2);
   for (Eigen::Index i = 0; i < 16; ++i) grid_pca.row(i) << std::cos(0.3 * i), 0.1 * i;
   const BilinearLightBasis bilinear(4, grid_pca);
-  for (const LightBasis* basis : std::initializer_list<const LightBasis*>{&rbf, &bilinear}) {
+  EXPECT_EQ(quadratic.ToJson()["tail"], "quadratic");
+  for (const LightBasis* basis :
+       std::initializer_list<const LightBasis*>{&rbf, &quadratic, &bilinear}) {
     const nlohmann::json json = nlohmann::json::parse(basis->ToJson().dump());
     const auto loaded = LightBasisFromJson(JsonReader(json, "stack.exr"));
     EXPECT_EQ(loaded->kind(), basis->kind());
     const auto light = LightDirection::FromSlantTilt(37, 77);
     EXPECT_LT((loaded->Coefficients(light) - basis->Coefficients(light)).norm(), 1e-12);
   }
+  // A stack written before the tail existed has none: affine.
+  nlohmann::json old = rbf.ToJson();
+  old.erase("tail");
+  const auto loaded = LightBasisFromJson(JsonReader(old, "stack.exr"));
+  const auto light = LightDirection::FromSlantTilt(37, 77);
+  EXPECT_LT((loaded->Coefficients(light) - rbf.Coefficients(light)).norm(), 1e-12);
+  nlohmann::json bad = rbf.ToJson();
+  bad["tail"] = "cubic";
+  EXPECT_THAT([&] { LightBasisFromJson(JsonReader(bad, "stack.exr")); },
+              ThrowsMessage<Error>(HasSubstr("cubic")));
 }
 
 TEST(LightProfileBasisTest, RejectsAMismatchedPcaBasis) {

@@ -7,6 +7,22 @@
 
 namespace photomat {
 
+// The low-order part of an RBF interpolant (represent/model/light_profile_basis.h): the terms it
+// reproduces exactly, the Gaussians interpolating what they leave.
+enum class RbfTail {
+  kAffine,     // 1, lx, ly, lz
+  kQuadratic,  // 1, lx, ly, lz, lx^2, ly^2, lx ly: PTM's terms and lz, a base under the RBF
+};
+
+// How the light-profile fits score their candidate parameters on the capture's own lights
+// (represent/fitting/light_profile_fit.h).
+enum class LeaveOut {
+  kOne,    // each light left out alone
+  kBlock,  // every 8th light left out at once (8 folds), as a held-out test leaves lights out
+  kEdge,   // each light on the boundary of the lights' hull in (lx, ly) left out alone:
+           // extrapolation, as predicting lights beyond the captured ones
+};
+
 // Options of the light-profile methods, `rbf` and `bilinear`
 // (represent/model/light_profile_basis.h, README "RBF and bilinear"): not part of the name.
 struct LightProfileOptions {
@@ -28,6 +44,11 @@ struct LightProfileOptions {
   // Nodes per side of the bilinear light grid.
   static constexpr int kDefaultGridSize = 24;
   int grid_size = kDefaultGridSize;
+  // The RBF's tail (a fixed option: on DiLiGenT the quadratic one, chosen by leave-one-out when
+  // searched, predicted held-out lights worse on cat and ball; README "RBF and bilinear").
+  RbfTail rbf_tail = RbfTail::kAffine;
+  // The score every unset parameter is chosen by.
+  LeaveOut leave_out = LeaveOut::kOne;
 
   bool operator==(const LightProfileOptions&) const = default;
 };
