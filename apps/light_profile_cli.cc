@@ -1,5 +1,8 @@
 #include "apps/light_profile_cli.h"
 
+#include <map>
+#include <string>
+
 namespace photomat::app {
 
 void AddLightProfileOptions(CLI::App& command, LightProfileCli& options) {
@@ -24,6 +27,23 @@ void AddLightProfileOptions(CLI::App& command, LightProfileCli& options) {
                   "bilinear: nodes per side of the light grid over (lx, ly) in [-1, 1]^2")
       ->capture_default_str()
       ->check(CLI::Range(2, 32));
+  const std::map<std::string, RbfTail> tails = {{"affine", RbfTail::kAffine},
+                                                {"quadratic", RbfTail::kQuadratic}};
+  command
+      .add_option("--rbf-tail", options.rbf_tail,
+                  "rbf: the low-order part under the Gaussians: affine (1, lx, ly, lz) or "
+                  "quadratic (PTM's terms and lz)")
+      ->transform(CLI::CheckedTransformer(tails))
+      ->option_text("affine|quadratic (default: affine)");
+  const std::map<std::string, LeaveOut> scores = {
+      {"one", LeaveOut::kOne}, {"block", LeaveOut::kBlock}, {"edge", LeaveOut::kEdge}};
+  command
+      .add_option("--leave-out", options.leave_out,
+                  "rbf, bilinear: how unset parameters are chosen on the capture's own lights: "
+                  "one (each light left out), block (every 8th light at once) or edge (each "
+                  "light on the hull of the lights left out: extrapolation)")
+      ->transform(CLI::CheckedTransformer(scores))
+      ->option_text("one|block|edge (default: one)");
 }
 
 void ApplyLightProfileOptions(const LightProfileCli& options, std::vector<Method>& methods) {
@@ -32,6 +52,8 @@ void ApplyLightProfileOptions(const LightProfileCli& options, std::vector<Method
     method.profile.rbf_regularisation = options.rbf_regularisation;
     method.profile.planes = options.planes;
     method.profile.grid_size = options.grid_size;
+    method.profile.rbf_tail = options.rbf_tail;
+    method.profile.leave_out = options.leave_out;
   }
 }
 
