@@ -365,6 +365,10 @@ int StreamedBandRows(const StackBandReader& stack, const StreamedExportOptions& 
 
 }  // namespace
 
+std::size_t RelitLightsBound(const StackBandReader& stack) {
+  return std::max<std::size_t>(stack.header().provenance.capture_lights.size(), 193);
+}
+
 std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack) {
   const Representation& r = stack.header().representation;
   const std::size_t maps = static_cast<std::size_t>(r.maps().channels());
@@ -374,8 +378,7 @@ std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack) {
   // Lambertian fit (the capture's lights, or the 193-light dome, x channels x 4 bytes), the
   // surface maps and their scratch copy (gradients, mask, normals, albedo: 6 + C floats, twice),
   // and stack.exr's band (maps and extra layers).
-  const std::size_t lights =
-      std::max<std::size_t>(stack.header().provenance.capture_lights.size(), 193);
+  const std::size_t lights = RelitLightsBound(stack);
   // A pbr stack adds its 12 channels of pbr maps (in pass 3), and their writers' copies.
   const std::size_t pbr = IsMicrofacet(r.shading()) ? 8 * 12 : 0;
   return 4 * (stored + maps) + 4 * lights * channels + 8 * (6 + channels) +

@@ -68,6 +68,9 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const std::filesystem:
 // Bytes per pixel of a streamed export's band (the stack's band, relit images for the
 // Lambertian fit, the surface maps, stack.exr's band).
 std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack);
+// At most how many lights a stack is relit at to refit it (its capture's lights, or RefitLights'
+// 193-light dome when it has none): the relit images' share of a band's memory.
+std::size_t RelitLightsBound(const StackBandReader& stack);
 // Bytes the in-memory ExportMaps holds for a stack of these dimensions (the stack, relit images,
 // the maps and the Poisson solve): what decides between the two.
 std::size_t InMemoryExportBytes(int width, int height, int maps, int channels);

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/memory_limits.h"
+#include "relight/export/export.h"
 #include "relight/formats/interchange.h"
 
 namespace photomat {
@@ -77,8 +78,7 @@ std::size_t StreamedInterchangeBytesPerPixel(const StackBandReader& stack) {
   const std::size_t channels = static_cast<std::size_t>(r.output_channels());
   // ConvertToEncoded relights at the capture's lights, or at RefitLights' 193 when they do not
   // determine the method.
-  const std::size_t lights =
-      std::max<std::size_t>(stack.header().provenance.capture_lights.size(), 193);
+  const std::size_t lights = RelitLightsBound(stack);
   // The band as stored and gathered, the relit images and the fit's observation matrix, the
   // refit's maps (float), their values in file units (double) and bytes (twice: planes and run).
   return 4 * (stored + maps) + 8 * lights * channels + (4 + 8 + 2) * kMostRefitPlanes;
