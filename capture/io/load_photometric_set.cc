@@ -230,18 +230,37 @@ std::size_t StreamedSet::SelectedPixels(int first, int rows) const {
   return count;
 }
 
+void StreamedSet::ReadBandInto(std::span<const ImageView> destinations, Progress* progress) {
+  if (destinations.size() != readers_.size()) {
+    throw Error(source_, fmt::format("{} band views for a set of {} images", destinations.size(),
+                                     readers_.size()));
+  }
+  const int rows = destinations.empty() ? 0 : destinations.front().height();
+  for (const ImageView& view : destinations) {
+    if (view.height() != rows) {
+      throw Error(source_, "the band views of one band differ in height");
+    }
+  }
+  tbb::parallel_for(std::size_t{0}, readers_.size(), [&](std::size_t i) {
+    readers_[i].ReadNext(destinations[i]);
+    if (progress) progress->Advance();
+  });
+}
+
 PhotometricSet StreamedSet::ReadBand(int rows, bool raw, Progress* progress) {
   const int first = next_row();
   std::vector<Image> images(readers_.size());
+  std::vector<ImageView> views(readers_.size());
+  // Allocated (zero-filled) in parallel too: touching the pages is a share of the band's time.
   tbb::parallel_for(std::size_t{0}, readers_.size(), [&](std::size_t i) {
     images[i] = Image(width(), rows, channels());
     // The file's channel names, as ReadImage gives them (stacks and samples keep them).
     if (!readers_[i].channel_names().empty()) {
       images[i].set_channel_names(readers_[i].channel_names());
     }
-    readers_[i].ReadNext(images[i].View());
-    if (progress) progress->Advance();
+    views[i] = images[i].View();
   });
+  ReadBandInto(views, progress);
   PhotometricSet band(std::move(images), lights_, names_, source_);
   if (mask_) {
     Mask mask(width(), rows, false);

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,8 @@ class StreamedSet {
   const std::vector<std::string>& image_names() const { return names_; }
   const std::filesystem::path& source() const { return source_; }
   InputKind kind() const { return kind_; }
+  // Whether the set has a mask (bands it covers only in part select some of their pixels).
+  bool masked() const { return mask_.has_value(); }
   const std::optional<std::filesystem::path>& ground_truth_normals() const {
     return ground_truth_normals_;
   }
@@ -45,6 +48,12 @@ class StreamedSet {
   // unless `raw`: then attached, for callers that look at the values as captured first). Throws
   // Error naming the image for a truncated or corrupt band. `progress` advances once per image.
   PhotometricSet ReadBand(int rows, bool raw = false, Progress* progress = nullptr);
+  // The next band of every image decoded straight into caller-owned storage, in parallel:
+  // `destinations[i]` (one view per image, of the set's width and channels, as many rows as the
+  // band) receives image i's rows as ReadBand would give them raw (no intensities applied). The
+  // streamed fit decodes this way into its image data matrix, with no band images and no copy.
+  // Throws Error naming the image for a truncated or corrupt band, or for a view of another size.
+  void ReadBandInto(std::span<const ImageView> destinations, Progress* progress = nullptr);
   // Pixels of rows [first, first + rows) the mask selects (all without a mask).
   std::size_t SelectedPixels(int first, int rows) const;
   // Back to row 0 (every file reopened): a further streamed pass.

@@ -1,12 +1,16 @@
 #include "represent/fitting/observations.h"
 
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <type_traits>
 #include <utility>
+
+#include "core/error.h"
 
 namespace photomat {
 namespace {
@@ -103,6 +107,19 @@ Observations::Observations(const PhotometricSet& set)
       for (Eigen::Index k = 0; k < m; ++k) out[k] = plane[pixel_indices_[k]];
     }
   });
+}
+
+Observations::Observations(Eigen::MatrixXf matrix, int width, int height, int channels)
+    : matrix_(std::move(matrix)), channels_(channels), width_(width), height_(height) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (width <= 0 || height <= 0 || channels <= 0 ||
+      static_cast<std::size_t>(matrix_.rows()) != pixels * static_cast<std::size_t>(channels)) {
+    throw Error(
+        fmt::format("a {} x {} matrix is not the observations of a {}x{} band of {} channels",
+                    matrix_.rows(), matrix_.cols(), width, height, channels));
+  }
+  pixel_indices_.resize(pixels);
+  std::iota(pixel_indices_.begin(), pixel_indices_.end(), std::size_t{0});
 }
 
 const Eigen::MatrixXd& Observations::Gram() const {

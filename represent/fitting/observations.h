@@ -19,6 +19,12 @@ namespace photomat {
 class Observations {
  public:
   explicit Observations(const PhotometricSet& set);
+  // The observations of a width x height band whose every pixel takes part, from `matrix`
+  // already in the layout above (column i: image i's planes, channel-major; (width * height *
+  // channels) x images): the streamed fit decodes its bands straight into such a matrix
+  // (StreamedSet::ReadBandInto), with no band images and no copy. Throws Error for a matrix of
+  // another height.
+  Observations(Eigen::MatrixXf matrix, int width, int height, int channels);
 
   const Eigen::MatrixXf& matrix() const { return matrix_; }
   int images() const { return static_cast<int>(matrix_.cols()); }

@@ -2,7 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <vector>
+
+#include "core/error.h"
+#include "core/image.h"
+#include "core/light_direction.h"
+#include "core/photometric_set.h"
 
 namespace photomat {
 namespace {
@@ -22,11 +29,12 @@ Eigen::MatrixXf SeededMatrix(Eigen::Index rows, Eigen::Index cols, unsigned seed
 class ParallelProductTest : public testing::TestWithParam<int> {};
 
 TEST_P(ParallelProductTest, EqualsTheProductToFloatRounding) {
-  const Eigen::MatrixXf left = SeededMatrix(9001, 96, 1);  // rows not a multiple of any block
-  const Eigen::MatrixXf right = SeededMatrix(96, GetParam(), 2);
+  // Rows not a multiple of any block, images not a multiple of the kernel's four per pass.
+  const Eigen::MatrixXf left = SeededMatrix(9001, 97, 1);
+  const Eigen::MatrixXf right = SeededMatrix(97, GetParam(), 2);
   const Eigen::MatrixXd exact = left.cast<double>() * right.cast<double>();
   const Eigen::MatrixXf product = ParallelProduct(left, right);
-  // 96 float products summed in float: a relative error of a few 1e-7 on sums of about 24.
+  // 97 float products summed in float: a relative error of a few 1e-7 on sums of about 24.
   EXPECT_LT((product.cast<double>() - exact).cwiseAbs().maxCoeff() / exact.cwiseAbs().maxCoeff(),
             2e-6);
 }
@@ -36,8 +44,8 @@ TEST_P(ParallelProductTest, RowsDoNotDependOnTheBandTheyCameFrom) {
   // Eigen-k and rbf/bilinear planes up to 16) a row gives the same bits in any band. Eigen's GEMM
   // beyond that vectorises a band's rows by their position in it, so its rows agree to float
   // rounding only (measured: a few 1e-7 relative).
-  const Eigen::MatrixXf left = SeededMatrix(5000, 40, 3);
-  const Eigen::MatrixXf right = SeededMatrix(40, GetParam(), 4);
+  const Eigen::MatrixXf left = SeededMatrix(5000, 42, 3);
+  const Eigen::MatrixXf right = SeededMatrix(42, GetParam(), 4);
   const Eigen::MatrixXf whole = ParallelProduct(left, right).middleRows(1234, 777);
   const Eigen::MatrixXf band = ParallelProduct(left.middleRows(1234, 777), right);
   if (GetParam() <= 16) {
@@ -47,7 +55,33 @@ TEST_P(ParallelProductTest, RowsDoNotDependOnTheBandTheyCameFrom) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Columns, ParallelProductTest, testing::Values(3, 6, 16, 17, 27));
+INSTANTIATE_TEST_SUITE_P(Columns, ParallelProductTest, testing::Values(1, 3, 6, 9, 16, 17, 27));
+
+// A band decoded straight into its image data matrix (the streamed least-squares fit) is the
+// same observations as the band set's: column i holds image i's planes.
+TEST(ObservationsTest, FullBandMatrixEqualsTheBandSetsObservations) {
+  const int width = 5, height = 3, channels = 3, images = 6;
+  std::vector<Image> band;
+  std::vector<LightDirection> lights;
+  Eigen::MatrixXf matrix(width * height * channels, images);
+  for (int i = 0; i < images; ++i) {
+    const Eigen::MatrixXf values = SeededMatrix(width * height * channels, 1, 10 + i);
+    Image image(width, height, channels);
+    std::copy(values.data(), values.data() + values.size(), image.values().begin());
+    band.push_back(std::move(image));
+    matrix.col(i) = values;
+    lights.push_back(LightDirection::FromSlantTilt(10.0 * i, 50.0 * i));
+  }
+  const Observations from_set(PhotometricSet(std::move(band), lights));
+  const Observations from_matrix(matrix, width, height, channels);
+  EXPECT_EQ(from_matrix.matrix(), from_set.matrix());
+  EXPECT_EQ(from_matrix.pixel_indices(), from_set.pixel_indices());
+  EXPECT_EQ(from_matrix.pixels(), width * height);
+  EXPECT_EQ(from_matrix.Gram(), from_set.Gram());
+  // A matrix of another height is not a band's.
+  EXPECT_THROW(Observations(matrix, width, height + 1, channels), Error);
+  EXPECT_THROW(Observations(matrix, width, height, 1), Error);
+}
 
 }  // namespace
 }  // namespace photomat

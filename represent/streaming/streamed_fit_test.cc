@@ -42,7 +42,9 @@ std::vector<Method> StreamedMethods() {
 // A 48 x 40 capture with shadows and highlights (so the robust weights matter), unequal light
 // intensities (applied when read) and a mask that leaves the first 7 rows empty (bands with no
 // pixel to fit), saved as 16-bit PNGs.
-fs::path WriteCapture(const fs::path& folder) {
+// Unmasked, every band takes the least-squares fit's direct decoding into the image data matrix
+// (with the intensities divided out there); masked, its bands are read as band sets and copied.
+fs::path WriteCapture(const fs::path& folder, bool masked = true) {
   const auto synthetic = testing::ShadowedSpecularSet(48);
   const PhotometricSet& full = synthetic.set;
   std::vector<Image> images;
@@ -55,7 +57,7 @@ fs::path WriteCapture(const fs::path& folder) {
   set.set_mask(mask);
   const auto intensities = testing::UnequalRgbIntensities(set.size());
   PhotometricSet scaled = testing::ScaleByIntensities(set, intensities);
-  scaled.set_mask(mask);
+  if (masked) scaled.set_mask(mask);
   scaled.set_intensities(intensities);
   SavePhotometricSet(folder, scaled);
   return folder;
@@ -92,9 +94,9 @@ std::vector<fs::path> FitToFolder(const fs::path& input, const fs::path& out,
   return paths;
 }
 
-void ExpectStreamedEqualsInMemory(bool robust, double bound) {
+void ExpectStreamedEqualsInMemory(bool robust, double bound, bool masked = true) {
   const testing::TempDir dir;
-  const fs::path input = WriteCapture(dir / "capture");
+  const fs::path input = WriteCapture(dir / "capture", masked);
   const std::vector<Method> methods = StreamedMethods();
   const auto banded = FitToFolder(input, dir / "bands3", methods, robust, 3);
   const auto whole = FitToFolder(input, dir / "whole", methods, robust, 40);
@@ -114,7 +116,7 @@ void ExpectStreamedEqualsInMemory(bool robust, double bound) {
     EXPECT_LE(to_memory, bound) << methods[i].Name();
     EXPECT_LE(to_one_band, bound) << methods[i].Name();
     // Outside the mask (the first 7 rows hold none of it) every map is 0.
-    for (int c = 0; c < streamed.representation.maps().channels(); ++c) {
+    for (int c = 0; masked && c < streamed.representation.maps().channels(); ++c) {
       for (int y = 0; y < 7; ++y) {
         for (float v : streamed.representation.maps().row(c, y)) ASSERT_EQ(v, 0.0f);
       }
@@ -126,13 +128,21 @@ void ExpectStreamedEqualsInMemory(bool robust, double bound) {
   }
 }
 
-// Float rounding only: products of the band matrix (Eigen's kernels block rows differently for
-// different row counts); the Gram matrix of Eigen-k, rbf and bilinear is RowGram's on both
-// paths. Measured (largest difference over the largest value): least squares 0 (3i, gradient,
-// eigen3) to 3.03e-7 (ptm; rbf and bilinear 1.3e-7), robust 0 (all but eigen6, rbf, bilinear),
-// 2.1e-7 (rbf, bilinear) and 2.68e-7 (eigen6); bound 1e-6 = 3.3x the largest.
+// Float rounding at most (the guarantee): products of more than 16 columns are Eigen's,
+// whose kernels block rows differently for different row counts; the Gram matrix of Eigen-k, rbf
+// and bilinear is RowGram's on both paths. Measured (largest difference over the largest value)
+// 2026-12-05: 0 for every method, least squares and robust, since every product here is
+// ParallelProduct's few-column kernel (a row's bits do not depend on its block); before it, up to
+// 3.03e-7 (ptm). Bound 1e-6 = 3.3x that.
 TEST(StreamedFitTest, BandsOfThreeRowsEqualTheInMemoryFit) {
   ExpectStreamedEqualsInMemory(false, 1e-6);
+}
+
+// The same bound; measured 0 for every method here too (robust bands still go through band
+// sets).
+TEST(StreamedFitTest, UnmaskedBandsOfThreeRowsEqualTheInMemoryFit) {
+  ExpectStreamedEqualsInMemory(false, 1e-6, false);
+  ExpectStreamedEqualsInMemory(true, 1e-6, false);
 }
 
 TEST(StreamedFitTest, RobustBandsOfThreeRowsEqualTheInMemoryFit) {
@@ -281,6 +291,13 @@ TEST(StreamedFitTest, BandRowsFollowTheBudget) {
   // 36 x 16 x 48 x 4 x 4 = 442368 bytes.
   EXPECT_EQ(StreamedBandRows(442368 + 5 * 98496 + 100, set, methods, false), 5);
   EXPECT_EQ(StreamedBandRows(442368 + 5 * 98496 - 100, set, methods, false), 4);
+  // Unmasked, least squares decodes straight into the image data matrix: 4 bytes per sample, so
+  // 2 x 36 x 3 x 4 + 324 = 1188 bytes per pixel, 57024 per row; robust still copies.
+  const StreamedSet unmasked = OpenStreamedSet(WriteCapture(dir / "unmasked", false));
+  EXPECT_EQ(StreamedBandRows(442368 + 5 * 57024 + 100, unmasked, methods, false), 5);
+  EXPECT_EQ(StreamedBandRows(442368 + 5 * 57024 - 100, unmasked, methods, false), 4);
+  EXPECT_LT(StreamedBandRows(442368 + 5 * 98496 + 100, unmasked, methods, true),
+            StreamedBandRows(442368 + 5 * 98496 + 100, unmasked, methods, false));
   if (!AddressSpaceRoom() && !CgroupMemoryLimit()) {
     EXPECT_GE(DefaultFitMemory(), std::size_t{256} << 20);
   }
