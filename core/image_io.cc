@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/cpu_dispatch.h"
 #include "core/enum_names.h"
 #include "core/error.h"
 #include "core/image_band_io.h"
@@ -46,21 +47,39 @@ constexpr int kBandRows = 64;
 
 // Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes through
 // the encoding's code -> light table; returns the pixels with a kept channel at the largest code.
-// kFileChannels > 0 fixes the file's channel count at compile time (the common RGB case, which
-// the compiler then unrolls: decoding is a large share of a fit's CPU time); 0 reads it at run
-// time.
-template <int kFileChannels, typename T>
-std::size_t DecodeIntegerRow(const T* row, int file_channels,
-                             const std::vector<float>& light_of_code, ImageView band, int y) {
+// kFileChannels and kKept fix the file's and the band's channel counts at compile time for the
+// common layouts (RGB, RGBA without its alpha, grey), so that one pass over the pixels converts
+// each sample and tests it for clipping with no inner loop (half the time of a pass per channel
+// and one for the clipping: decoding is a large share of a fit's CPU time); 0 reads the counts
+// at run time.
+template <int kFileChannels, int kKept, typename T>
+PHOTOMAT_HOT_LOOP std::size_t DecodeIntegerRow(const T* row, int file_channels,
+                                               const std::vector<float>& light_of_code,
+                                               ImageView band, int y) {
   constexpr T kMax = std::numeric_limits<T>::max();
   const int stride = kFileChannels > 0 ? kFileChannels : file_channels;
-  const int width = band.width(), kept = band.channels();
+  const int kept = kKept > 0 ? kKept : band.channels();
+  const int width = band.width();
   const float* table = light_of_code.data();
+  std::size_t saturated = 0;
+  if constexpr (kKept > 0) {
+    float* out[kKept];
+    for (int c = 0; c < kKept; ++c) out[c] = band.row(c, y).data();
+    for (int x = 0; x < width; ++x) {
+      const T* pixel = row + static_cast<std::size_t>(x) * stride;
+      int at_max = 0;
+      for (int c = 0; c < kKept; ++c) {
+        out[c][x] = table[pixel[c]];
+        at_max |= pixel[c] == kMax ? 1 : 0;
+      }
+      saturated += static_cast<std::size_t>(at_max);
+    }
+    return saturated;
+  }
   for (int c = 0; c < kept; ++c) {
     float* out = band.row(c, y).data();
     for (int x = 0; x < width; ++x) out[x] = table[row[x * stride + c]];
   }
-  std::size_t saturated = 0;
   for (int x = 0; x < width; ++x) {
     const T* pixel = row + static_cast<std::size_t>(x) * stride;
     bool at_max = false;
@@ -73,8 +92,17 @@ std::size_t DecodeIntegerRow(const T* row, int file_channels,
 template <typename T>
 std::size_t DecodeIntegerRow(const T* row, int file_channels,
                              const std::vector<float>& light_of_code, ImageView band, int y) {
-  return file_channels == 3 ? DecodeIntegerRow<3>(row, file_channels, light_of_code, band, y)
-                            : DecodeIntegerRow<0>(row, file_channels, light_of_code, band, y);
+  const int kept = band.channels();
+  if (file_channels == 3 && kept == 3) {
+    return DecodeIntegerRow<3, 3>(row, file_channels, light_of_code, band, y);
+  }
+  if (file_channels == 4 && kept == 3) {
+    return DecodeIntegerRow<4, 3>(row, file_channels, light_of_code, band, y);
+  }
+  if (file_channels == 1 && kept == 1) {
+    return DecodeIntegerRow<1, 1>(row, file_channels, light_of_code, band, y);
+  }
+  return DecodeIntegerRow<0, 0>(row, file_channels, light_of_code, band, y);
 }
 
 // Float, half and unusual integer widths, converted to float by OpenImageIO (integers to
