@@ -239,7 +239,13 @@ ImageBandReader::ImageBandReader(const fs::path& path, const ImageReadOptions& o
     : path_(path), decoder_(std::make_unique<Decoder>()) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path, "image file not found");
-  const OIIO::ImageSpec config = CameraRawConfig(options.camera_raw);
+  OIIO::ImageSpec config = CameraRawConfig(options.camera_raw);
+  // Photometric data drop alpha, and their colour samples are measurements: read them as stored.
+  // OpenImageIO would otherwise multiply the colours of a file with unassociated alpha (PNG,
+  // some TIFFs) by its alpha, silently scaling the light of every pixel whose alpha is below 1.
+  // Readers that keep alpha (stacks, masks) keep OpenImageIO's associated convention, the one
+  // its writers assume.
+  if (!options.keep_alpha) config.attribute("oiio:UnassociatedAlpha", 1);
   decoder_->input = OIIO::ImageInput::open(path.string(), &config);
   if (!decoder_->input) throw Error(path, fmt::format("cannot read image: {}", OiioError("")));
   const OIIO::ImageSpec& spec = decoder_->spec = decoder_->input->spec();

@@ -290,6 +290,83 @@ TEST(ImageIoTest, AlphaIsDroppedForPhotometricData) {
   EXPECT_EQ(ReadImage(dir / "rgba.png").image.channels(), 3);
 }
 
+// Writes `image` as a PNG of `type` codes (value x largest code, rounded) exactly as given: alpha
+// unassociated, the colours not divided by it (as cameras and most tools store PNGs).
+void WriteUnassociatedPng(const fs::path& path, const Image& image, OIIO::TypeDesc type) {
+  const int channels = image.channels();
+  OIIO::ImageSpec spec(image.width(), image.height(), channels, type);
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (channels == 2 || channels == 4) spec.alpha_channel = channels - 1;
+  std::vector<float> interleaved;
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      for (int c = 0; c < channels; ++c) interleaved.push_back(image.at(x, y, c));
+    }
+  }
+  auto out = OIIO::ImageOutput::create(path.string());
+  ASSERT_TRUE(out && out->open(path.string(), spec));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()));
+  ASSERT_TRUE(out->close());
+}
+
+// Every channel layout the decoder specialises (grey, RGB, RGBA without its alpha) and the
+// general one (grey + alpha, RGBA kept whole), at 8 and 16 bits: each code decodes to its linear
+// value, colours are read as stored whatever the alpha (not multiplied by it), and a pixel counts
+// as clipped when a kept channel is at the largest code.
+TEST(ImageIoTest, EveryChannelLayoutDecodesCodesAndCountsClippedPixels) {
+  TempDir dir;
+  for (const OIIO::TypeDesc type : {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16}) {
+    const double largest = type == OIIO::TypeDesc::UINT8 ? 255.0 : 65535.0;
+    for (const int channels : {1, 2, 3, 4}) {
+      // 7 x 3 pixels, code (x + 7 y + 5 c) % 50 + 1 (alpha too: below 1); pixel (x, 1) has
+      // channel x % channels at the largest code, for x < 4.
+      Image image(7, 3, channels);
+      for (int c = 0; c < channels; ++c) {
+        for (int y = 0; y < 3; ++y) {
+          for (int x = 0; x < 7; ++x) {
+            image.at(x, y, c) = static_cast<float>(((x + 7 * y + 5 * c) % 50 + 1) / largest);
+          }
+        }
+      }
+      for (int x = 0; x < 4; ++x) image.at(x, 1, x % channels) = 1.0f;
+      const fs::path path = dir / fmt::format("c{}_{}.png", channels, largest);
+      WriteUnassociatedPng(path, image, type);
+      ImageReadOptions read;
+      read.colour_space = ColourSpace::kLinear;
+      const LoadedImage loaded = ReadImage(path, read);
+      const int kept = channels == 2 || channels == 4 ? channels - 1 : channels;  // alpha dropped
+      ASSERT_EQ(loaded.image.channels(), kept) << path;
+      for (int c = 0; c < kept; ++c) {
+        for (int y = 0; y < 3; ++y) {
+          for (int x = 0; x < 7; ++x) {
+            ASSERT_EQ(std::lround(loaded.image.at(x, y, c) * largest),
+                      std::lround(image.at(x, y, c) * largest))
+                << path << " channel " << c << " at " << x << "," << y;
+          }
+        }
+      }
+      std::size_t clipped = 0;  // a largest code in the dropped alpha does not count
+      for (int x = 0; x < 4; ++x) clipped += x % channels < kept ? 1 : 0;
+      EXPECT_EQ(loaded.info.saturated_pixels, clipped) << path;
+      // Kept whole (stacks, masks): every channel, alpha as stored; the colours in OpenImageIO's
+      // associated convention (multiplied by the alpha, below 1 here), so only a largest code in
+      // the alpha stays at the largest code.
+      read.keep_alpha = true;
+      const LoadedImage whole = ReadImage(path, read);
+      ASSERT_EQ(whole.image.channels(), channels) << path;
+      const bool alpha = kept < channels;
+      std::size_t whole_clipped = 0;
+      for (int x = 0; x < 4; ++x) whole_clipped += !alpha || x % channels == kept ? 1 : 0;
+      EXPECT_EQ(whole.info.saturated_pixels, whole_clipped) << path;
+      for (int x = 0; alpha && x < 7; ++x) {
+        EXPECT_EQ(std::lround(whole.image.at(x, 0, kept) * largest),
+                  std::lround(image.at(x, 0, kept) * largest))
+            << path;
+      }
+    }
+  }
+}
+
 TEST(ImageIoTest, MaskThresholdsAtHalf) {
   TempDir dir;
   Image image(3, 1, 1);
