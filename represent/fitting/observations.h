@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <mutex>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/image.h"
@@ -27,6 +28,9 @@ class Observations {
   Observations(Eigen::MatrixXf matrix, int width, int height, int channels);
 
   const Eigen::MatrixXf& matrix() const { return matrix_; }
+  // The matrix, moved out for its storage to be reused (a streamed fit's next band); these
+  // observations are left with none.
+  Eigen::MatrixXf ReleaseMatrix() && { return std::move(matrix_); }
   int images() const { return static_cast<int>(matrix_.cols()); }
   int channels() const { return channels_; }
   // Number of selected pixels (m).
