@@ -58,6 +58,15 @@ PendingFile::~PendingFile() {
   fs::remove(temp_, ec);
 }
 
+void PendingFile::StartWriteback() const {
+#ifdef __linux__
+  const int fd = ::open(temp_.c_str(), O_RDONLY);
+  if (fd < 0) return;
+  ::sync_file_range(fd, 0, 0, SYNC_FILE_RANGE_WRITE);
+  ::close(fd);
+#endif
+}
+
 void PendingFile::Commit() {
   std::error_code ec;
   if (int err = SyncPath(temp_, false); err != 0) {

@@ -30,6 +30,12 @@ class PendingFile {
 
   const std::filesystem::path& path() const { return path_; }
   const std::filesystem::path& temp() const { return temp_; }
+  // Asks the system to start writing what the temporary holds so far to disk, without waiting
+  // (Linux: sync_file_range; elsewhere nothing): a writer that writes for long (a map stack band
+  // by band) calls it now and then, so that the disk works while the program does and Commit's
+  // flush waits only for the rest (a 12 MP PTM stack of 0.9 GB flushed in 1 s at the end, the
+  // fifth of the fit's wall time). Best effort: errors show at Commit.
+  void StartWriteback() const;
   // Throws Error naming path() when flushing or renaming fails (the temporary is then removed).
   void Commit();
 

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <filesystem>
+#include <string>
+
 #include "core/error.h"
 #include "tests/support/test_support.h"
 
@@ -29,6 +32,35 @@ TEST(AtomicFileTest, FailingWriterLeavesOldContentAndNoTemporary) {
                                    }),
                Error);
   EXPECT_EQ(ReadTextFile(dir / "a.txt"), "old");
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+}
+
+// A pending file written in parts, its write-back started after each (and before the temporary
+// exists, which must be harmless), commits whole; destroyed uncommitted, it leaves nothing.
+TEST(AtomicFileTest, PendingFileWritesBackInPartsAndCommitsWhole) {
+  TempDir dir;
+  {
+    PendingFile file(dir / "stack.bin");
+    file.StartWriteback();
+    std::string written;
+    for (int part = 0; part < 4; ++part) {
+      written += std::string(1 << 16, static_cast<char>('a' + part));
+      testing::WriteFile(file.temp(), written);
+      file.StartWriteback();
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "stack.bin"));
+    file.Commit();
+    EXPECT_EQ(ReadTextFile(dir / "stack.bin"), written);
+  }
+  {
+    PendingFile abandoned(dir / "other.bin");
+    testing::WriteFile(abandoned.temp(), "half");
+    abandoned.StartWriteback();
+  }
   int files = 0;
   for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) {
     ++files;

@@ -541,6 +541,7 @@ void ImageBandWriter::WriteNext(ConstImageView image) {
     }
   }
   next_row_ += image.height();
+  file_.StartWriteback();  // the disk writes while the next band is fitted
 }
 
 void ImageBandWriter::Commit(const std::function<void(const fs::path& temp)>& before_rename) {
