@@ -402,8 +402,22 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
     edge_folds.push_back(std::move(fold));
   }
   fmt::print("{} edge folds\n", edge_folds.size());
-  double best_edge = -1e300, best_edge_test = 0.0;
-  std::string best_edge_label;
+  // Side folds: each side of that hull (HullSideLights) left out at once.
+  std::vector<Split> side_folds;
+  std::size_t side_lights = 0;
+  for (const std::vector<int>& side : HullSideLights(training)) {
+    Split fold;
+    for (int t : side) fold.held.push_back(hold_out.selected[t]);
+    for (std::size_t t = 0; t < training.size(); ++t) {
+      if (!std::binary_search(side.begin(), side.end(), static_cast<int>(t))) {
+        fold.others.push_back(hold_out.selected[t]);
+      }
+    }
+    side_lights += fold.held.size();
+    side_folds.push_back(std::move(fold));
+  }
+  double best_edge = -1e300, best_edge_test = 0.0, best_side = -1e300, best_side_test = 0.0;
+  std::string best_edge_label, best_side_label;
   const Split test{hold_out.held_out, hold_out.selected};
   double best_score = -1e300, best_test = 0.0;
   std::string best_label;
@@ -421,12 +435,26 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
             edge_score += mean_psnr(fold, factor * spacing, regularisation, planes);
           }
           edge_score /= static_cast<double>(std::max<std::size_t>(1, edge_folds.size()));
+          // The mean over every left-out light of the sides, as the fit's score.
+          double side_score = 0.0;
+          for (const Split& fold : side_folds) {
+            side_score += static_cast<double>(fold.held.size()) *
+                          mean_psnr(fold, factor * spacing, regularisation, planes);
+          }
+          side_score /= static_cast<double>(std::max<std::size_t>(1, side_lights));
+          if (side_score > best_side) {
+            best_side = side_score;
+            best_side_label = fmt::format("rbf {:.3g} deg / {:g}, {} planes", factor * spacing,
+                                          regularisation, planes);
+            best_side_test = mean_psnr(test, factor * spacing, regularisation, planes);
+          }
           const double held = mean_psnr(test, factor * spacing, regularisation, planes);
           const std::string label = fmt::format("rbf {:.3g} deg / {:g}, {} planes",
                                                 factor * spacing, regularisation, planes);
           fmt::print(
-              "clamped leave-block-out {}: score {:.2f}, edge score {:.2f}, held out {:.2f}\n",
-              label, score, edge_score, held);
+              "clamped leave-block-out {}: score {:.2f}, edge score {:.2f}, side score {:.2f}, "
+              "held out {:.2f}\n",
+              label, score, edge_score, side_score, held);
           if (edge_score > best_edge) {
             best_edge = edge_score;
             best_edge_test = held;
@@ -446,6 +474,8 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
              best_label, best_score, best_test);
   fmt::print("chosen by the clamped edge score: {} (score {:.2f}): held out {:.2f}\n",
              best_edge_label, best_edge, best_edge_test);
+  fmt::print("chosen by the clamped side score: {} (score {:.2f}): held out {:.2f}\n",
+             best_side_label, best_side, best_side_test);
 }
 
 // The median angle from a light to its nearest neighbour (the scale of the fit's kernel widths).
