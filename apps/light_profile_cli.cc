@@ -35,15 +35,18 @@ void AddLightProfileOptions(CLI::App& command, LightProfileCli& options) {
                   "quadratic (PTM's terms and lz)")
       ->transform(CLI::CheckedTransformer(tails))
       ->option_text("affine|quadratic (default: affine)");
-  const std::map<std::string, LeaveOut> scores = {
-      {"one", LeaveOut::kOne}, {"block", LeaveOut::kBlock}, {"edge", LeaveOut::kEdge}};
+  const std::map<std::string, LeaveOut> scores = {{"one", LeaveOut::kOne},
+                                                  {"block", LeaveOut::kBlock},
+                                                  {"edge", LeaveOut::kEdge},
+                                                  {"side", LeaveOut::kSide}};
   command
       .add_option("--leave-out", options.leave_out,
                   "rbf, bilinear: how unset parameters are chosen on the capture's own lights: "
-                  "one (each light left out), block (every 8th light at once) or edge (each "
-                  "light on the hull of the lights left out: extrapolation)")
+                  "one (each light left out), block (every 8th light at once), edge (each "
+                  "light on the hull of the lights left out: extrapolation) or side (each side "
+                  "of that hull at once: extrapolation one grid step beyond the lights)")
       ->transform(CLI::CheckedTransformer(scores))
-      ->option_text("one|block|edge (default: one)");
+      ->option_text("one|block|edge|side (default: one)");
 }
 
 void ApplyLightProfileOptions(const LightProfileCli& options, std::vector<Method>& methods) {

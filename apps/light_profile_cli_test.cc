@@ -34,6 +34,7 @@ TEST(LightProfileCliTest, TailAndLeaveOutReachTheMethod) {
   EXPECT_EQ(rbf.profile.leave_out, LeaveOut::kEdge);
   EXPECT_EQ(rbf.profile.planes, 4);
   EXPECT_EQ(ParsedRbf({"--leave-out", "block"}).profile.leave_out, LeaveOut::kBlock);
+  EXPECT_EQ(ParsedRbf({"--leave-out", "side"}).profile.leave_out, LeaveOut::kSide);
 }
 
 TEST(LightProfileCliTest, AnUnknownChoiceIsAnError) {

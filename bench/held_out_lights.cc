@@ -18,12 +18,14 @@
 //   held_out_lights [SET ...] [--every K] [--methods ptm,hsh9,rbf,bilinear,rbf:-1,...]
 //                   [--float] [--relight-cli PATH|none] [--planes N] [--grid-size G]
 //                   [--rbf-width DEG] [--rbf-regularisation R] [--rbf-tail affine|quadratic]
-//                   [--leave-out one|block]
-//   held_out_lights SET --oracle [--residual-of METHOD] | --clamped-score   (diagnosis, below)
+//                   [--leave-out one|block|edge|side]
+//   held_out_lights SET --oracle [--residual-of METHOD] | --clamped-score | --blend [--planes -1]
+//                   (diagnosis, below)
 //
 // A method NAME:K fits with K PCA planes per channel (0: uncompressed, -1: chosen by leave-one-out
-// on the training lights); a suffix +block chooses by leave-block-out, +quadratic gives rbf the
-// quadratic tail (rbf:-1+block+quadratic); the other options apply
+// on the training lights); a suffix +block, +edge or +side chooses by leave-block-out,
+// leave-edge-out or leave-side-out, +quadratic gives rbf the quadratic tail
+// (rbf:-1+block+quadratic); the other options apply
 // to every light-profile method. relight-cli: --relight-cli, else $PHOTOMAT_RELIGHT_CLI, else the
 // build bench/peer_table leaves in ~/.cache/photomat-peers/relight-build.
 #include <OpenImageIO/imageio.h>
@@ -64,6 +66,7 @@ struct Arguments {
   bool linear_jpeg = true;
   bool oracle = false;
   bool clamped_score = false;
+  bool blend = false;
   std::optional<std::string> residual_of;
   std::optional<fs::path> relight_cli;
   LightProfileOptions profile;
@@ -84,6 +87,8 @@ Arguments Parse(int argc, char** argv) {
       arguments.methods = value();
     } else if (a == "--oracle") {
       arguments.oracle = true;
+    } else if (a == "--blend") {
+      arguments.blend = true;
     } else if (a == "--clamped-score") {
       arguments.clamped_score = true;
     } else if (a == "--residual-of") {
@@ -105,11 +110,12 @@ Arguments Parse(int argc, char** argv) {
       arguments.profile.rbf_tail = RbfTailFromString(value());
     } else if (a == "--leave-out") {
       const std::string scheme = value();
-      if (scheme != "one" && scheme != "block" && scheme != "edge") {
-        throw Error("--leave-out: expected one, block or edge");
+      if (scheme != "one" && scheme != "block" && scheme != "edge" && scheme != "side") {
+        throw Error("--leave-out: expected one, block, edge or side");
       }
       arguments.profile.leave_out = scheme == "block"  ? LeaveOut::kBlock
                                     : scheme == "edge" ? LeaveOut::kEdge
+                                    : scheme == "side" ? LeaveOut::kSide
                                                        : LeaveOut::kOne;
     } else if (a.starts_with("--")) {
       throw Error(fmt::format("unknown option {}", a));
@@ -142,6 +148,7 @@ std::vector<Method> ParseMethods(const std::string& list, const LightProfileOpti
     for (const auto& [suffix, apply] : std::vector<std::pair<std::string, std::function<void()>>>{
              {"+block", [&] { options.leave_out = LeaveOut::kBlock; }},
              {"+edge", [&] { options.leave_out = LeaveOut::kEdge; }},
+             {"+side", [&] { options.leave_out = LeaveOut::kSide; }},
              {"+quadratic", [&] { options.rbf_tail = RbfTail::kQuadratic; }}}) {
       if (const std::size_t at = name.find(suffix); at != std::string::npos) {
         name.erase(at, suffix.size());
@@ -168,6 +175,7 @@ std::string MethodLabel(const Method& method) {
   }
   if (method.profile.leave_out == LeaveOut::kBlock) label += "+block";
   if (method.profile.leave_out == LeaveOut::kEdge) label += "+edge";
+  if (method.profile.leave_out == LeaveOut::kSide) label += "+side";
   if (method.kind == Method::Kind::kRbf && method.profile.rbf_tail == RbfTail::kQuadratic) {
     label += "+quadratic";
   }
@@ -320,8 +328,9 @@ void PrintTable(const std::string& title, const std::vector<Row>& rows) {
           "EXPECTED FAILURE: target \"photomat's best at least 1 dB PSNR above relight-cli's "
           "best\" not met (measured {:+.2f} dB, {:.2f} dB short) because no method photomat "
           "chooses on the training lights predicts these held-out lights better (on DiLiGenT ball "
-          "an rbf set by hand would; no score on the training lights picks it: README "
-          "\"Relighting held-out lights against relight-cli\")\n",
+          "an rbf set by hand would; no score on the training lights, leave-side-out and the "
+          "rbf/bilinear blend (--blend) included, picks it: README \"Relighting held-out lights "
+          "against relight-cli\")\n",
           margin, 1.0 - margin);
     }
   }
@@ -393,8 +402,22 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
     edge_folds.push_back(std::move(fold));
   }
   fmt::print("{} edge folds\n", edge_folds.size());
-  double best_edge = -1e300, best_edge_test = 0.0;
-  std::string best_edge_label;
+  // Side folds: each side of that hull (HullSideLights) left out at once.
+  std::vector<Split> side_folds;
+  std::size_t side_lights = 0;
+  for (const std::vector<int>& side : HullSideLights(training)) {
+    Split fold;
+    for (int t : side) fold.held.push_back(hold_out.selected[t]);
+    for (std::size_t t = 0; t < training.size(); ++t) {
+      if (!std::binary_search(side.begin(), side.end(), static_cast<int>(t))) {
+        fold.others.push_back(hold_out.selected[t]);
+      }
+    }
+    side_lights += fold.held.size();
+    side_folds.push_back(std::move(fold));
+  }
+  double best_edge = -1e300, best_edge_test = 0.0, best_side = -1e300, best_side_test = 0.0;
+  std::string best_edge_label, best_side_label;
   const Split test{hold_out.held_out, hold_out.selected};
   double best_score = -1e300, best_test = 0.0;
   std::string best_label;
@@ -412,12 +435,26 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
             edge_score += mean_psnr(fold, factor * spacing, regularisation, planes);
           }
           edge_score /= static_cast<double>(std::max<std::size_t>(1, edge_folds.size()));
+          // The mean over every left-out light of the sides, as the fit's score.
+          double side_score = 0.0;
+          for (const Split& fold : side_folds) {
+            side_score += static_cast<double>(fold.held.size()) *
+                          mean_psnr(fold, factor * spacing, regularisation, planes);
+          }
+          side_score /= static_cast<double>(std::max<std::size_t>(1, side_lights));
+          if (side_score > best_side) {
+            best_side = side_score;
+            best_side_label = fmt::format("rbf {:.3g} deg / {:g}, {} planes", factor * spacing,
+                                          regularisation, planes);
+            best_side_test = mean_psnr(test, factor * spacing, regularisation, planes);
+          }
           const double held = mean_psnr(test, factor * spacing, regularisation, planes);
           const std::string label = fmt::format("rbf {:.3g} deg / {:g}, {} planes",
                                                 factor * spacing, regularisation, planes);
           fmt::print(
-              "clamped leave-block-out {}: score {:.2f}, edge score {:.2f}, held out {:.2f}\n",
-              label, score, edge_score, held);
+              "clamped leave-block-out {}: score {:.2f}, edge score {:.2f}, side score {:.2f}, "
+              "held out {:.2f}\n",
+              label, score, edge_score, side_score, held);
           if (edge_score > best_edge) {
             best_edge = edge_score;
             best_edge_test = held;
@@ -437,6 +474,175 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
              best_label, best_score, best_test);
   fmt::print("chosen by the clamped edge score: {} (score {:.2f}): held out {:.2f}\n",
              best_edge_label, best_edge, best_edge_test);
+  fmt::print("chosen by the clamped side score: {} (score {:.2f}): held out {:.2f}\n",
+             best_side_label, best_side, best_side_test);
+}
+
+// The median angle from a light to its nearest neighbour (the scale of the fit's kernel widths).
+double MedianSpacingDegrees(const std::vector<LightDirection>& lights) {
+  std::vector<double> nearest;
+  for (const auto& a : lights) {
+    double best = 180.0;
+    for (const auto& b : lights) {
+      if (&a != &b) best = std::min(best, a.AngleToDegrees(b));
+    }
+    nearest.push_back(best);
+  }
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  return nearest[nearest.size() / 2];
+}
+
+// The mean held-out PSNR, clamped to [0, peak] as MaskedPsnr, of predicting the held-out lights
+// by `weights` (held x training) from the training images compressed to `planes` PCA axes of the
+// training lights (a pass over the pixels).
+double ClampedHeldOutPsnr(const Observations& observations, const HoldOut& hold_out,
+                          const Eigen::MatrixXd& weights, int planes, double peak) {
+  const Eigen::MatrixXd& gram = observations.Gram();
+  const Eigen::MatrixXf& matrix = observations.matrix();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(
+      gram(hold_out.selected, hold_out.selected));
+  const Eigen::MatrixXd axes = solver.eigenvectors().rightCols(planes);
+  const Eigen::MatrixXf combination =
+      (axes * (axes.transpose() * weights.transpose())).cast<float>();
+  const Eigen::MatrixXf predicted =
+      (matrix(Eigen::all, hold_out.selected) * combination).cwiseMax(0.0f).cwiseMin(float(peak));
+  double total = 0.0;
+  for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+    const double error =
+        (predicted.col(h) - matrix.col(hold_out.held_out[h]).cwiseMax(0.0f).cwiseMin(float(peak)))
+            .cast<double>()
+            .squaredNorm();
+    total += 10.0 * std::log10(peak * peak * static_cast<double>(matrix.rows()) / error);
+  }
+  return total / static_cast<double>(hold_out.held_out.size());
+}
+
+std::string SchemeName(LeaveOut scheme) {
+  return scheme == LeaveOut::kEdge    ? "leave-edge-out"
+         : scheme == LeaveOut::kSide  ? "leave-side-out"
+         : scheme == LeaveOut::kBlock ? "leave-block-out"
+                                      : "leave-one-out";
+}
+
+// --blend: w(l) = a w_rbf(l) + (1 - a) w_bilinear(l), a in {0, 0.25, .., 1}, each part's
+// settings among the fit's candidates, all chosen together by each training-light score
+// (leave-one-out, leave-edge-out, leave-block-out; 9 planes); the held-out PSNR of each a's choice
+// and of the joint choice (clamped, as the table), and separately labelled, the held-out lights'
+// own best a for the chosen parts (oracle, never a choice).
+void PrintBlend(const Observations& observations, const std::vector<LightDirection>& lights,
+                const HoldOut& hold_out, double peak, const LightProfileOptions& profile) {
+  const Eigen::MatrixXd& gram = observations.Gram();
+  std::vector<LightDirection> training;
+  for (int i : hold_out.selected) training.push_back(lights[i]);
+  const Eigen::MatrixXd training_gram = gram(hold_out.selected, hold_out.selected);
+  const double spacing = MedianSpacingDegrees(training);
+  // Planes: the option's count, or (--planes -1) the best score's among 1..16.
+  std::vector<int> plane_candidates = {profile.planes > 0 ? profile.planes
+                                                          : LightProfileOptions::kDefaultPlanes};
+  if (profile.planes == LightProfileOptions::kChoosePlanes) {
+    plane_candidates.clear();
+    for (int k = 1; k <= LightProfileOptions::kMaxChosenPlanes; ++k) plane_candidates.push_back(k);
+  }
+  const int grid = profile.grid_size;
+  // The fit's candidates (represent/fitting/light_profile_fit.cc).
+  const std::vector<double> factors = {0.25, 0.3536, 0.5, 0.7071, 1.0, 1.4142, 2.0, 2.8284, 4.0};
+  const std::vector<double> regularisations = {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
+  const std::vector<double> smoothnesses = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
+  const std::vector<double> alphas = {0.0, 0.25, 0.5, 0.75, 1.0};
+  const auto held_rbf = [&](double width, double regularisation) {
+    const RbfInterpolation rbf(training, width, regularisation);
+    Eigen::MatrixXd weights(hold_out.held_out.size(), training.size());
+    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+      weights.row(h) = rbf.Weights(lights[hold_out.held_out[h]]).transpose();
+    }
+    return weights;
+  };
+  const auto held_bilinear = [&](double smoothness) {
+    const Eigen::MatrixXd resampling = BilinearResampling(training, grid, smoothness);
+    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(hold_out.held_out.size(), training.size());
+    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+      const LightDirection& l = lights[hold_out.held_out[h]];
+      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid, l.x(), l.y())) {
+        weights.row(h) += w * resampling.row(node);
+      }
+    }
+    return weights;
+  };
+  for (LeaveOut scheme : {LeaveOut::kOne, LeaveOut::kEdge, LeaveOut::kBlock, LeaveOut::kSide}) {
+    const LeaveOutFolds folds(training_gram, scheme, training);
+    struct Part {
+      double width = 0.0, regularisation = 0.0, smoothness = 0.0;
+      std::vector<Eigen::MatrixXd> weights;
+    };
+    std::vector<Part> rbfs, bilinears;
+    for (double factor : factors) {
+      for (double regularisation : regularisations) {
+        auto weights =
+            RbfFoldWeights(folds, training, factor * spacing, regularisation, RbfTail::kAffine);
+        if (!weights.empty()) {
+          rbfs.push_back({factor * spacing, regularisation, 0.0, std::move(weights)});
+        }
+      }
+    }
+    for (double smoothness : smoothnesses) {
+      auto weights = BilinearFoldWeights(folds, training, grid, smoothness);
+      if (!weights.empty()) bilinears.push_back({0.0, 0.0, smoothness, std::move(weights)});
+    }
+    struct Choice {
+      double score = -1e300;
+      const Part* rbf = nullptr;
+      const Part* bilinear = nullptr;
+      double alpha = 0.0;
+      int planes = 0;
+    };
+    std::vector<Choice> by_alpha(alphas.size());
+    for (std::size_t a = 0; a < alphas.size(); ++a) {
+      const double alpha = alphas[a];
+      // A pure part does not depend on the other's settings: score it once.
+      for (const Part& rbf : rbfs) {
+        if (alpha == 0.0 && &rbf != &rbfs.front()) break;
+        for (const Part& bilinear : bilinears) {
+          if (alpha == 1.0 && &bilinear != &bilinears.front()) break;
+          std::vector<Eigen::MatrixXd> blend;
+          for (std::size_t f = 0; f < folds.folds().size(); ++f) {
+            blend.push_back(alpha * rbf.weights[f] + (1.0 - alpha) * bilinear.weights[f]);
+          }
+          const Eigen::VectorXd scores = folds.Score(blend).mean_snr_db;
+          for (int planes : plane_candidates) {
+            const double score = scores[planes - 1];
+            if (score > by_alpha[a].score) by_alpha[a] = {score, &rbf, &bilinear, alpha, planes};
+          }
+        }
+      }
+    }
+    Choice joint;
+    for (const Choice& choice : by_alpha) {
+      if (choice.score > joint.score) joint = choice;
+    }
+    const auto held = [&](const Choice& c, double alpha) {
+      return ClampedHeldOutPsnr(observations, hold_out,
+                                alpha * held_rbf(c.rbf->width, c.rbf->regularisation) +
+                                    (1.0 - alpha) * held_bilinear(c.bilinear->smoothness),
+                                c.planes, peak);
+    };
+    for (const Choice& c : by_alpha) {
+      fmt::print(
+          "blend {} a={:.2f}: rbf {:.3g} deg / {:g}, bilinear {:g}, {} planes: score {:.3f}, "
+          "held out {:.2f}\n",
+          SchemeName(scheme), c.alpha, c.rbf->width, c.rbf->regularisation, c.bilinear->smoothness,
+          c.planes, c.score, held(c, c.alpha));
+    }
+    fmt::print("blend {} chosen: a={:.2f}, {} planes (score {:.3f}): held out {:.2f}\n",
+               SchemeName(scheme), joint.alpha, joint.planes, joint.score,
+               held(joint, joint.alpha));
+    double oracle = -1e300, oracle_alpha = 0.0;
+    for (double alpha = 0.0; alpha <= 1.0001; alpha += 0.125) {
+      const double value = held(joint, alpha);
+      if (value > oracle) oracle = value, oracle_alpha = alpha;
+    }
+    fmt::print("ORACLE (held-out lights, not a choice) {} parts: best a={:.3f}: {:.2f}\n",
+               SchemeName(scheme), oracle_alpha, oracle);
+  }
 }
 
 // --oracle: what the held-out lights themselves would choose (never used to choose; it shows how
@@ -572,6 +778,10 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
              peak);
   const std::vector<Method> methods = ParseMethods(arguments.methods, arguments.profile);
   for (const HoldOut& hold_out : HoldOuts(set.lights(), arguments.every)) {
+    if (arguments.blend) {
+      PrintBlend(observations, set.lights(), hold_out, peak, arguments.profile);
+      continue;
+    }
     if (arguments.clamped_score) {
       PrintClampedScores(observations, set.lights(), hold_out, peak);
       continue;
@@ -613,8 +823,12 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
         rows.back().method += fmt::format(" [planes {}]", r.details()["pca"]["planes"].dump());
       }
       if (r.details().contains("bilinear")) {
-        rows.back().method += fmt::format(" [smoothness {:.3g}]",
-                                          r.details()["bilinear"]["smoothness"].get<double>());
+        rows.back().method += fmt::format(" [smoothness {:.3g}, grid {}, score {:.3f} dB]",
+                                          r.details()["bilinear"]["smoothness"].get<double>(),
+                                          r.details()["bilinear"]["grid_size"].get<int>(),
+                                          r.details()["bilinear"]["mean_snr_db"].is_number()
+                                              ? r.details()["bilinear"]["mean_snr_db"].get<double>()
+                                              : std::nan(""));
       }
       if (r.details().contains("rbf")) {
         rows.back().method += fmt::format(" [width {:.3g} deg, regularisation {:.3g}, tail {}]",

@@ -90,49 +90,79 @@ std::vector<LightDirection> Select(const std::vector<LightDirection>& lights,
   return selected;
 }
 
+}  // namespace
+
+std::vector<Eigen::MatrixXd> RbfFoldWeights(const LeaveOutFolds& folds,
+                                            const std::vector<LightDirection>& lights, double width,
+                                            double regularisation, RbfTail tail) {
+  std::vector<Eigen::MatrixXd> weights;
+  if (OneLightFolds(folds.scheme())) {
+    const Eigen::MatrixXd one = RbfLeaveOneOutWeights(lights, width, regularisation, tail);
+    if (one.size() == 0) return {};
+    for (const LeaveOutFolds::Fold& fold : folds.folds()) {
+      weights.push_back(one(fold.held_out, fold.others));
+    }
+    return weights;
+  }
+  for (const LeaveOutFolds::Fold& fold : folds.folds()) {
+    try {
+      const RbfInterpolation interpolation(Select(lights, fold.others), width, regularisation,
+                                           tail);
+      Eigen::MatrixXd fold_weights(fold.held_out.size(), fold.others.size());
+      for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
+        fold_weights.row(static_cast<Eigen::Index>(h)) =
+            interpolation.Weights(lights[fold.held_out[h]]).transpose();
+      }
+      weights.push_back(std::move(fold_weights));
+    } catch (const Error&) {
+      return {};
+    }
+  }
+  return weights;
+}
+
+std::vector<Eigen::MatrixXd> BilinearFoldWeights(const LeaveOutFolds& folds,
+                                                 const std::vector<LightDirection>& lights,
+                                                 int grid_size, double smoothness) {
+  std::vector<Eigen::MatrixXd> weights;
+  if (OneLightFolds(folds.scheme())) {
+    const Eigen::MatrixXd one = BilinearLeaveOneOutWeights(lights, grid_size, smoothness);
+    if (one.size() == 0) return {};
+    for (const LeaveOutFolds::Fold& fold : folds.folds()) {
+      weights.push_back(one(fold.held_out, fold.others));
+    }
+    return weights;
+  }
+  for (const LeaveOutFolds::Fold& fold : folds.folds()) {
+    const Eigen::MatrixXd resampling =
+        BilinearResampling(Select(lights, fold.others), grid_size, smoothness);
+    Eigen::MatrixXd fold_weights = Eigen::MatrixXd::Zero(fold.held_out.size(), fold.others.size());
+    for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
+      const LightDirection& l = lights[fold.held_out[h]];
+      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
+        fold_weights.row(static_cast<Eigen::Index>(h)) += w * resampling.row(node);
+      }
+    }
+    weights.push_back(std::move(fold_weights));
+  }
+  return weights;
+}
+
+namespace {
+
 // The scores of an RBF candidate: Rippa's closed form for leave-one-out, else each fold's
 // interpolation over its other lights evaluated at its left-out ones.
 LeaveOutFolds::Scores RbfScores(const LeaveOutFolds& folds,
                                 const std::vector<LightDirection>& lights, double width,
                                 double regularisation, RbfTail tail) {
-  if (folds.scheme() != LeaveOut::kBlock) {
-    return folds.Score(RbfLeaveOneOutWeights(lights, width, regularisation, tail));
-  }
-  return folds.Score([&](const LeaveOutFolds::Fold& fold) -> Eigen::MatrixXd {
-    try {
-      const RbfInterpolation interpolation(Select(lights, fold.others), width, regularisation,
-                                           tail);
-      Eigen::MatrixXd weights(fold.held_out.size(), fold.others.size());
-      for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
-        weights.row(static_cast<Eigen::Index>(h)) =
-            interpolation.Weights(lights[fold.held_out[h]]).transpose();
-      }
-      return weights;
-    } catch (const Error&) {
-      return {};
-    }
-  });
+  return folds.Score(RbfFoldWeights(folds, lights, width, regularisation, tail));
 }
 
 // The scores of a bilinear smoothness, as RbfScores.
 LeaveOutFolds::Scores BilinearScores(const LeaveOutFolds& folds,
                                      const std::vector<LightDirection>& lights, int grid_size,
                                      double smoothness) {
-  if (folds.scheme() != LeaveOut::kBlock) {
-    return folds.Score(BilinearLeaveOneOutWeights(lights, grid_size, smoothness));
-  }
-  return folds.Score([&](const LeaveOutFolds::Fold& fold) -> Eigen::MatrixXd {
-    const Eigen::MatrixXd resampling =
-        BilinearResampling(Select(lights, fold.others), grid_size, smoothness);
-    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(fold.held_out.size(), fold.others.size());
-    for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
-      const LightDirection& l = lights[fold.held_out[h]];
-      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
-        weights.row(static_cast<Eigen::Index>(h)) += w * resampling.row(node);
-      }
-    }
-    return weights;
-  });
+  return folds.Score(BilinearFoldWeights(folds, lights, grid_size, smoothness));
 }
 
 std::string_view ToString(LeaveOut scheme) {
@@ -141,6 +171,8 @@ std::string_view ToString(LeaveOut scheme) {
       return "leave-block-out";
     case LeaveOut::kEdge:
       return "leave-edge-out";
+    case LeaveOut::kSide:
+      return "leave-side-out";
     case LeaveOut::kOne:
       break;
   }
@@ -334,10 +366,19 @@ LightProfileModel BilinearModel(const Eigen::MatrixXd& gram, const Eigen::Vector
 
 }  // namespace
 
-std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights) {
-  constexpr double kTolerance = 0.02;
+namespace {
+
+constexpr double kHullTolerance = 0.02;
+
+std::vector<Eigen::Vector2d> Projected(const std::vector<LightDirection>& lights) {
   std::vector<Eigen::Vector2d> points;
   for (const LightDirection& l : lights) points.emplace_back(l.x(), l.y());
+  return points;
+}
+
+// The convex hull's vertices, counter-clockwise (Andrew's monotone chain: the lower hull, then
+// the upper).
+std::vector<int> HullVertices(const std::vector<Eigen::Vector2d>& points) {
   std::vector<int> order(points.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   std::sort(order.begin(), order.end(), [&](int a, int b) {
@@ -348,7 +389,6 @@ std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights) {
     const Eigen::Vector2d u = points[a] - points[o], v = points[b] - points[o];
     return u.x() * v.y() - u.y() * v.x();
   };
-  // Andrew's monotone chain: the lower hull, then the upper (the order reversed).
   std::vector<int> hull;
   for (int pass = 0; pass < 2; ++pass) {
     const std::size_t start = hull.size();
@@ -361,20 +401,79 @@ std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights) {
     hull.pop_back();
     std::reverse(order.begin(), order.end());
   }
+  return hull;
+}
+
+// Whether `point` lies within kHullTolerance of the hull edge from vertex e to e + 1.
+bool NearHullEdge(const std::vector<Eigen::Vector2d>& points, const std::vector<int>& hull,
+                  std::size_t e, const Eigen::Vector2d& point) {
+  const Eigen::Vector2d a = points[hull[e]], d = points[hull[(e + 1) % hull.size()]] - a;
+  const double along =
+      d.squaredNorm() > 0.0 ? std::clamp((point - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (a + along * d - point).norm() < kHullTolerance;
+}
+
+// The angle from direction a to direction b in (-pi, pi].
+double TurnAngle(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+}
+
+}  // namespace
+
+std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights) {
+  const std::vector<Eigen::Vector2d> points = Projected(lights);
+  const std::vector<int> hull = HullVertices(points);
   std::vector<int> boundary;
   for (std::size_t t = 0; t < points.size(); ++t) {
     for (std::size_t e = 0; e < hull.size(); ++e) {
-      const Eigen::Vector2d a = points[hull[e]], d = points[hull[(e + 1) % hull.size()]] - a;
-      const double along = d.squaredNorm() > 0.0
-                               ? std::clamp((points[t] - a).dot(d) / d.squaredNorm(), 0.0, 1.0)
-                               : 0.0;
-      if ((a + along * d - points[t]).norm() < kTolerance) {
+      if (NearHullEdge(points, hull, e, points[t])) {
         boundary.push_back(static_cast<int>(t));
         break;
       }
     }
   }
   return boundary;
+}
+
+std::vector<std::vector<int>> HullSideLights(const std::vector<LightDirection>& lights) {
+  const std::vector<Eigen::Vector2d> points = Projected(lights);
+  const std::vector<int> hull = HullVertices(points);
+  const std::size_t m = hull.size();
+  if (m < 3) return {HullBoundaryLights(lights)};
+  std::vector<Eigen::Vector2d> direction(m);
+  for (std::size_t e = 0; e < m; ++e) direction[e] = points[hull[(e + 1) % m]] - points[hull[e]];
+  // Start at the sharpest corner, then group consecutive edges into one side while they turn less
+  // than kSideTurn from the side's first edge.
+  constexpr double kSideTurn = M_PI / 4.0;
+  std::size_t start = 0;
+  double sharpest = -1.0;
+  for (std::size_t e = 0; e < m; ++e) {
+    const double turn = std::abs(TurnAngle(direction[(e + m - 1) % m], direction[e]));
+    if (turn > sharpest) sharpest = turn, start = e;
+  }
+  std::vector<std::vector<std::size_t>> sides;
+  for (std::size_t step = 0; step < m; ++step) {
+    const std::size_t e = (start + step) % m;
+    if (sides.empty() ||
+        std::abs(TurnAngle(direction[sides.back().front()], direction[e])) > kSideTurn) {
+      sides.emplace_back();
+    }
+    sides.back().push_back(e);
+  }
+  std::vector<std::vector<int>> side_lights;
+  for (const std::vector<std::size_t>& side : sides) {
+    std::vector<int> members;
+    for (std::size_t t = 0; t < points.size(); ++t) {
+      for (std::size_t e : side) {
+        if (NearHullEdge(points, hull, e, points[t])) {
+          members.push_back(static_cast<int>(t));
+          break;
+        }
+      }
+    }
+    side_lights.push_back(std::move(members));
+  }
+  return side_lights;
 }
 
 LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
@@ -388,6 +487,12 @@ LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
           fmt::format("leave-edge-out: {} lights for a {}x{} Gram matrix", lights.size(), n, n));
     }
     for (int i : HullBoundaryLights(lights)) held_out.push_back({i});
+  } else if (scheme == LeaveOut::kSide) {
+    if (static_cast<int>(lights.size()) != n) {
+      throw Error(
+          fmt::format("leave-side-out: {} lights for a {}x{} Gram matrix", lights.size(), n, n));
+    }
+    held_out = HullSideLights(lights);
   } else if (scheme == LeaveOut::kBlock) {
     for (int offset = 0; offset < std::min(kBlockStride, n); ++offset) {
       held_out.emplace_back();
@@ -420,7 +525,7 @@ LeaveOutFolds::LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
 }
 
 LeaveOutFolds::Scores LeaveOutFolds::Score(const Eigen::MatrixXd& weights) const {
-  if (scheme_ == LeaveOut::kBlock || weights.rows() != diagonal_.size() ||
+  if (!OneLightFolds(scheme_) || weights.rows() != diagonal_.size() ||
       weights.cols() != diagonal_.size()) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     return {Eigen::VectorXd::Constant(plane_entries_, nan),
@@ -428,6 +533,17 @@ LeaveOutFolds::Scores LeaveOutFolds::Score(const Eigen::MatrixXd& weights) const
   }
   return Score(
       [&](const Fold& fold) -> Eigen::MatrixXd { return weights(fold.held_out, fold.others); });
+}
+
+LeaveOutFolds::Scores LeaveOutFolds::Score(const std::vector<Eigen::MatrixXd>& weights) const {
+  if (weights.size() != folds_.size()) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {Eigen::VectorXd::Constant(plane_entries_, nan),
+            Eigen::VectorXd::Constant(plane_entries_, nan)};
+  }
+  return Score([&](const Fold& fold) -> Eigen::MatrixXd {
+    return weights[static_cast<std::size_t>(&fold - folds_.data())];
+  });
 }
 
 LeaveOutFolds::Scores LeaveOutFolds::Score(const FoldWeights& weights) const {

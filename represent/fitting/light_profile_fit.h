@@ -36,7 +36,8 @@ class LeaveOutFolds {
   static constexpr int kMaxFolds = 128;
   // kBlock (IMPLEMENTER CHOICE): every 8th light at once, as the held-out benchmark holds out.
   static constexpr int kBlockStride = 8;
-  // kEdge: one fold per light of HullBoundaryLights(lights). `lights` are the Gram matrix's.
+  // kEdge: one fold per light of HullBoundaryLights(lights); kSide: one fold per side of
+  // HullSideLights(lights). `lights` are the Gram matrix's.
   LeaveOutFolds(const Eigen::MatrixXd& gram, LeaveOut scheme,
                 const std::vector<LightDirection>& lights);
 
@@ -70,6 +71,8 @@ class LeaveOutFolds {
   // Folds of one light (kOne, kEdge): `weights` n x n, row i the leave-one-out weights of light i
   // (Rippa's).
   Scores Score(const Eigen::MatrixXd& weights) const;
+  // Per fold (in folds()' order), its |H| x |O| weights; NaN throughout for a wrong count.
+  Scores Score(const std::vector<Eigen::MatrixXd>& weights) const;
 
  private:
   LeaveOut scheme_;
@@ -78,9 +81,27 @@ class LeaveOutFolds {
   Eigen::Index plane_entries_ = 1;
 };
 
+// Each side of the lights' convex hull in (lx, ly): the lights within 0.02 of its edges, a side
+// being consecutive hull edges that turn less than 45 degrees from its first (IMPLEMENTER CHOICE:
+// a grid's four rows and columns of its border, corners in both; a whole side left out at once
+// is predicted from the row one step inside, as lights one grid step beyond the captured ones).
+std::vector<std::vector<int>> HullSideLights(const std::vector<LightDirection>& lights);
+
 // The lights within 0.02 of the boundary of their convex hull in (lx, ly) (IMPLEMENTER CHOICE:
 // the lights a new light beyond the captured ones is extrapolated from), in increasing order.
 std::vector<int> HullBoundaryLights(const std::vector<LightDirection>& lights);
+
+// The weights each fold of `folds` (over `lights`, the Gram matrix's) gives its left-out lights
+// over its others (|H| x |O|, in folds.folds()' order) for an RBF candidate (Rippa's for folds of
+// one light, else each fold's interpolation over its others) and for a bilinear smoothness (the
+// penalised least squares' closed form, else each fold's resampling). Empty when the candidate
+// cannot be solved. A linear blend of two candidates' weights is a predictor of the same folds.
+std::vector<Eigen::MatrixXd> RbfFoldWeights(const LeaveOutFolds& folds,
+                                            const std::vector<LightDirection>& lights, double width,
+                                            double regularisation, RbfTail tail);
+std::vector<Eigen::MatrixXd> BilinearFoldWeights(const LeaveOutFolds& folds,
+                                                 const std::vector<LightDirection>& lights,
+                                                 int grid_size, double smoothness);
 
 // The plane counts a fit may take: options.planes > 0 that count, 0 every axis (n - 1 in a fold),
 // kChoosePlanes 1..kMaxChosenPlanes; each capped at the n - 1 a fold has.

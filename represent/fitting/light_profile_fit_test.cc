@@ -491,6 +491,86 @@ TEST(LightProfileFitTest, LeaveEdgeOutIsThatOfRefittingWithoutEachEdgeLight) {
   EXPECT_NEAR(rbf.relative_error, explicit_error, 1e-6 * explicit_error);
 }
 
+TEST(LightProfileFitTest, HullSideLightsAreTheGridsBorderRowsAndColumns) {
+  // A 5 x 5 grid in (lx, ly), rows in order: its four sides are rows 0 and 4 and columns 0 and
+  // 4, each with both corners.
+  std::vector<LightDirection> lights;
+  for (int row = 0; row < 5; ++row) {
+    for (int column = 0; column < 5; ++column) {
+      const double x = -0.4 + 0.2 * column, y = -0.4 + 0.2 * row;
+      lights.push_back(LightDirection::FromVector({x, y, std::sqrt(1.0 - x * x - y * y)}));
+    }
+  }
+  std::vector<std::vector<int>> sides = HullSideLights(lights);
+  std::sort(sides.begin(), sides.end());
+  const std::vector<std::vector<int>> expected = {
+      {0, 1, 2, 3, 4}, {0, 5, 10, 15, 20}, {4, 9, 14, 19, 24}, {20, 21, 22, 23, 24}};
+  EXPECT_EQ(sides, expected);
+}
+
+TEST(LightProfileFitTest, LeaveSideOutIsThatOfRefittingWithoutEachSide) {
+  // LeaveOut::kSide: each side of the hull left out at once, against refitting without it (3 PCA
+  // planes), for rbf and bilinear.
+  const auto synthetic = testing::ShadowedSpecularSet(8);
+  const Observations observations(synthetic.set);
+  const auto& lights = synthetic.set.lights();
+  const Eigen::MatrixXd gram = observations.Gram();
+  const Eigen::MatrixXd matrix = observations.matrix().cast<double>();
+  LightProfileOptions options;
+  options.rbf_width_degrees = 24.0;
+  options.rbf_regularisation = 1e-3;
+  options.bilinear_smoothness = 1e-2;
+  options.planes = 3;
+  options.leave_out = LeaveOut::kSide;
+  const RbfParameters rbf = ChooseRbfParameters(lights, gram, options);
+  const BilinearParameters bilinear = ChooseBilinearParameters(lights, gram, options);
+  const std::vector<std::vector<int>> sides = HullSideLights(lights);
+  ASSERT_GE(sides.size(), 3u);
+  double rbf_squares = 0.0, bilinear_squares = 0.0, signal = 0.0;
+  const int g = options.grid_size;
+  for (const std::vector<int>& side : sides) {
+    std::vector<int> others;
+    std::vector<LightDirection> rest;
+    for (int j = 0; j < static_cast<int>(lights.size()); ++j) {
+      if (!std::binary_search(side.begin(), side.end(), j)) {
+        others.push_back(j);
+        rest.push_back(lights[j]);
+      }
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram(others, others));
+    const Eigen::MatrixXd axes = solver.eigenvectors().rightCols(3);
+    const RbfInterpolation interpolation(rest, 24.0, 1e-3);
+    const Eigen::MatrixXd resampling = BilinearResampling(rest, g, 1e-2);
+    for (int i : side) {
+      Eigen::VectorXd grid = Eigen::VectorXd::Zero(resampling.cols());
+      for (const auto& [node, weight] :
+           BilinearLightBasis::GridWeights(g, lights[i].x(), lights[i].y())) {
+        grid += weight * resampling.row(node).transpose();
+      }
+      for (const auto& [w, squares] :
+           {std::pair<Eigen::VectorXd, double*>{interpolation.Weights(lights[i]), &rbf_squares},
+            std::pair<Eigen::VectorXd, double*>{grid, &bilinear_squares}}) {
+        const Eigen::VectorXd u = axes * (axes.transpose() * w);
+        *squares += (matrix(Eigen::all, others) * u - matrix.col(i)).squaredNorm();
+      }
+      signal += gram(i, i);
+    }
+  }
+  const double rbf_explicit = std::sqrt(rbf_squares / signal);
+  const double bilinear_explicit = std::sqrt(bilinear_squares / signal);
+  fmt::print(
+      "leave-side-out ({} sides), 3 planes: rbf {:.8g} (explicit {:.8g}), bilinear {:.8g} "
+      "(explicit {:.8g})\n",
+      sides.size(), rbf.relative_error, rbf_explicit, bilinear.relative_error, bilinear_explicit);
+  // The same double Gram matrix on both sides: bound 1e-6 relative, as above.
+  EXPECT_NEAR(rbf.relative_error, rbf_explicit, 1e-6 * rbf_explicit);
+  EXPECT_NEAR(bilinear.relative_error, bilinear_explicit, 1e-6 * bilinear_explicit);
+  Method method = Method::Parse("bilinear");
+  method.profile.leave_out = LeaveOut::kSide;
+  const Representation r = Fit(synthetic.set, method);
+  EXPECT_EQ(r.details()["bilinear"]["smoothness_from"], "leave-side-out");
+}
+
 TEST(LightProfileFitTest, BadOptionsAreClearErrors) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBricks, 8);
   Method bilinear = Method::Parse("bilinear");

@@ -21,7 +21,14 @@ enum class LeaveOut {
   kBlock,  // every 8th light left out at once (8 folds), as a held-out test leaves lights out
   kEdge,   // each light on the boundary of the lights' hull in (lx, ly) left out alone:
            // extrapolation, as predicting lights beyond the captured ones
+  kSide,   // each side of that hull (its lights on one border row or column) left out at once:
+           // extrapolation one grid step beyond the lights, as a held-out edge row
 };
+
+// Whether every fold of `scheme` leaves out one light (the closed-form leave-one-out weights).
+inline bool OneLightFolds(LeaveOut scheme) {
+  return scheme == LeaveOut::kOne || scheme == LeaveOut::kEdge;
+}
 
 // Options of the light-profile methods, `rbf` and `bilinear`
 // (represent/model/light_profile_basis.h, README "RBF and bilinear"): not part of the name.
