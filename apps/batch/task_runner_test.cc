@@ -1,8 +1,11 @@
 #include "apps/batch/task_runner.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -11,6 +14,7 @@
 #include <thread>
 
 #include "apps/batch/child_process.h"
+#include "apps/batch/task_record.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
@@ -164,6 +168,21 @@ TEST_F(TaskRunnerTest, AFolderNotWrittenByABatchIsNeverReplaced) {
   EXPECT_EQ(Runs("f"), 0);
 }
 
+// Whether the flock(2) on `path` can be taken within `limit` (then it is released at once).
+bool LockBecomesFree(const fs::path& path, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  do {
+    const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd >= 0) {
+      const bool free = flock(fd, LOCK_EX | LOCK_NB) == 0;
+      ::close(fd);
+      if (free) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  } while (std::chrono::steady_clock::now() < deadline);
+  return false;
+}
+
 // SIGKILL in the middle of a step: nothing final is written, the leftover temporary folder goes
 // with the next attempt, which finishes the task.
 TEST_F(TaskRunnerTest, KilledTaskLeavesNoFinalFolderAndResumes) {
@@ -188,6 +207,12 @@ TEST_F(TaskRunnerTest, KilledTaskLeavesNoFinalFolderAndResumes) {
     ::kill(run.pid(), SIGKILL);
     EXPECT_EQ(run.Wait().signal, SIGKILL);
   }
+  // The kernel releases the lock once no process holds its open file: a step the killed runner
+  // was starting holds it from its fork to its exec (the descriptor is close-on-exec), which on a
+  // loaded machine can outlast the runner's death (seen once in CI: the resume below was refused
+  // as "already running"). Wait for that, bounded: a lock still held after 10 s is a real fault.
+  const fs::path lock = fs::path(RecordPath(batch_, task)).replace_extension(".lock");
+  EXPECT_TRUE(LockBecomesFree(lock, std::chrono::seconds(10))) << lock;
   EXPECT_FALSE(fs::exists(task.folder));
   EXPECT_EQ(LastAttempt(batch_, task)->state, TaskState::kRunning);  // what the kill left
   EXPECT_FALSE(fs::is_empty(task.folder.parent_path()));             // the temporary folder
@@ -196,7 +221,7 @@ TEST_F(TaskRunnerTest, KilledTaskLeavesNoFinalFolderAndResumes) {
               MakeTask(0, "k", {{"write", "a.txt", "a"}, {"sleep", "0"}, {"write", "b.txt", "b"}}),
               FakePhotomat())
           .record;
-  EXPECT_EQ(record.state, TaskState::kDone);
+  EXPECT_EQ(record.state, TaskState::kDone) << record.error;
   EXPECT_EQ(record.attempt, 2);
   EXPECT_EQ(
       std::distance(fs::directory_iterator(task.folder.parent_path()), fs::directory_iterator()),
