@@ -20,7 +20,7 @@
 //                   [--rbf-width DEG] [--rbf-regularisation R] [--rbf-tail affine|quadratic]
 //                   [--leave-out one|block|edge|side]
 //   held_out_lights SET --oracle [--residual-of METHOD] | --clamped-score | --blend [--planes -1]
-//                   (diagnosis, below)
+//                   | --polyharmonic (diagnosis, below)
 //
 // A method NAME:K fits with K PCA planes per channel (0: uncompressed, -1: chosen by leave-one-out
 // on the training lights); a suffix +block, +edge or +side chooses by leave-block-out,
@@ -39,6 +39,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -67,6 +68,7 @@ struct Arguments {
   bool oracle = false;
   bool clamped_score = false;
   bool blend = false;
+  bool polyharmonic = false;
   std::optional<std::string> residual_of;
   std::optional<fs::path> relight_cli;
   LightProfileOptions profile;
@@ -89,6 +91,8 @@ Arguments Parse(int argc, char** argv) {
       arguments.oracle = true;
     } else if (a == "--blend") {
       arguments.blend = true;
+    } else if (a == "--polyharmonic") {
+      arguments.polyharmonic = true;
     } else if (a == "--clamped-score") {
       arguments.clamped_score = true;
     } else if (a == "--residual-of") {
@@ -650,6 +654,145 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
 // rbf and bilinear candidate and plane count, from the Gram matrix of every light (the PCA over
 // the training lights, the interpolation's weights from them), without the fit's clamp to
 // [0, peak].
+// Weights (targets x nodes) of polyharmonic spline interpolation over light directions:
+// f(l) = sum_i a_i phi(|l - l_i|) + (1, lx, ly, lz) . b, phi(r) = r (order 1), r^2 log r (2,
+// the thin-plate spline) or r^3 (3), |.| the chord as the rbf method's Gaussian; the coefficients
+// solve [Phi + lambda I, T; T^T, 0] [a; b] = [profile; 0]. No width: the kernels have no scale.
+Eigen::MatrixXd PolyharmonicWeights(const std::vector<LightDirection>& nodes,
+                                    const std::vector<LightDirection>& targets, int order,
+                                    double regularisation) {
+  const auto kernel = [order](const LightDirection& a, const LightDirection& b) {
+    const double r = (a.vector() - b.vector()).norm();
+    if (r <= 0.0) return 0.0;
+    return order == 1 ? r : (order == 2 ? r * r * std::log(r) : r * r * r);
+  };
+  const auto tail = [](const LightDirection& l) {
+    return Eigen::Vector4d(1.0, l.x(), l.y(), l.z());
+  };
+  const auto n = static_cast<Eigen::Index>(nodes.size());
+  Eigen::MatrixXd system = Eigen::MatrixXd::Zero(n + 4, n + 4);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) system(i, j) = kernel(nodes[i], nodes[j]);
+    system(i, i) += regularisation;
+    system.block(i, n, 1, 4) = tail(nodes[i]).transpose();
+    system.block(n, i, 4, 1) = tail(nodes[i]);
+  }
+  const Eigen::MatrixXd solve = system.fullPivLu().inverse().topRows(n);
+  Eigen::MatrixXd weights(static_cast<Eigen::Index>(targets.size()), n);
+  for (std::size_t h = 0; h < targets.size(); ++h) {
+    Eigen::VectorXd features(n + 4);
+    for (Eigen::Index i = 0; i < n; ++i) features[i] = kernel(targets[h], nodes[i]);
+    features.tail(4) = tail(targets[h]);
+    weights.row(static_cast<Eigen::Index>(h)) = (solve * features).transpose();
+  }
+  return weights;
+}
+
+// Polyharmonic splines in place of the rbf method's Gaussian (diagnosis, never a choice of the
+// fit): their held-out PSNR (clamped as the table) per order, regularisation and plane count;
+// the candidate each training-light score picks among them and the fit's Gaussian candidates;
+// and for leave-side-out the cubic's score of each side (4 planes).
+void PrintPolyharmonic(const Observations& observations, const std::vector<LightDirection>& lights,
+                       const HoldOut& hold_out, double peak) {
+  std::vector<LightDirection> training, held;
+  for (int i : hold_out.selected) training.push_back(lights[i]);
+  for (int i : hold_out.held_out) held.push_back(lights[i]);
+  const std::vector<double> regularisations{0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
+  for (int order : {1, 2, 3}) {
+    for (double regularisation : regularisations) {
+      const Eigen::MatrixXd w = PolyharmonicWeights(training, held, order, regularisation);
+      fmt::print(
+          "polyharmonic order {} regularisation {}: k=4 {:.2f}, k=6 {:.2f}, k=9 {:.2f}, "
+          "k=16 {:.2f}\n",
+          order, regularisation, ClampedHeldOutPsnr(observations, hold_out, w, 4, peak),
+          ClampedHeldOutPsnr(observations, hold_out, w, 6, peak),
+          ClampedHeldOutPsnr(observations, hold_out, w, 9, peak),
+          ClampedHeldOutPsnr(observations, hold_out, w, 16, peak));
+    }
+  }
+  const Eigen::MatrixXd gram = observations.Gram()(hold_out.selected, hold_out.selected);
+  const double spacing = MedianSpacingDegrees(training);
+  for (LeaveOut scheme : {LeaveOut::kOne, LeaveOut::kBlock, LeaveOut::kEdge, LeaveOut::kSide}) {
+    const LeaveOutFolds folds(gram, scheme, training);
+    struct Choice {
+      std::string label;
+      double score = -std::numeric_limits<double>::infinity();
+      int planes = 0;
+      Eigen::MatrixXd weights;
+    };
+    Choice cubic, any;
+    const auto consider = [&](Choice& best, const std::string& label,
+                              const LeaveOutFolds::Scores& scores,
+                              const std::function<Eigen::MatrixXd()>& held_weights) {
+      for (int k = 1; k <= std::min<int>(16, scores.mean_snr_db.size()); ++k) {
+        if (scores.mean_snr_db[k - 1] > best.score) {
+          best = {label, scores.mean_snr_db[k - 1], k, held_weights()};
+        }
+      }
+    };
+    for (double regularisation : regularisations) {
+      std::vector<Eigen::MatrixXd> fold_weights;
+      for (const LeaveOutFolds::Fold& fold : folds.folds()) {
+        std::vector<LightDirection> nodes, targets;
+        for (int i : fold.others) nodes.push_back(training[i]);
+        for (int i : fold.held_out) targets.push_back(training[i]);
+        fold_weights.push_back(PolyharmonicWeights(nodes, targets, 3, regularisation));
+      }
+      const auto held_weights = [&] {
+        return PolyharmonicWeights(training, held, 3, regularisation);
+      };
+      consider(cubic, fmt::format("cubic {}", regularisation), folds.Score(fold_weights),
+               held_weights);
+      if (scheme != LeaveOut::kSide) continue;
+      for (std::size_t f = 0; f < folds.folds().size(); ++f) {
+        const LeaveOutFolds::Fold& fold = folds.folds()[f];
+        double decibels = 0.0;
+        Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+        for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
+          const int light = fold.held_out[h];
+          const Eigen::Vector4d a =
+              fold.axes.leftCols(4).transpose() * fold_weights[f].row(h).transpose();
+          double error = gram(light, light);
+          for (int j = 0; j < 4; ++j) {
+            error += fold.eigenvalues[j] * a[j] * a[j] - 2.0 * a[j] * fold.cross(j, h);
+          }
+          decibels += 10.0 * std::log10(gram(light, light) / error);
+          centre += Eigen::Vector2d(training[light].x(), training[light].y());
+        }
+        const double count = static_cast<double>(fold.held_out.size());
+        fmt::print(
+            "  side {} ({} lights around lx {:.2f}, ly {:.2f}): cubic {} 4 planes {:.3f} dB\n", f,
+            fold.held_out.size(), centre.x() / count, centre.y() / count, regularisation,
+            decibels / count);
+      }
+    }
+    any = cubic;
+    for (double factor : {0.25, 0.354, 0.5, 0.707, 1.0, 1.414, 2.0, 2.83, 4.0}) {
+      for (double regularisation : regularisations) {
+        const double width = factor * spacing;
+        const auto fold_weights =
+            RbfFoldWeights(folds, training, width, regularisation, RbfTail::kAffine);
+        if (fold_weights.empty()) continue;
+        consider(any, fmt::format("gaussian {:.3g} deg / {}", width, regularisation),
+                 folds.Score(fold_weights), [&] {
+                   const RbfInterpolation rbf(training, width, regularisation, RbfTail::kAffine);
+                   Eigen::MatrixXd w(static_cast<Eigen::Index>(held.size()),
+                                     static_cast<Eigen::Index>(training.size()));
+                   for (std::size_t h = 0; h < held.size(); ++h) {
+                     w.row(static_cast<Eigen::Index>(h)) = rbf.Weights(held[h]).transpose();
+                   }
+                   return w;
+                 });
+      }
+    }
+    for (const Choice* choice : {&cubic, &any}) {
+      fmt::print("{} picks {} with {} planes (score {:.3f} dB): held-out {:.2f}\n",
+                 SchemeName(scheme), choice->label, choice->planes, choice->score,
+                 ClampedHeldOutPsnr(observations, hold_out, choice->weights, choice->planes, peak));
+    }
+  }
+}
+
 void PrintOracle(const Observations& observations, const std::vector<LightDirection>& lights,
                  const HoldOut& hold_out, double peak, int grid_size) {
   const Eigen::MatrixXd& gram = observations.Gram();
@@ -780,6 +923,10 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
   for (const HoldOut& hold_out : HoldOuts(set.lights(), arguments.every)) {
     if (arguments.blend) {
       PrintBlend(observations, set.lights(), hold_out, peak, arguments.profile);
+      continue;
+    }
+    if (arguments.polyharmonic) {
+      PrintPolyharmonic(observations, set.lights(), hold_out, peak);
       continue;
     }
     if (arguments.clamped_score) {
