@@ -1,5 +1,6 @@
 #include "represent/surface/surface_integration.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Sparse>
@@ -132,62 +133,115 @@ Image ProjectToIntegrable(const Image& gradients) {
   return out;
 }
 
-Image IntegratePoisson(const Image& gradients, const Mask& mask_in) {
-  CheckGradients(gradients);
-  const int w = gradients.width(), h = gradients.height();
-  const Mask mask = mask_in.pixel_count() == 0 ? Mask(w, h, true) : mask_in;
-  if (mask.width() != w || mask.height() != h) throw Error("mask and gradients differ in size");
-  // Unknowns: the masked pixels.
-  std::vector<int> index(static_cast<std::size_t>(w) * h, -1);
-  int unknowns = 0;
-  for (std::size_t i = 0; i < index.size(); ++i) {
-    if (mask[i]) index[i] = unknowns++;
-  }
-  if (unknowns == 0) throw Error("the mask selects no pixel to integrate");
-  // Each neighbouring pair (a, b) inside the mask gives s_b - s_a = mean slope along a -> b.
-  std::vector<Eigen::Triplet<double>> triplets;
-  std::vector<double> targets;
-  const auto add_pair = [&](int a, int b, double slope) {
-    const int row = static_cast<int>(targets.size());
-    triplets.emplace_back(row, a, -1.0);
-    triplets.emplace_back(row, b, 1.0);
-    targets.push_back(slope);
-  };
+struct PoissonIntegrator::System {
+  Eigen::SparseMatrix<double> normal;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;  // when direct()
+};
+
+namespace {
+
+// Calls pair(a, b, x, y, horizontal) for each neighbouring pair of unknowns (a, b): (x, y) -> (x +
+// 1, y) when horizontal, else (x, y) -> (x, y + 1), in raster order.
+template <typename Pair>
+void ForEachPair(const std::vector<int>& index, int w, int h, Pair pair) {
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const int a = index[static_cast<std::size_t>(y) * w + x];
       if (a < 0) continue;
       if (x + 1 < w) {
         const int b = index[static_cast<std::size_t>(y) * w + x + 1];
-        if (b >= 0) add_pair(a, b, 0.5 * (gradients.at(x, y, 0) + gradients.at(x + 1, y, 0)));
+        if (b >= 0) pair(a, b, x, y, true);
       }
       if (y + 1 < h) {
-        // One row down is one unit of -y.
         const int b = index[static_cast<std::size_t>(y + 1) * w + x];
-        if (b >= 0) add_pair(a, b, -0.5 * (gradients.at(x, y, 1) + gradients.at(x, y + 1, 1)));
+        if (b >= 0) pair(a, b, x, y, false);
       }
     }
   }
-  Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(targets.size()), unknowns);
-  a.setFromTriplets(triplets.begin(), triplets.end());
-  const Eigen::Map<const Eigen::VectorXd> b(targets.data(),
-                                            static_cast<Eigen::Index>(targets.size()));
-  // The normal equations are singular by the free constant (one per connected region); a tiny
-  // Tikhonov term picks the zero-mean solution without biasing the shape measurably.
-  Eigen::SparseMatrix<double> normal = a.transpose() * a;
-  for (int i = 0; i < unknowns; ++i) normal.coeffRef(i, i) += 1e-9;
-  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
-  solver.setTolerance(1e-10);
-  solver.setMaxIterations(20 * unknowns + 1000);
-  solver.compute(normal);
-  Eigen::VectorXd s = solver.solve(a.transpose() * b);
-  if (solver.info() != Eigen::Success) throw Error("Poisson integration did not converge");
+}
+
+}  // namespace
+
+PoissonIntegrator::PoissonIntegrator(const Mask& mask, PoissonSolver solver)
+    : width_(mask.width()), height_(mask.height()) {
+  index_.assign(mask.pixel_count(), -1);
+  for (std::size_t i = 0; i < index_.size(); ++i) {
+    if (mask[i]) index_[i] = unknowns_++;
+  }
+  if (unknowns_ == 0) throw Error("the mask selects no pixel to integrate");
+  direct_ = solver == PoissonSolver::kDirect ||
+            (solver == PoissonSolver::kAuto && unknowns_ <= kDirectPoissonUnknowns);
+  // Each pair (a, b) is a row -e_a + e_b of the least-squares matrix A: A^T A gains 1 on both
+  // diagonals and -1 off them.
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (int i = 0; i < unknowns_; ++i) triplets.emplace_back(i, i, 1e-9);
+  ForEachPair(index_, width_, height_, [&](int a, int b, int, int, bool) {
+    triplets.emplace_back(a, a, 1.0);
+    triplets.emplace_back(b, b, 1.0);
+    triplets.emplace_back(a, b, -1.0);
+    triplets.emplace_back(b, a, -1.0);
+  });
+  auto system = std::make_unique<System>();
+  system->normal.resize(unknowns_, unknowns_);
+  system->normal.setFromTriplets(triplets.begin(), triplets.end());
+  if (direct()) {
+    system->factor.compute(system->normal);
+    if (system->factor.info() != Eigen::Success) {
+      throw Error(
+          fmt::format("Poisson integration: the {} x {} system of {} unknowns could not be "
+                      "factorised",
+                      width_, height_, unknowns_));
+    }
+  }
+  system_ = std::move(system);
+}
+
+PoissonIntegrator::~PoissonIntegrator() = default;
+PoissonIntegrator::PoissonIntegrator(PoissonIntegrator&&) noexcept = default;
+PoissonIntegrator& PoissonIntegrator::operator=(PoissonIntegrator&&) noexcept = default;
+
+Image PoissonIntegrator::Integrate(const Image& gradients) const {
+  CheckGradients(gradients);
+  if (gradients.width() != width_ || gradients.height() != height_) {
+    throw Error(fmt::format("Poisson integration: gradients of {} x {} for a mask of {} x {}",
+                            gradients.width(), gradients.height(), width_, height_));
+  }
+  // A^T b: each pair's target, the mean slope along a -> b (one row down is one unit of -y).
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(unknowns_);
+  ForEachPair(index_, width_, height_, [&](int a, int b, int x, int y, bool horizontal) {
+    const double slope = horizontal ? 0.5 * (gradients.at(x, y, 0) + gradients.at(x + 1, y, 0))
+                                    : -0.5 * (gradients.at(x, y, 1) + gradients.at(x, y + 1, 1));
+    rhs[a] -= slope;
+    rhs[b] += slope;
+  });
+  Eigen::VectorXd s;
+  if (direct()) {
+    s = system_->factor.solve(rhs);
+  } else {
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
+    solver.setTolerance(1e-10);
+    solver.setMaxIterations(20 * unknowns_ + 1000);
+    solver.compute(system_->normal);
+    s = solver.solve(rhs);
+    if (solver.info() != Eigen::Success) throw Error("Poisson integration did not converge");
+  }
+  if (!s.allFinite()) throw Error("Poisson integration gave non-finite heights");
   s.array() -= s.mean();
-  Image out(w, h, std::vector<std::string>{"height"});
-  for (std::size_t i = 0; i < index.size(); ++i) {
-    if (index[i] >= 0) out.pixel(i)[0] = static_cast<float>(s[index[i]]);
+  Image out(width_, height_, std::vector<std::string>{"height"});
+  for (std::size_t i = 0; i < index_.size(); ++i) {
+    if (index_[i] >= 0) out.pixel(i)[0] = static_cast<float>(s[index_[i]]);
   }
   return out;
+}
+
+Image IntegratePoisson(const Image& gradients, const Mask& mask) {
+  CheckGradients(gradients);
+  if (mask.pixel_count() == 0) {
+    return PoissonIntegrator(Mask(gradients.width(), gradients.height(), true))
+        .Integrate(gradients);
+  }
+  if (!mask.SameSize(gradients)) throw Error("mask and gradients differ in size");
+  return PoissonIntegrator(mask).Integrate(gradients);
 }
 
 }  // namespace photomat

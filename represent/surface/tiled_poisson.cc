@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -119,9 +123,33 @@ int LabelPieces(const Mask& mask, std::vector<int>& labels) {
   return pieces;
 }
 
+// The integrators of full tiles (every pixel in the mask), by size: every interior tile of an
+// unmasked map has the same system, so one factorisation serves them all (PoissonIntegrator).
+// Only sizes of the current tile row's height are kept (IMPLEMENTER CHOICE: at most the row's
+// left, interior and right tiles, about 40 MB each at 320 x 320). Get is thread-safe; KeepHeight
+// is called between rows, when no tile is being solved.
+class FullTileIntegrators {
+ public:
+  const PoissonIntegrator& Get(int width, int height) {
+    const std::lock_guard lock(mutex_);
+    auto& integrator = integrators_[{width, height}];
+    if (!integrator) integrator = std::make_unique<PoissonIntegrator>(Mask(width, height, true));
+    return *integrator;
+  }
+  void KeepHeight(int height) {
+    std::erase_if(integrators_,
+                  [height](const auto& entry) { return entry.first.second != height; });
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<std::pair<int, int>, std::unique_ptr<PoissonIntegrator>> integrators_;
+};
+
 // One tile's region: columns [x0, x1) of the window's rows, whose first row is image row `top`.
 // Its Poisson solution, each piece of the mask moved to the coarse height's level (0 outside).
-Image SolveTile(const Image& window, int top, int x0, int x1, const CoarseHeight& coarse) {
+Image SolveTile(const Image& window, int top, int x0, int x1, const CoarseHeight& coarse,
+                FullTileIntegrators& full_tiles) {
   const int w = x1 - x0, h = window.height();
   Image gradients(w, h, std::vector<std::string>{"p", "q"});
   Mask mask(w, h, false);
@@ -132,8 +160,10 @@ Image SolveTile(const Image& window, int top, int x0, int x1, const CoarseHeight
       mask.Set(x, y, window.at(x0 + x, y, kMask) >= 0.5f);
     }
   }
-  if (mask.CountSet() == 0) return Image(w, h, 1);
-  Image solved = IntegratePoisson(gradients, mask);
+  const std::size_t inside = mask.CountSet();
+  if (inside == 0) return Image(w, h, 1);
+  Image solved = inside == mask.pixel_count() ? full_tiles.Get(w, h).Integrate(gradients)
+                                              : IntegratePoisson(gradients, mask);
   std::vector<int> labels;
   const int pieces = LabelPieces(mask, labels);
   std::vector<double> difference(static_cast<std::size_t>(pieces)), count(difference.size());
@@ -190,6 +220,7 @@ void IntegrateTiledPoisson(int width, int height, const GradientRows& gradients,
       SolveCoarse(width, height, gradients, CoarseFactor(width, height, options));
 
   gradients.rewind();
+  FullTileIntegrators full_tiles;
   // The window: gradient rows [window_top, window_top + window.height()) and the blended height
   // of the same rows (with their mask), of which those above the window's tiles are final.
   Image window, blended;
@@ -233,10 +264,11 @@ void IntegrateTiledPoisson(int width, int height, const GradientRows& gradients,
     // The tiles of this row, solved in parallel, then blended in order.
     const int tiles = (width + tile - 1) / tile;
     std::vector<Image> solved(static_cast<std::size_t>(tiles));
+    full_tiles.KeepHeight(window.height());
     tbb::parallel_for(0, tiles, [&](int t) {
       const int x0 = std::max(0, t * tile - overlap);
       const int x1 = std::min(width, std::min((t + 1) * tile, width) + overlap);
-      solved[t] = SolveTile(window, top, x0, x1, coarse);
+      solved[t] = SolveTile(window, top, x0, x1, coarse, full_tiles);
     });
     for (int t = 0; t < tiles; ++t) {
       const int col0 = t * tile, col1 = std::min(col0 + tile, width);

@@ -3,6 +3,7 @@
 #include <functional>
 
 #include "core/image.h"
+#include "represent/surface/surface_integration.h"
 
 namespace photomat {
 
@@ -15,16 +16,19 @@ namespace photomat {
 //      blocks that hold a masked pixel: the surface's shape at large scale, in one small solve.
 //   2. Tile pass: the image is cut into tiles of `tile` x `tile` pixels, each solved by
 //      IntegratePoisson over itself and `overlap` pixels around it (the tiles of one row of tiles
-//      in parallel). Each solve is known up to a constant per connected piece of the mask inside
-//      it; that constant is the mean difference to the coarse height, interpolated bilinearly,
-//      over the piece. Neighbouring tiles are blended with linear weights across the 2 x overlap
-//      pixels they share (weights sum to 1), so no seam is left where their solutions differ.
+//      in parallel; tiles wholly inside the mask share one factorised PoissonIntegrator per size).
+//      Each solve is known up to a constant per connected piece of the mask inside it; that
+//      constant is the mean difference to the coarse height, interpolated bilinearly, over the
+//      piece. Neighbouring tiles are blended with linear weights across the 2 x overlap pixels they
+//      share (weights sum to 1), so no seam is left where their solutions differ.
 //
 // Memory: one row of tiles with its overlaps (gradients, mask and the blended height: 16 bytes per
-// pixel of (tile + 2 overlap) rows) plus the coarse grid (at most about 2^20 blocks, IMPLEMENTER
-// CHOICE: coarse_factor grows from the given one until the grid is that small). The result is
-// zero-mean over the mask up to the coarse grid's approximation and 0 outside the mask; its
-// accuracy against the in-memory IntegratePoisson is measured in tiled_poisson_test.cc.
+// pixel of (tile + 2 overlap) rows), the factorised tiles (about 40 MB each for 320 x 320: the
+// row's full tiles' at most 3 sizes and one per thread for a tile the mask cuts) plus the coarse
+// grid (at most kDirectPoissonUnknowns blocks, IMPLEMENTER CHOICE: coarse_factor grows from the
+// given one until the grid is that small, so it is solved directly, in about 2 s at most). The
+// result is zero-mean over the mask up to the coarse grid's approximation and 0 outside the mask;
+// its accuracy against the in-memory IntegratePoisson is measured in tiled_poisson_test.cc.
 struct TiledPoissonOptions {
   // IMPLEMENTER CHOICE: 256-pixel tiles with 32 pixels of overlap on each side (a 320 x 320
   // solve of about 0.1 M unknowns per tile), stitched by a coarse grid of 8 x 8-pixel blocks.
@@ -44,7 +48,7 @@ struct GradientRows {
 // The coarse grid's block side for a width x height image: options.coarse_factor, doubled until
 // the grid has at most kMaxCoarseBlocks blocks.
 int CoarseFactor(int width, int height, const TiledPoissonOptions& options);
-inline constexpr long kMaxCoarseBlocks = long{1} << 20;
+inline constexpr long kMaxCoarseBlocks = kDirectPoissonUnknowns;
 
 // Integrates the width x height field read from `gradients` and hands the height to `write` in
 // row order, in bands of 2 channels: the height (pixel units) and the mask (1 inside, 0 outside).
