@@ -1,9 +1,11 @@
 #include "capture/io/load_photometric_set.h"
 
 #include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <utility>
 
 #include "capture/io/capture_manifest.h"
 #include "capture/io/diligent.h"
@@ -228,6 +230,28 @@ std::size_t StreamedSet::SelectedPixels(int first, int rows) const {
     count += (*mask_)[offset + p] ? 1 : 0;
   }
   return count;
+}
+
+std::vector<std::size_t> StreamedSet::SelectedPixelIndices(int first, int rows) const {
+  const std::size_t pixels = static_cast<std::size_t>(rows) * width();
+  std::vector<std::size_t> indices;
+  indices.reserve(SelectedPixels(first, rows));
+  const std::size_t offset = static_cast<std::size_t>(first) * width();
+  for (std::size_t p = 0; p < pixels; ++p) {
+    if (!mask_ || (*mask_)[offset + p]) indices.push_back(p);
+  }
+  return indices;
+}
+
+void StreamedSet::VisitBand(int rows,
+                            const std::function<void(int image, ConstImageView band)>& use) {
+  tbb::enumerable_thread_specific<Image> scratch;
+  tbb::parallel_for(std::size_t{0}, readers_.size(), [&](std::size_t i) {
+    Image& band = scratch.local();
+    if (band.height() != rows) band = Image(width(), rows, channels());
+    readers_[i].ReadNext(band.View());
+    use(static_cast<int>(i), std::as_const(band).View());
+  });
 }
 
 void StreamedSet::ReadBandInto(std::span<const ImageView> destinations, Progress* progress) {

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -54,8 +55,17 @@ class StreamedSet {
   // streamed fit decodes this way into its image data matrix, with no band images and no copy.
   // Throws Error naming the image for a truncated or corrupt band, or for a view of another size.
   void ReadBandInto(std::span<const ImageView> destinations, Progress* progress = nullptr);
+  // The next `rows` rows of every image, each handed raw to `use(image, band)` as soon as it is
+  // decoded, in parallel (a thread decodes one image at a time into a scratch band it reuses;
+  // `band` is contiguous, its row stride the width, and valid during the call only). For callers
+  // that keep a part of every band, as a masked fit keeps its selected pixels: no band image per
+  // image. Throws Error naming the image for a truncated or corrupt band, and whatever `use`
+  // throws.
+  void VisitBand(int rows, const std::function<void(int image, ConstImageView band)>& use);
   // Pixels of rows [first, first + rows) the mask selects (all without a mask).
   std::size_t SelectedPixels(int first, int rows) const;
+  // Their indices within the band ((y - first) * width + x), ascending.
+  std::vector<std::size_t> SelectedPixelIndices(int first, int rows) const;
   // Back to row 0 (every file reopened): a further streamed pass.
   void Rewind();
   // Per image, the clipped pixels (a channel at full scale) of the rows read so far.

@@ -114,17 +114,44 @@ Observations::Observations(const PhotometricSet& set)
   });
 }
 
+namespace {
+
+std::vector<std::size_t> EveryPixel(int width, int height) {
+  std::vector<std::size_t> indices(static_cast<std::size_t>(std::max(width, 0)) *
+                                   static_cast<std::size_t>(std::max(height, 0)));
+  std::iota(indices.begin(), indices.end(), std::size_t{0});
+  return indices;
+}
+
+}  // namespace
+
 Observations::Observations(Eigen::MatrixXf matrix, int width, int height, int channels)
-    : matrix_(std::move(matrix)), channels_(channels), width_(width), height_(height) {
-  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    : Observations(std::move(matrix), EveryPixel(width, height), width, height, channels) {}
+
+Observations::Observations(Eigen::MatrixXf matrix, std::vector<std::size_t> pixel_indices,
+                           int width, int height, int channels)
+    : matrix_(std::move(matrix)),
+      pixel_indices_(std::move(pixel_indices)),
+      channels_(channels),
+      width_(width),
+      height_(height) {
+  const std::size_t pixels =
+      static_cast<std::size_t>(std::max(width, 0)) * static_cast<std::size_t>(std::max(height, 0));
   if (width <= 0 || height <= 0 || channels <= 0 ||
-      static_cast<std::size_t>(matrix_.rows()) != pixels * static_cast<std::size_t>(channels)) {
-    throw Error(
-        fmt::format("a {} x {} matrix is not the observations of a {}x{} band of {} channels",
-                    matrix_.rows(), matrix_.cols(), width, height, channels));
+      static_cast<std::size_t>(matrix_.rows()) !=
+          pixel_indices_.size() * static_cast<std::size_t>(channels)) {
+    throw Error(fmt::format(
+        "a {} x {} matrix is not the observations of {} pixels of a {}x{} band of {} channels",
+        matrix_.rows(), matrix_.cols(), pixel_indices_.size(), width, height, channels));
   }
-  pixel_indices_.resize(pixels);
-  std::iota(pixel_indices_.begin(), pixel_indices_.end(), std::size_t{0});
+  for (std::size_t k = 0; k < pixel_indices_.size(); ++k) {
+    if (pixel_indices_[k] >= pixels || (k > 0 && pixel_indices_[k] <= pixel_indices_[k - 1])) {
+      throw Error(
+          fmt::format("observations: pixel index {} ({}) is out of order or outside a "
+                      "{}x{} band",
+                      k, pixel_indices_[k], width, height));
+    }
+  }
 }
 
 const Eigen::MatrixXd& Observations::Gram() const {

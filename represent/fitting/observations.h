@@ -26,6 +26,11 @@ class Observations {
   // (StreamedSet::ReadBandInto), with no band images and no copy. Throws Error for a matrix of
   // another height.
   Observations(Eigen::MatrixXf matrix, int width, int height, int channels);
+  // The same for a band whose mask selects `pixel_indices` (y * width + x within the band,
+  // ascending): the streamed fit gathers them into the matrix as each image's band is decoded.
+  // Throws Error for indices out of order or range, or a matrix of another height.
+  Observations(Eigen::MatrixXf matrix, std::vector<std::size_t> pixel_indices, int width,
+               int height, int channels);
 
   const Eigen::MatrixXf& matrix() const { return matrix_; }
   // The matrix, moved out for its storage to be reused (a streamed fit's next band); these

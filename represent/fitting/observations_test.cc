@@ -83,5 +83,40 @@ TEST(ObservationsTest, FullBandMatrixEqualsTheBandSetsObservations) {
   EXPECT_THROW(Observations(matrix, width, height, 1), Error);
 }
 
+TEST(ObservationsTest, GatheredBandMatrixEqualsTheMaskedBandSetsObservations) {
+  const int width = 5, height = 3, channels = 3, images = 6;
+  Mask mask(width, height, false);
+  for (std::size_t p : {1, 2, 6, 7, 8, 13}) mask.Set(p, true);
+  const std::vector<std::size_t> selected = mask.SetIndices();
+  const auto m = static_cast<Eigen::Index>(selected.size());
+  std::vector<Image> band;
+  std::vector<LightDirection> lights;
+  Eigen::MatrixXf gathered(m * channels, images);
+  for (int i = 0; i < images; ++i) {
+    const Eigen::MatrixXf values = SeededMatrix(width * height * channels, 1, 20 + i);
+    Image image(width, height, channels);
+    std::copy(values.data(), values.data() + values.size(), image.values().begin());
+    for (int c = 0; c < channels; ++c) {
+      for (Eigen::Index k = 0; k < m; ++k) {
+        gathered(c * m + k, i) = image.plane(c)[selected[static_cast<std::size_t>(k)]];
+      }
+    }
+    band.push_back(std::move(image));
+    lights.push_back(LightDirection::FromSlantTilt(10.0 * i, 50.0 * i));
+  }
+  PhotometricSet set(std::move(band), lights);
+  set.set_mask(mask);
+  const Observations from_set(set);
+  const Observations from_matrix(gathered, selected, width, height, channels);
+  EXPECT_EQ(from_matrix.matrix(), from_set.matrix());
+  EXPECT_EQ(from_matrix.pixel_indices(), from_set.pixel_indices());
+  EXPECT_EQ(from_matrix.Gram(), from_set.Gram());
+  // Indices out of order, repeated or outside the band, or a matrix of another height.
+  EXPECT_THROW(Observations(gathered, {1, 6, 2, 7, 8, 13}, width, height, channels), Error);
+  EXPECT_THROW(Observations(gathered, {1, 2, 2, 7, 8, 13}, width, height, channels), Error);
+  EXPECT_THROW(Observations(gathered, {1, 2, 6, 7, 8, 15}, width, height, channels), Error);
+  EXPECT_THROW(Observations(gathered, {1, 2, 6, 7, 8}, width, height, channels), Error);
+}
+
 }  // namespace
 }  // namespace photomat

@@ -1,6 +1,7 @@
 #include "represent/streaming/streamed_fit.h"
 
 #include <fmt/format.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <future>
@@ -114,13 +115,15 @@ class Streamer {
     band.first = set_.next_row();
     band.rows = std::min(band_rows_, set_.height() - band.first);
     const std::size_t selected = set_.SelectedPixels(band.first, band.rows);
-    if (!options_.robust &&
-        selected == static_cast<std::size_t>(set_.width()) * static_cast<std::size_t>(band.rows)) {
-      ReadWholeBand(band);
+    if (selected == 0) {
+      set_.VisitBand(band.rows, [](int, ConstImageView) {});  // decoded past, nothing kept
+      return;
+    }
+    if (!options_.robust) {
+      ReadLeastSquaresBand(band, selected);
       return;
     }
     PhotometricSet raw = set_.ReadBand(band.rows, true);
-    if (selected == 0) return;
     if (options_.robust) band.measured = MeasuredPixelMasks(raw);
     if (set_.apply_intensities()) raw.ApplyIntensities();
     band.set.emplace(std::move(raw));
@@ -135,31 +138,50 @@ class Streamer {
     }
   }
 
-  // A least-squares band whose every pixel takes part, decoded straight into the columns of its
-  // image data matrix (StreamedSet::ReadBandInto), the intensities divided out there: no band
-  // images, no zero-filling and no copy, which were a quarter of a streamed PTM fit's CPU time
-  // beside the decoding (perf, 12 MP x 50 JPEGs). Masked bands and robust fits (which look at
-  // the band's images as captured) read a band set as before.
-  void ReadWholeBand(Band& band) {
+  // A least-squares band decoded straight into the columns of its image data matrix, the
+  // intensities divided out there: no band images, no zero-filling and no copy, which were a
+  // quarter of a streamed PTM fit's CPU time beside the decoding (perf, 12 MP x 50 JPEGs). A band
+  // whose every pixel takes part is decoded into the columns themselves
+  // (StreamedSet::ReadBandInto); one the mask covers in part has each image's band decoded into a
+  // scratch band of its thread and its selected pixels gathered (StreamedSet::VisitBand). Robust
+  // fits (which look at the band's images as captured) read a band set.
+  void ReadLeastSquaresBand(Band& band, std::size_t selected) {
     const int width = set_.width(), rows = band.rows, channels = set_.channels();
-    const std::ptrdiff_t plane = static_cast<std::ptrdiff_t>(width) * rows;
+    const auto pixels = static_cast<std::ptrdiff_t>(selected);
     Eigen::MatrixXf matrix = TakeSpareMatrix();
-    matrix.resize(plane * channels, set_.size());  // the spare's storage when the size is kept
-    std::vector<ImageView> columns;
-    for (int i = 0; i < set_.size(); ++i) {
-      columns.emplace_back(matrix.col(i).data(), width, rows, channels, width, plane);
+    matrix.resize(pixels * channels, set_.size());  // the spare's storage when the size is kept
+    std::vector<std::size_t> indices;
+    if (selected == static_cast<std::size_t>(width) * static_cast<std::size_t>(rows)) {
+      std::vector<ImageView> columns;
+      for (int i = 0; i < set_.size(); ++i) {
+        columns.emplace_back(matrix.col(i).data(), width, rows, channels, width, pixels);
+      }
+      set_.ReadBandInto(columns);
+    } else {
+      indices = set_.SelectedPixelIndices(band.first, rows);
+      set_.VisitBand(rows, [&](int i, ConstImageView decoded) {
+        for (int c = 0; c < channels; ++c) {
+          // VisitBand's bands are contiguous: pixel p of plane c is at c * plane_stride + p.
+          const float* plane = decoded.data() + c * decoded.plane_stride();
+          float* out = matrix.col(i).data() + c * pixels;
+          for (std::ptrdiff_t k = 0; k < pixels; ++k) out[k] = plane[indices[k]];
+        }
+      });
     }
-    set_.ReadBandInto(columns);
     if (set_.apply_intensities() && !set_.intensities().empty()) {
       for (int i = 0; i < set_.size(); ++i) {
         for (int c = 0; c < channels; ++c) {
           const float intensity = set_.intensities()[i][static_cast<std::size_t>(c)];
           // As PhotometricSet::ApplyIntensities divides (the same bits as the in-memory fit).
-          for (float& v : matrix.col(i).segment(c * plane, plane)) v /= intensity;
+          for (float& v : matrix.col(i).segment(c * pixels, pixels)) v /= intensity;
         }
       }
     }
-    band.observations.emplace(std::move(matrix), width, rows, channels);
+    if (indices.empty()) {
+      band.observations.emplace(std::move(matrix), width, rows, channels);
+    } else {
+      band.observations.emplace(std::move(matrix), std::move(indices), width, rows, channels);
+    }
   }
 
   // One streamed pass: `visit` sees every band in row order. The next band is decoded (and, for
@@ -197,10 +219,11 @@ class Streamer {
   const std::vector<int>& all() const { return all_; }
 
  private:
-  // A fitted band's image data matrix, kept for the next band's (ReadWholeBand). Its storage is
-  // one block larger than malloc's reuse threshold (core/memory_limits.h) as soon as a band holds
-  // more than 32 MiB, and a fresh mapping per band would be first touched page by page (system
-  // time as large as the fit's own: 6.3 s for a 12 MP PTM fit in bands of 128 MB, measured).
+  // A fitted band's image data matrix, kept for the next band's (ReadLeastSquaresBand). Its storage
+  // is one block larger than malloc's reuse threshold (core/memory_limits.h) as soon as a band
+  // holds more than 32 MiB, and a fresh mapping per band would be first touched page by page
+  // (system time as large as the fit's own: 6.3 s for a 12 MP PTM fit in bands of 128 MB,
+  // measured).
   Eigen::MatrixXf TakeSpareMatrix() {
     const std::lock_guard lock(spare_mutex_);
     return std::move(spare_matrix_);
@@ -316,22 +339,27 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
   const auto channels = static_cast<std::size_t>(set.channels());
   const auto width = static_cast<std::size_t>(set.width());
   // Per pixel of a band: the image data matrix (4 bytes per sample), which least squares
-  // decodes straight into (Streamer::ReadWholeBand), but a masked or robust fit decodes into
-  // band images first and copies (4 + 4); robust: the weights (4 per image), the measured masks
-  // (1) and, for Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample).
-  // Two bands
-  // are held at once (the next one is decoded while this one is fitted: Streamer::Pass). One
-  // method's maps at a time, with the fit's products and the writer's interleaved copy (12 bytes
-  // per map).
+  // decodes straight into (Streamer::ReadLeastSquaresBand), but a robust fit decodes into band
+  // images first and copies (4 + 4); robust: the weights (4 per image), the measured masks (1)
+  // and, for Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample). Two
+  // bands are held at once (the next one is decoded while this one is fitted: Streamer::Pass).
+  // One method's maps at a time, with the fit's products and the writer's interleaved copy (12
+  // bytes per map). A masked least-squares fit adds each decoding thread's scratch band (4 bytes
+  // per channel; only the band being read has them).
   int planes = 0;
   bool imputed = false;
   for (const Method& method : methods) {
     planes = std::max(planes, MapPlanes(method, set.size(), set.channels()));
     imputed |= NeedsGram(method);
   }
-  std::size_t per_band_pixel = n * channels * (robust || set.masked() ? 8 : 4);
+  std::size_t per_band_pixel = n * channels * (robust ? 8 : 4);
   if (robust) per_band_pixel += n * 5 + (imputed ? n * channels * 8 : 0);
-  const std::size_t per_pixel = 2 * per_band_pixel + static_cast<std::size_t>(planes) * 12;
+  const std::size_t scratch =
+      !robust && set.masked()
+          ? static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()) * channels * 4
+          : 0;
+  const std::size_t per_pixel =
+      2 * per_band_pixel + static_cast<std::size_t>(planes) * 12 + scratch;
   const std::size_t fixed = DecoderChunkBytes(set);
   const std::size_t room = memory_bytes > fixed ? memory_bytes - fixed : 0;
   const std::size_t rows = room / std::max<std::size_t>(per_pixel * width, 1);
