@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "relight/formats/interchange.h"
 #include "represent/surface/surface_integration.h"
+#include "represent/surface/tiled_poisson.h"
 
 namespace photomat {
 namespace {
@@ -128,7 +129,7 @@ Image HeightFromNormals(const Image& normals, const Mask& mask, HeightIntegrator
   const Image gradients = GradientsFromNormals(normals);
   Image height = integrator == HeightIntegrator::kFrankotChellappa
                      ? IntegrateFrankotChellappa(gradients)
-                     : IntegratePoisson(gradients, mask);
+                     : IntegratePoissonAnySize(gradients, mask);
   height.set_channel_names({"height"});
   return height;
 }

@@ -25,6 +25,7 @@
 #include "represent/model/neural_decoder.h"
 #include "represent/stack/stack_band_reader.h"
 #include "represent/surface/surface_integration.h"
+#include "represent/surface/tiled_poisson.h"
 
 namespace photomat {
 namespace {
@@ -157,7 +158,7 @@ nlohmann::json WriteDisplayMaps(const fs::path& folder, const Representation& so
                    {"encoding", "sRGB"}});
 
   if (mask.CountSet() > 0) {
-    const Image height = IntegratePoisson(GradientsFromNormals(*normals), mask);
+    const Image height = IntegratePoissonAnySize(GradientsFromNormals(*normals), mask);
     double low = INFINITY, high = -INFINITY;
     for (std::size_t p = 0; p < height.pixel_count(); ++p) {
       if (!mask[p]) continue;

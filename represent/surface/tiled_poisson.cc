@@ -326,4 +326,25 @@ Image IntegrateTiledPoisson(const Image& gradients, const Mask& mask,
   return result;
 }
 
+Image IntegratePoissonAnySize(const Image& gradients, const Mask& mask) {
+  const std::size_t unknowns = mask.pixel_count() == 0 ? gradients.pixel_count() : mask.CountSet();
+  if (unknowns <= static_cast<std::size_t>(kDirectPoissonUnknowns)) {
+    return IntegratePoisson(gradients, mask);
+  }
+  Image height = IntegrateTiledPoisson(gradients, mask);
+  // Zero mean over the mask, as IntegratePoisson gives it.
+  double sum = 0.0;
+  for (std::size_t p = 0; p < height.pixel_count(); ++p) {
+    if (mask.pixel_count() == 0 || mask[p]) sum += height.pixel(p)[0];
+  }
+  // (In double, in raster order, as the streamed export subtracts it: the same bits.)
+  const double mean = sum / static_cast<double>(unknowns);
+  for (std::size_t p = 0; p < height.pixel_count(); ++p) {
+    if (mask.pixel_count() == 0 || mask[p]) {
+      height.pixel(p)[0] = static_cast<float>(height.pixel(p)[0] - mean);
+    }
+  }
+  return height;
+}
+
 }  // namespace photomat

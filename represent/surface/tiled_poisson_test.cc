@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -97,6 +98,36 @@ TEST(TiledPoissonTest, MaskedPiecesKeepTheirLevels) {
     if (!mask[p]) {
       ASSERT_EQ(tiled.pixel(p)[0], 0.0f);
     }
+  }
+}
+
+// In-memory exports: the exact solve up to kDirectPoissonUnknowns masked pixels (the same bits as
+// IntegratePoisson), the tiled one above it with its mean over the mask removed.
+TEST(TiledPoissonTest, AnySizeIsExactWhenSmallAndTiledWhenLarge) {
+  const Image small = BrickGradients(64, 48);
+  Mask disc(64, 48, false);
+  for (int y = 0; y < 48; ++y) {
+    for (int x = 0; x < 64; ++x) disc.Set(x, y, std::hypot(x - 30, y - 24) < 20);
+  }
+  for (const Mask& mask : {Mask(), disc}) {
+    const Image exact = IntegratePoisson(small, mask);
+    const Image any = IntegratePoissonAnySize(small, mask);
+    EXPECT_TRUE(std::equal(any.values().begin(), any.values().end(), exact.values().begin()));
+  }
+  // 520 x 510 = 265,200 pixels, above 2^18.
+  const Image large = BrickGradients(520, 510);
+  const Image any = IntegratePoissonAnySize(large, Mask());
+  const Image tiled = IntegrateTiledPoisson(large, Mask());
+  double mean = 0.0, tiled_mean = 0.0;
+  for (std::size_t p = 0; p < any.pixel_count(); ++p) {
+    mean += any.pixel(p)[0];
+    tiled_mean += tiled.pixel(p)[0];
+  }
+  mean /= static_cast<double>(any.pixel_count());
+  tiled_mean /= static_cast<double>(any.pixel_count());
+  EXPECT_NEAR(mean, 0.0, 1e-4);
+  for (std::size_t p = 0; p < any.pixel_count(); ++p) {
+    ASSERT_EQ(any.pixel(p)[0], static_cast<float>(tiled.pixel(p)[0] - tiled_mean)) << p;
   }
 }
 
