@@ -208,12 +208,21 @@ Image PoissonIntegrator::Integrate(const Image& gradients) const {
   }
   // A^T b: each pair's target, the mean slope along a -> b (one row down is one unit of -y).
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(unknowns_);
+  std::size_t non_finite = 0;
   ForEachPair(index_, width_, height_, [&](int a, int b, int x, int y, bool horizontal) {
     const double slope = horizontal ? 0.5 * (gradients.at(x, y, 0) + gradients.at(x + 1, y, 0))
                                     : -0.5 * (gradients.at(x, y, 1) + gradients.at(x, y + 1, 1));
+    if (!std::isfinite(slope)) ++non_finite;
     rhs[a] -= slope;
     rhs[b] += slope;
   });
+  // One NaN would spread through the solve to its whole piece of the mask: refuse instead.
+  if (non_finite > 0) {
+    throw Error(fmt::format(
+        "Poisson integration: {} slope(s) inside the mask are not finite (NaN or infinite normals "
+        "or gradients)",
+        non_finite));
+  }
   Eigen::VectorXd s;
   if (direct()) {
     s = system_->factor.solve(rhs);

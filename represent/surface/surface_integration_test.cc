@@ -149,6 +149,15 @@ TEST(SurfaceIntegrationTest, DirectAndIterativeSolversAgreeAndTheSystemIsReused)
     EXPECT_TRUE(std::equal(fresh.values().begin(), fresh.values().end(), again.values().begin()));
   }
   EXPECT_THROW(direct.Integrate(Image(80, 70, 2)), Error);
+  // A NaN inside the mask is refused (it would spread over its piece); outside it is ignored.
+  Image poisoned = bowl;
+  poisoned.at(0, 0, 0) = std::nanf("");
+  ASSERT_FALSE(mask(0, 0));
+  EXPECT_NO_THROW(direct.Integrate(poisoned));
+  poisoned.at(36, 35 - 14, 1) = std::nanf("");
+  ASSERT_TRUE(mask(36, 35 - 14));
+  EXPECT_THROW(direct.Integrate(poisoned), Error);
+  EXPECT_THROW(iterative.Integrate(poisoned), Error);
 }
 
 TEST(SurfaceIntegrationTest, ProjectionRemovesTheNonIntegrablePart) {
