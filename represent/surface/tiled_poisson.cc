@@ -54,7 +54,7 @@ struct CoarseHeight {
 };
 
 // Pass 1: block means of the slopes over the masked pixels, times the block side (slopes per
-// block), integrated by IntegratePoisson over the blocks that hold a masked pixel.
+// block), integrated over the blocks that hold a masked pixel by a factorised PoissonIntegrator.
 CoarseHeight SolveCoarse(int width, int height, const GradientRows& rows, int factor) {
   const int cw = (width + factor - 1) / factor, ch = (height + factor - 1) / factor;
   std::vector<double> sum_p(static_cast<std::size_t>(cw) * ch), sum_q(sum_p.size()),
@@ -86,7 +86,7 @@ CoarseHeight SolveCoarse(int width, int height, const GradientRows& rows, int fa
     gradients.pixel(b)[1] = static_cast<float>(sum_q[b] / count[b] * factor);
   }
   if (coarse.mask.CountSet() == 0) throw Error("the mask selects no pixel to integrate");
-  coarse.height = IntegratePoisson(gradients, coarse.mask);
+  coarse.height = PoissonIntegrator(coarse.mask, PoissonSolver::kDirect).Integrate(gradients);
   return coarse;
 }
 
