@@ -388,9 +388,11 @@ std::size_t StreamedExportBytesPerPixel(const StackBandReader& stack) {
 std::size_t InMemoryExportBytes(int width, int height, int maps, int channels) {
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   // The stack (twice: read and written with its extra layers), the relit images, normals, albedo
-  // and height, and the Poisson solve (PoissonIntegrator): up to kDirectPoissonUnknowns its
+  // and height, and the Poisson solve (IntegratePoissonAnySize): up to kDirectPoissonUnknowns its
   // factorised normal equations (measured: 187 MB of peak for 262,000 unknowns, so 720 bytes per
-  // unknown), above it the iterative solve's sparse matrix and vectors (about 200 bytes).
+  // unknown); above it the tiled solve, which needs less than the 200 bytes per unknown the whole
+  // field's conjugate gradients did (its window and result, plus at most about 0.5 GB for the
+  // coarse grid): 200 is kept as a conservative bound.
   const std::size_t poisson = pixels <= kDirectPoissonUnknowns ? 720 : 200;
   return pixels * (8 * static_cast<std::size_t>(maps) +
                    4 * 193 * static_cast<std::size_t>(channels) + poisson);
