@@ -8,7 +8,9 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <future>
 #include <sstream>
+#include <system_error>
 #include <thread>
 
 #include "core/error.h"
@@ -36,6 +38,15 @@ int SyncPath(const fs::path& path, bool directory) {
   return result;
 }
 
+// fdatasync of `path` if it exists; returns errno or 0 (0 too when there is no such file yet).
+int DataSyncIfPresent(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return errno == ENOENT ? 0 : errno;
+  const int result = ::fdatasync(fd) == 0 ? 0 : errno;
+  ::close(fd);
+  return result;
+}
+
 }  // namespace
 
 PendingFile::PendingFile(fs::path path) : path_(std::move(path)) {
@@ -48,28 +59,43 @@ PendingFile::PendingFile(fs::path path) : path_(std::move(path)) {
 }
 
 PendingFile::PendingFile(PendingFile&& other) noexcept
-    : path_(std::move(other.path_)), temp_(std::move(other.temp_)), pending_(other.pending_) {
+    : path_(std::move(other.path_)),
+      temp_(std::move(other.temp_)),
+      pending_(other.pending_),
+      writeback_(std::move(other.writeback_)),
+      writeback_error_(other.writeback_error_) {
   other.pending_ = false;
 }
 
 PendingFile::~PendingFile() {
+  FinishWriteback();  // the flush's thread must not outlive the temporary's name
   if (!pending_) return;
   std::error_code ec;
   fs::remove(temp_, ec);
 }
 
-void PendingFile::StartWriteback() const {
-#ifdef __linux__
-  const int fd = ::open(temp_.c_str(), O_RDONLY);
-  if (fd < 0) return;
-  ::sync_file_range(fd, 0, 0, SYNC_FILE_RANGE_WRITE);
-  ::close(fd);
-#endif
+void PendingFile::StartWriteback() {
+  if (writeback_.valid()) {
+    if (writeback_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    FinishWriteback();
+  }
+  try {
+    writeback_ = std::async(std::launch::async, DataSyncIfPresent, temp_);
+  } catch (const std::system_error&) {
+    // No thread to be had (an address-space limit, say): Commit's flush does it all.
+  }
+}
+
+void PendingFile::FinishWriteback() {
+  if (!writeback_.valid()) return;
+  const int error = writeback_.get();
+  if (writeback_error_ == 0) writeback_error_ = error;
 }
 
 void PendingFile::Commit() {
   std::error_code ec;
-  if (int err = SyncPath(temp_, false); err != 0) {
+  FinishWriteback();
+  if (int err = writeback_error_ != 0 ? writeback_error_ : SyncPath(temp_, false); err != 0) {
     fs::remove(temp_, ec);
     pending_ = false;
     throw Error(path_, fmt::format("cannot write: {}", std::strerror(err)));
