@@ -11,6 +11,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <set>
 #include <string_view>
@@ -45,41 +46,26 @@ constexpr int kChunkRows = 16;
 // Rows per band of the writer for formats other than EXR.
 constexpr int kBandRows = 64;
 
-// Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes through
-// the encoding's code -> light table; returns the pixels with a kept channel at the largest code.
-// kFileChannels and kKept fix the file's and the band's channel counts at compile time for the
-// common layouts (RGB, RGBA without its alpha, grey), so that one pass over the pixels converts
-// each sample and tests it for clipping with no inner loop (half the time of a pass per channel
-// and one for the clipping: decoding is a large share of a fit's CPU time); 0 reads the counts
-// at run time.
-template <int kFileChannels, int kKept, typename T>
-PHOTOMAT_HOT_LOOP std::size_t DecodeIntegerRow(const T* row, int file_channels,
-                                               const std::vector<float>& light_of_code,
-                                               ImageView band, int y) {
+// Pixels of an interleaved row whose first `kept` channels include one at full scale. Most rows
+// of a capture have no sample at full scale, and for those one pass over the row's bytes (memchr
+// for 8 bits, a vectorised test for 16) replaces testing each pixel's channels: the test was a
+// third of the decoding loop's instructions. A row whose every channel is kept is looked at
+// whole; with a dropped alpha (at full scale in most files) the pixels are always tested.
+template <typename T>
+PHOTOMAT_HOT_LOOP std::size_t CountPixelsAtFullScale(const T* row, int width, int stride,
+                                                     int kept) {
   constexpr T kMax = std::numeric_limits<T>::max();
-  const int stride = kFileChannels > 0 ? kFileChannels : file_channels;
-  const int kept = kKept > 0 ? kKept : band.channels();
-  const int width = band.width();
-  const float* table = light_of_code.data();
-  std::size_t saturated = 0;
-  if constexpr (kKept > 0) {
-    float* out[kKept];
-    for (int c = 0; c < kKept; ++c) out[c] = band.row(c, y).data();
-    for (int x = 0; x < width; ++x) {
-      const T* pixel = row + static_cast<std::size_t>(x) * stride;
-      int at_max = 0;
-      for (int c = 0; c < kKept; ++c) {
-        out[c][x] = table[pixel[c]];
-        at_max |= pixel[c] == kMax ? 1 : 0;
-      }
-      saturated += static_cast<std::size_t>(at_max);
+  const std::size_t samples = static_cast<std::size_t>(width) * stride;
+  if (kept == stride) {
+    if constexpr (sizeof(T) == 1) {
+      if (std::memchr(row, kMax, samples) == nullptr) return 0;
+    } else {
+      unsigned any = 0;
+      for (std::size_t i = 0; i < samples; ++i) any |= row[i] == kMax ? 1u : 0u;
+      if (any == 0) return 0;
     }
-    return saturated;
   }
-  for (int c = 0; c < kept; ++c) {
-    float* out = band.row(c, y).data();
-    for (int x = 0; x < width; ++x) out[x] = table[row[x * stride + c]];
-  }
+  std::size_t saturated = 0;
   for (int x = 0; x < width; ++x) {
     const T* pixel = row + static_cast<std::size_t>(x) * stride;
     bool at_max = false;
@@ -87,6 +73,36 @@ PHOTOMAT_HOT_LOOP std::size_t DecodeIntegerRow(const T* row, int file_channels,
     saturated += at_max ? 1 : 0;
   }
   return saturated;
+}
+
+// Decodes one interleaved row of an 8- or 16-bit file into row `y` of `band`'s planes through
+// the encoding's code -> light table; returns the pixels with a kept channel at the largest code
+// (CountPixelsAtFullScale). kFileChannels and kKept fix the file's and the band's channel counts
+// at compile time for the common layouts (RGB, RGBA without its alpha, grey), so that one pass
+// over the pixels converts each sample with no inner loop (half the time of a pass per channel:
+// decoding is a large share of a fit's CPU time); 0 reads the counts at run time.
+template <int kFileChannels, int kKept, typename T>
+PHOTOMAT_HOT_LOOP std::size_t DecodeIntegerRow(const T* row, int file_channels,
+                                               const std::vector<float>& light_of_code,
+                                               ImageView band, int y) {
+  const int stride = kFileChannels > 0 ? kFileChannels : file_channels;
+  const int kept = kKept > 0 ? kKept : band.channels();
+  const int width = band.width();
+  const float* table = light_of_code.data();
+  if constexpr (kKept > 0) {
+    float* out[kKept];
+    for (int c = 0; c < kKept; ++c) out[c] = band.row(c, y).data();
+    for (int x = 0; x < width; ++x) {
+      const T* pixel = row + static_cast<std::size_t>(x) * stride;
+      for (int c = 0; c < kKept; ++c) out[c][x] = table[pixel[c]];
+    }
+  } else {
+    for (int c = 0; c < kept; ++c) {
+      float* out = band.row(c, y).data();
+      for (int x = 0; x < width; ++x) out[x] = table[row[x * stride + c]];
+    }
+  }
+  return CountPixelsAtFullScale(row, width, stride, kept);
 }
 
 template <typename T>
