@@ -38,10 +38,12 @@ int SyncPath(const fs::path& path, bool directory) {
   return result;
 }
 
-// fdatasync of `path` if it exists; returns errno or 0 (0 too when there is no such file yet).
+// fdatasync of `path`; returns its errno or 0. A file that cannot be opened (not created yet, or
+// no descriptor free) returns 0: this flush is an early start, and Commit's own flush of the file
+// decides.
 int DataSyncIfPresent(const fs::path& path) {
   const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0) return errno == ENOENT ? 0 : errno;
+  if (fd < 0) return 0;
   const int result = ::fdatasync(fd) == 0 ? 0 : errno;
   ::close(fd);
   return result;
