@@ -123,19 +123,18 @@ class Streamer {
       ReadLeastSquaresBand(band, selected);
       return;
     }
+    // Robust: a band set, whose images the robust fit looks at as captured first.
     PhotometricSet raw = set_.ReadBand(band.rows, true);
-    if (options_.robust) band.measured = MeasuredPixelMasks(raw);
+    band.measured = MeasuredPixelMasks(raw);
     if (set_.apply_intensities()) raw.ApplyIntensities();
     band.set.emplace(std::move(raw));
     band.observations.emplace(*band.set);
-    if (options_.robust) {
-      RobustFitOptions robust = options_.robust_options;
-      robust.measured = band.measured;
-      robust.progress = nullptr;
-      // The band's lamps (their frame the whole image's, from its first row) for pbr.
-      if (band.set->near_lighting()) robust.near_lighting = &*band.set->near_lighting();
-      band.robust.emplace(*band.observations, band.set->lights(), all_, robust, set_.source());
-    }
+    RobustFitOptions robust = options_.robust_options;
+    robust.measured = band.measured;
+    robust.progress = nullptr;
+    // The band's lamps (their frame the whole image's, from its first row) for pbr.
+    if (band.set->near_lighting()) robust.near_lighting = &*band.set->near_lighting();
+    band.robust.emplace(*band.observations, band.set->lights(), all_, robust, set_.source());
   }
 
   // A least-squares band decoded straight into the columns of its image data matrix, the
