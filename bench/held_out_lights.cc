@@ -147,6 +147,9 @@ Arguments Parse(int argc, char** argv) {
       arguments.sets.push_back(fs::path(data) / "diligent" / object);
     }
   }
+  if (arguments.calibrated && !arguments.linear_jpeg) {
+    throw Error("--calibrated compares the two tools on JPEGs; it cannot go with --float");
+  }
   if (arguments.every.empty() ||
       *std::min_element(arguments.every.begin(), arguments.every.end()) < 2) {
     throw Error("--every must list values of at least 2");
@@ -286,16 +289,21 @@ PhotometricSet LinearJpegSet(const PhotometricSet& raw, const fs::path& folder) 
 // The photographs with their lamps' intensities divided out, written as linear 8-bit JPEGs that
 // both tools read: image i, channel c is raw / scale[i][c], where scale = intensity / k and k is
 // the largest factor that clips no sample (so no image is clipped and the brightest calibrated
-// sample is code 255). Returns the set read back and fills `scale`.
-PhotometricSet CalibratedJpegSet(const PhotometricSet& raw, const fs::path& folder,
-                                 std::vector<std::vector<float>>& scale) {
+// sample is code 255).
+struct CalibratedJpegs {
+  PhotometricSet set;                     // the JPEGs read back
+  std::vector<std::vector<float>> scale;  // per image and channel: raw = set x scale
+  fs::path folder;                        // where they are
+};
+
+CalibratedJpegs CalibratedJpegSet(const PhotometricSet& raw, const fs::path& folder) {
   PhotometricSet calibrated = raw;
   calibrated.ApplyIntensities();
   float largest = 0.0f;
   for (const Image& image : calibrated.images()) {
     for (float v : image.values()) largest = std::max(largest, v);
   }
-  scale = raw.intensities();
+  std::vector<std::vector<float>> scale = raw.intensities();
   for (auto& row : scale) {
     for (float& v : row) v *= largest;
   }
@@ -307,7 +315,7 @@ PhotometricSet CalibratedJpegSet(const PhotometricSet& raw, const fs::path& fold
   }
   PhotometricSet normalised(std::move(images), raw.lights());
   normalised.set_mask(raw.MaskOrAll());
-  return LinearJpegSet(normalised, folder);
+  return {LinearJpegSet(normalised, folder), std::move(scale), folder};
 }
 
 struct Row {
@@ -975,22 +983,28 @@ void PrintOracle(const Observations& observations, const std::vector<LightDirect
 // is multiplied by its lamp's scale before it is compared with the raw held-out JPEG; photomat
 // alone also fits the raw JPEGs with the intensities divided out in floats (what `fit` does with a
 // capture that gives intensities; relight's .lp has no field for them).
-void PrintCalibratedTables(const PhotometricSet& calibrated,
-                           const std::vector<std::vector<float>>& scale, const PhotometricSet& raw,
+void PrintCalibratedTables(const CalibratedJpegs& calibrated, const PhotometricSet& raw,
                            const PhotometricSet& set, const std::vector<Method>& methods,
                            const HoldOut& hold_out, const Arguments& arguments,
                            const fs::path& work, const fs::path& path) {
-  std::vector<Row> rows;
-  const Observations calibrated_observations(calibrated);
-  for (const Method& method : methods) {
-    const Representation r =
-        FitObservations(calibrated_observations, set.lights(), method, hold_out.selected, path);
-    rows.push_back({"photomat", MethodLabel(method), r.maps().channels(),
-                    MeanPsnr(r, set, hold_out.held_out, 1.0, scale)});
-  }
+  // photomat's rows: each method fitted to `fitted`, its predictions times `scale` scored against
+  // the raw held-out JPEGs.
+  const auto photomat_rows = [&](const PhotometricSet& fitted,
+                                 const std::vector<std::vector<float>>& scale) {
+    const Observations observations(fitted);
+    std::vector<Row> rows;
+    for (const Method& method : methods) {
+      const Representation r =
+          FitObservations(observations, set.lights(), method, hold_out.selected, path);
+      rows.push_back({"photomat", MethodLabel(method), r.maps().channels(),
+                      MeanPsnr(r, set, hold_out.held_out, 1.0, scale)});
+    }
+    return rows;
+  };
+  std::vector<Row> rows = photomat_rows(calibrated.set, calibrated.scale);
   if (arguments.relight_cli) {
-    const auto theirs = RelightCliRows(*arguments.relight_cli, set, work / "calibrated-jpegs",
-                                       hold_out, work, scale);
+    const auto theirs = RelightCliRows(*arguments.relight_cli, set, calibrated.folder, hold_out,
+                                       work, calibrated.scale);
     rows.insert(rows.end(), theirs.begin(), theirs.end());
   }
   PrintTable(fmt::format("{}, {} held out ({}), both tools on the calibrated JPEGs",
@@ -1000,18 +1014,10 @@ void PrintCalibratedTables(const PhotometricSet& calibrated,
   divided.set_intensities(raw.intensities());
   const std::vector<std::vector<float>> intensities = divided.intensities();
   divided.ApplyIntensities();
-  const Observations divided_observations(divided);
-  rows.clear();
-  for (const Method& method : methods) {
-    const Representation r =
-        FitObservations(divided_observations, set.lights(), method, hold_out.selected, path);
-    rows.push_back({"photomat", MethodLabel(method), r.maps().channels(),
-                    MeanPsnr(r, set, hold_out.held_out, 1.0, intensities)});
-  }
   PrintTable(fmt::format("{}, {} held out ({}), photomat on the raw JPEGs with the intensities "
                          "divided out",
                          path.filename().string(), hold_out.held_out.size(), hold_out.name),
-             rows, false);
+             photomat_rows(divided, intensities), false);
 }
 
 void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& work) {
@@ -1021,12 +1027,8 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
   const fs::path jpegs = work / "jpegs";
   const PhotometricSet set =
       arguments.linear_jpeg ? LinearJpegSet(raw.set, jpegs) : PhotometricSet(raw.set);
-  std::vector<std::vector<float>> calibrated_scale;
-  const fs::path calibrated_jpegs = work / "calibrated-jpegs";
-  std::optional<PhotometricSet> calibrated;
-  if (arguments.calibrated && arguments.linear_jpeg) {
-    calibrated.emplace(CalibratedJpegSet(raw.set, calibrated_jpegs, calibrated_scale));
-  }
+  std::optional<CalibratedJpegs> calibrated;
+  if (arguments.calibrated) calibrated = CalibratedJpegSet(raw.set, work / "calibrated-jpegs");
   const Observations observations(set);
   const double peak = arguments.linear_jpeg ? 1.0 : double{observations.matrix().maxCoeff()};
   fmt::print("\n{}: {} images, {} pixels in the mask, {}; PSNR peak {:.4g}\n", path.string(),
@@ -1105,9 +1107,9 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
     PrintTable(fmt::format("{}, {} held out ({}), {} fitted", path.filename().string(),
                            hold_out.held_out.size(), hold_out.name, hold_out.selected.size()),
                rows);
-    if (calibrated)
-      PrintCalibratedTables(*calibrated, calibrated_scale, raw.set, set, methods, hold_out,
-                            arguments, work, path);
+    if (calibrated) {
+      PrintCalibratedTables(*calibrated, raw.set, set, methods, hold_out, arguments, work, path);
+    }
   }
   if (!LightInterpolator(set.lights()).rings().size()) {
     fmt::print("(no slant-ring hold-out: the lights do not lie on rings of equal slant)\n");
