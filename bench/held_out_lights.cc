@@ -17,7 +17,9 @@
 // peak = the capture's largest value (the README's first held-out table).
 // --calibrated: also the same hold-outs on JPEGs with the lamps' intensities divided out, for
 // both tools (PrintCalibratedTables; a diagnosis beside the comparison, which stays the
-// raw JPEGs').
+// raw JPEGs'), photomat alone with them divided out in floats, and photomat with only the
+// training lamps' divided out and the held-out lamps' predicted from them
+// (PrintPredictedBrightnessTable).
 //
 //   held_out_lights [SET ...] [--every K[,K...]] [--methods ptm,hsh9,rbf,bilinear,rbf:-1,...]
 //                   [--float] [--relight-cli PATH|none] [--planes N] [--grid-size G]
@@ -976,6 +978,62 @@ void PrintOracle(const Observations& observations, const std::vector<LightDirect
   }
 }
 
+// The best a tool could do that calibrated its lamps itself from the photographs: the training
+// lamps' published intensities divided out exactly, the held-out lamps' predicted from them (a
+// polyharmonic spline of the log intensity over the light directions, per channel). The held-out
+// lamps' own intensities choose the spline (ORACLE: this bounds such a tool from above, it is not
+// a method), and the prediction's relative error is printed for each spline.
+template <typename PhotomatRows>
+void PrintPredictedBrightnessTable(const PhotometricSet& set,
+                                   const std::vector<std::vector<float>>& published,
+                                   const HoldOut& hold_out, const fs::path& path,
+                                   const PhotomatRows& photomat_rows) {
+  std::vector<LightDirection> training, held;
+  for (int i : hold_out.selected) training.push_back(set.light(i));
+  for (int i : hold_out.held_out) held.push_back(set.light(i));
+  std::vector<std::vector<float>> best;
+  double best_error = std::numeric_limits<double>::infinity();
+  for (int order : {1, 2, 3}) {
+    for (double regularisation : {0.0, 1e-3, 1e-2, 1e-1}) {
+      const Eigen::MatrixXd w = PolyharmonicWeights(training, held, order, regularisation);
+      std::vector<std::vector<float>> predicted = published;
+      double squared = 0.0;
+      for (std::size_t c = 0; c < published.front().size(); ++c) {
+        Eigen::VectorXd log_training(static_cast<Eigen::Index>(training.size()));
+        for (std::size_t t = 0; t < hold_out.selected.size(); ++t) {
+          log_training[static_cast<Eigen::Index>(t)] =
+              std::log(published[static_cast<std::size_t>(hold_out.selected[t])][c]);
+        }
+        const Eigen::VectorXd log_held = w * log_training;
+        for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
+          const auto i = static_cast<std::size_t>(hold_out.held_out[h]);
+          predicted[i][c] = static_cast<float>(std::exp(log_held[static_cast<Eigen::Index>(h)]));
+          squared += std::pow(predicted[i][c] / published[i][c] - 1.0, 2);
+        }
+      }
+      const double error =
+          std::sqrt(squared / static_cast<double>(held.size() * published.front().size()));
+      fmt::print(
+          "held-out lamps' intensity from the training lamps', polyharmonic order {} "
+          "regularisation {}: relative RMS error {:.3f}\n",
+          order, regularisation, error);
+      if (error < best_error) {
+        best_error = error;
+        best = predicted;
+      }
+    }
+  }
+  PhotometricSet divided = set;
+  divided.set_intensities(best);
+  divided.ApplyIntensities();
+  PrintTable(
+      fmt::format("{}, {} held out ({}), photomat on the raw JPEGs with the training "
+                  "lamps' intensities divided out, the held-out lamps' predicted (error "
+                  "{:.3f}, ORACLE choice of spline)",
+                  path.filename().string(), hold_out.held_out.size(), hold_out.name, best_error),
+      photomat_rows(divided, best), false);
+}
+
 // --calibrated (diagnosis): the same hold-out with each lamp's published intensity divided out.
 // DiLiGenT's lamps differ in brightness by up to 6 times (ball: 0.30 to 1.76), so a tool that
 // interpolates the raw photographs must also guess the held-out lamp's brightness from its
@@ -1018,6 +1076,7 @@ void PrintCalibratedTables(const CalibratedJpegs& calibrated, const PhotometricS
                          "divided out",
                          path.filename().string(), hold_out.held_out.size(), hold_out.name),
              photomat_rows(divided, intensities), false);
+  PrintPredictedBrightnessTable(set, raw.intensities(), hold_out, path, photomat_rows);
 }
 
 void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& work) {
