@@ -212,6 +212,42 @@ struct HoldOut {
   std::vector<int> held_out, selected;
 };
 
+std::vector<LightDirection> LightsOf(const std::vector<LightDirection>& lights,
+                                     const std::vector<int>& indices) {
+  std::vector<LightDirection> selected;
+  for (int i : indices) selected.push_back(lights[static_cast<std::size_t>(i)]);
+  return selected;
+}
+
+// Interpolation weights (targets x nodes) of the rbf and bilinear bases: a target light's
+// predicted profile is its row times the nodes' values.
+Eigen::MatrixXd RbfWeights(const std::vector<LightDirection>& nodes,
+                           const std::vector<LightDirection>& targets, double width_degrees,
+                           double regularisation, RbfTail tail = RbfTail::kAffine) {
+  const RbfInterpolation rbf(nodes, width_degrees, regularisation, tail);
+  Eigen::MatrixXd weights(static_cast<Eigen::Index>(targets.size()),
+                          static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t h = 0; h < targets.size(); ++h) {
+    weights.row(static_cast<Eigen::Index>(h)) = rbf.Weights(targets[h]).transpose();
+  }
+  return weights;
+}
+
+Eigen::MatrixXd BilinearWeights(const std::vector<LightDirection>& nodes,
+                                const std::vector<LightDirection>& targets, int grid_size,
+                                double smoothness) {
+  const Eigen::MatrixXd resampling = BilinearResampling(nodes, grid_size, smoothness);
+  Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(targets.size()),
+                                                  static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t h = 0; h < targets.size(); ++h) {
+    const LightDirection& l = targets[h];
+    for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
+      weights.row(static_cast<Eigen::Index>(h)) += w * resampling.row(node);
+    }
+  }
+  return weights;
+}
+
 std::vector<HoldOut> HoldOuts(const std::vector<LightDirection>& lights,
                               const std::vector<int>& everies) {
   std::vector<HoldOut> hold_outs;
@@ -421,8 +457,7 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
   const Eigen::MatrixXd& gram = observations.Gram();
   const Eigen::MatrixXf& matrix = observations.matrix();
   const auto rows = static_cast<double>(matrix.rows());
-  std::vector<LightDirection> training;
-  for (int i : hold_out.selected) training.push_back(lights[i]);
+  const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
   std::vector<double> nearest;
   for (const auto& a : training) {
     double best = 180.0;
@@ -438,13 +473,9 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
     std::vector<int> held, others;
   };
   const auto mean_psnr = [&](const Split& split, double width, double regularisation, int planes) {
-    std::vector<LightDirection> from;
-    for (int i : split.others) from.push_back(lights[i]);
-    const RbfInterpolation rbf(from, width, regularisation);
-    Eigen::MatrixXd weights(split.others.size(), split.held.size());
-    for (std::size_t h = 0; h < split.held.size(); ++h) {
-      weights.col(h) = rbf.Weights(lights[split.held[h]]);
-    }
+    const Eigen::MatrixXd weights = RbfWeights(LightsOf(lights, split.others),
+                                               LightsOf(lights, split.held), width, regularisation)
+                                        .transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram(split.others, split.others));
     const Eigen::MatrixXd axes = solver.eigenvectors().rightCols(planes);
     const Eigen::MatrixXf combination = (axes * (axes.transpose() * weights)).cast<float>();
@@ -608,8 +639,7 @@ std::string SchemeName(LeaveOut scheme) {
 void PrintBlend(const Observations& observations, const std::vector<LightDirection>& lights,
                 const HoldOut& hold_out, double peak, const LightProfileOptions& profile) {
   const Eigen::MatrixXd& gram = observations.Gram();
-  std::vector<LightDirection> training;
-  for (int i : hold_out.selected) training.push_back(lights[i]);
+  const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
   const Eigen::MatrixXd training_gram = gram(hold_out.selected, hold_out.selected);
   const double spacing = MedianSpacingDegrees(training);
   // Planes: the option's count, or (--planes -1) the best score's among 1..16.
@@ -625,24 +655,12 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
   const std::vector<double> regularisations = {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
   const std::vector<double> smoothnesses = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
   const std::vector<double> alphas = {0.0, 0.25, 0.5, 0.75, 1.0};
+  const std::vector<LightDirection> held = LightsOf(lights, hold_out.held_out);
   const auto held_rbf = [&](double width, double regularisation) {
-    const RbfInterpolation rbf(training, width, regularisation);
-    Eigen::MatrixXd weights(hold_out.held_out.size(), training.size());
-    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
-      weights.row(h) = rbf.Weights(lights[hold_out.held_out[h]]).transpose();
-    }
-    return weights;
+    return RbfWeights(training, held, width, regularisation);
   };
   const auto held_bilinear = [&](double smoothness) {
-    const Eigen::MatrixXd resampling = BilinearResampling(training, grid, smoothness);
-    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(hold_out.held_out.size(), training.size());
-    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
-      const LightDirection& l = lights[hold_out.held_out[h]];
-      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid, l.x(), l.y())) {
-        weights.row(h) += w * resampling.row(node);
-      }
-    }
-    return weights;
+    return BilinearWeights(training, held, grid, smoothness);
   };
   for (LeaveOut scheme : {LeaveOut::kOne, LeaveOut::kEdge, LeaveOut::kBlock, LeaveOut::kSide}) {
     const LeaveOutFolds folds(training_gram, scheme, training);
@@ -695,7 +713,7 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
     for (const Choice& choice : by_alpha) {
       if (choice.score > joint.score) joint = choice;
     }
-    const auto held = [&](const Choice& c, double alpha) {
+    const auto held_psnr = [&](const Choice& c, double alpha) {
       return ClampedHeldOutPsnr(observations, hold_out,
                                 alpha * held_rbf(c.rbf->width, c.rbf->regularisation) +
                                     (1.0 - alpha) * held_bilinear(c.bilinear->smoothness),
@@ -706,14 +724,14 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
           "blend {} a={:.2f}: rbf {:.3g} deg / {:g}, bilinear {:g}, {} planes: score {:.3f}, "
           "held out {:.2f}\n",
           SchemeName(scheme), c.alpha, c.rbf->width, c.rbf->regularisation, c.bilinear->smoothness,
-          c.planes, c.score, held(c, c.alpha));
+          c.planes, c.score, held_psnr(c, c.alpha));
     }
     fmt::print("blend {} chosen: a={:.2f}, {} planes (score {:.3f}): held out {:.2f}\n",
                SchemeName(scheme), joint.alpha, joint.planes, joint.score,
-               held(joint, joint.alpha));
+               held_psnr(joint, joint.alpha));
     double oracle = -1e300, oracle_alpha = 0.0;
     for (double alpha = 0.0; alpha <= 1.0001; alpha += 0.125) {
-      const double value = held(joint, alpha);
+      const double value = held_psnr(joint, alpha);
       if (value > oracle) oracle = value, oracle_alpha = alpha;
     }
     fmt::print("ORACLE (held-out lights, not a choice) {} parts: best a={:.3f}: {:.2f}\n",
@@ -766,9 +784,8 @@ Eigen::MatrixXd PolyharmonicWeights(const std::vector<LightDirection>& nodes,
 // and for leave-side-out the cubic's score of each side (4 planes).
 void PrintPolyharmonic(const Observations& observations, const std::vector<LightDirection>& lights,
                        const HoldOut& hold_out, double peak) {
-  std::vector<LightDirection> training, held;
-  for (int i : hold_out.selected) training.push_back(lights[i]);
-  for (int i : hold_out.held_out) held.push_back(lights[i]);
+  const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
+  const std::vector<LightDirection> held = LightsOf(lights, hold_out.held_out);
   const std::vector<double> regularisations{0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
   for (int order : {1, 2, 3}) {
     for (double regularisation : regularisations) {
@@ -846,15 +863,8 @@ void PrintPolyharmonic(const Observations& observations, const std::vector<Light
             RbfFoldWeights(folds, training, width, regularisation, RbfTail::kAffine);
         if (fold_weights.empty()) continue;
         consider(any, fmt::format("gaussian {:.3g} deg / {}", width, regularisation),
-                 folds.Score(fold_weights), [&] {
-                   const RbfInterpolation rbf(training, width, regularisation, RbfTail::kAffine);
-                   Eigen::MatrixXd w(static_cast<Eigen::Index>(held.size()),
-                                     static_cast<Eigen::Index>(training.size()));
-                   for (std::size_t h = 0; h < held.size(); ++h) {
-                     w.row(static_cast<Eigen::Index>(h)) = rbf.Weights(held[h]).transpose();
-                   }
-                   return w;
-                 });
+                 folds.Score(fold_weights),
+                 [&] { return RbfWeights(training, held, width, regularisation); });
       }
     }
     for (const Choice* choice : {&cubic, &any}) {
@@ -874,8 +884,8 @@ void PrintOracle(const Observations& observations, const std::vector<LightDirect
   const Eigen::VectorXd eigenvalues = solver.eigenvalues().reverse();
   const Eigen::MatrixXd cross = axes.transpose() * gram(hold_out.selected, hold_out.held_out);
   const double count = static_cast<double>(observations.matrix().rows());
-  std::vector<LightDirection> training;
-  for (int i : hold_out.selected) training.push_back(lights[i]);
+  const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
+  const std::vector<LightDirection> held = LightsOf(lights, hold_out.held_out);
   // Mean PSNR per plane count 1..16 and uncompressed (last) of weights (held x training).
   const auto psnr = [&](const Eigen::MatrixXd& weights) {
     std::vector<double> mean(17, 0.0);
@@ -902,36 +912,18 @@ void PrintOracle(const Observations& observations, const std::vector<LightDirect
     for (double width : {4.4, 6.2, 8.8, 12.4, 17.5, 24.8}) {
       for (double regularisation : {0.0, 1e-3, 1e-2, 1e-1, 1.0}) {
         try {
-          const RbfInterpolation rbf(training, width, regularisation, tail);
-          Eigen::MatrixXd weights(hold_out.held_out.size(), training.size());
-          for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
-            weights.row(h) = rbf.Weights(lights[hold_out.held_out[h]]).transpose();
-          }
           print(fmt::format("rbf {} width {} reg {}", ToString(tail), width, regularisation),
-                psnr(weights));
+                psnr(RbfWeights(training, held, width, regularisation, tail)));
         } catch (const Error&) {
         }
       }
     }
   }
   const auto rbf_weights = [&](double width, double regularisation, RbfTail tail) {
-    const RbfInterpolation rbf(training, width, regularisation, tail);
-    Eigen::MatrixXd weights(hold_out.held_out.size(), training.size());
-    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
-      weights.row(h) = rbf.Weights(lights[hold_out.held_out[h]]).transpose();
-    }
-    return weights;
+    return RbfWeights(training, held, width, regularisation, tail);
   };
   const auto bilinear_weights = [&](double smoothness) {
-    const Eigen::MatrixXd resampling = BilinearResampling(training, grid_size, smoothness);
-    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(hold_out.held_out.size(), training.size());
-    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
-      const LightDirection& l = lights[hold_out.held_out[h]];
-      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
-        weights.row(h) += w * resampling.row(node);
-      }
-    }
-    return weights;
+    return BilinearWeights(training, held, grid_size, smoothness);
   };
   for (double alpha : {0.25, 0.5, 0.75}) {
     print(fmt::format("mix {} rbf 12.4/0.01 + bilinear 1e-4", alpha),
@@ -966,15 +958,8 @@ void PrintOracle(const Observations& observations, const std::vector<LightDirect
     }
   }
   for (double smoothness : {1e-4, 1e-3, 1e-2, 1e-1, 1.0}) {
-    const Eigen::MatrixXd resampling = BilinearResampling(training, grid_size, smoothness);
-    Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(hold_out.held_out.size(), training.size());
-    for (std::size_t h = 0; h < hold_out.held_out.size(); ++h) {
-      const LightDirection& l = lights[hold_out.held_out[h]];
-      for (const auto& [node, w] : BilinearLightBasis::GridWeights(grid_size, l.x(), l.y())) {
-        weights.row(h) += w * resampling.row(node);
-      }
-    }
-    print(fmt::format("bilinear smoothness {}", smoothness), psnr(weights));
+    print(fmt::format("bilinear smoothness {}", smoothness),
+          psnr(BilinearWeights(training, held, grid_size, smoothness)));
   }
 }
 
@@ -988,9 +973,8 @@ void PrintPredictedBrightnessTable(const PhotometricSet& set,
                                    const std::vector<std::vector<float>>& published,
                                    const HoldOut& hold_out, const fs::path& path,
                                    const PhotomatRows& photomat_rows) {
-  std::vector<LightDirection> training, held;
-  for (int i : hold_out.selected) training.push_back(set.light(i));
-  for (int i : hold_out.held_out) held.push_back(set.light(i));
+  const std::vector<LightDirection> training = LightsOf(set.lights(), hold_out.selected);
+  const std::vector<LightDirection> held = LightsOf(set.lights(), hold_out.held_out);
   std::vector<std::vector<float>> best;
   double best_error = std::numeric_limits<double>::infinity();
   for (int order : {1, 2, 3}) {
