@@ -18,20 +18,6 @@
 namespace photomat {
 namespace {
 
-// The median angle from a light to its nearest neighbour (the scale of the fit's kernel widths).
-double MedianSpacingDegrees(const std::vector<LightDirection>& lights) {
-  std::vector<double> nearest;
-  for (const auto& a : lights) {
-    double best = 180.0;
-    for (const auto& b : lights) {
-      if (&a != &b) best = std::min(best, a.AngleToDegrees(b));
-    }
-    nearest.push_back(best);
-  }
-  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
-  return nearest[nearest.size() / 2];
-}
-
 // The mean held-out PSNR, clamped to [0, peak] as MaskedPsnr, of predicting the held-out lights
 // by `weights` (held x training) from the training images compressed to `planes` PCA axes of the
 // training lights (a pass over the pixels).
@@ -136,16 +122,7 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
   const Eigen::MatrixXf& matrix = observations.matrix();
   const auto rows = static_cast<double>(matrix.rows());
   const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
-  std::vector<double> nearest;
-  for (const auto& a : training) {
-    double best = 180.0;
-    for (const auto& b : training) {
-      if (&a != &b) best = std::min(best, a.AngleToDegrees(b));
-    }
-    nearest.push_back(best);
-  }
-  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
-  const double spacing = nearest[nearest.size() / 2];
+  const double spacing = MedianNearestNeighbourDegrees(training);
   // The mean PSNR of lights `held` predicted from lights `others` (indices into the set).
   struct Split {
     std::vector<int> held, others;
@@ -268,7 +245,7 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
   const Eigen::MatrixXd& gram = observations.Gram();
   const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
   const Eigen::MatrixXd training_gram = gram(hold_out.selected, hold_out.selected);
-  const double spacing = MedianSpacingDegrees(training);
+  const double spacing = MedianNearestNeighbourDegrees(training);
   // Planes: the option's count, or (--planes -1) the best score's among 1..16.
   std::vector<int> plane_candidates = {profile.planes > 0 ? profile.planes
                                                           : LightProfileOptions::kDefaultPlanes};
@@ -277,10 +254,7 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
     for (int k = 1; k <= LightProfileOptions::kMaxChosenPlanes; ++k) plane_candidates.push_back(k);
   }
   const int grid = profile.grid_size;
-  // The fit's candidates (represent/fitting/light_profile_fit.cc).
-  const std::vector<double> factors = {0.25, 0.3536, 0.5, 0.7071, 1.0, 1.4142, 2.0, 2.8284, 4.0};
-  const std::vector<double> regularisations = {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
-  const std::vector<double> smoothnesses = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
+  // The rbf and bilinear parts among the fit's candidates (kRbfWidthFactors, ...), a among these.
   const std::vector<double> alphas = {0.0, 0.25, 0.5, 0.75, 1.0};
   const std::vector<LightDirection> held = LightsOf(lights, hold_out.held_out);
   const auto held_rbf = [&](double width, double regularisation) {
@@ -296,8 +270,8 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
       std::vector<Eigen::MatrixXd> weights;
     };
     std::vector<Part> rbfs, bilinears;
-    for (double factor : factors) {
-      for (double regularisation : regularisations) {
+    for (double factor : kRbfWidthFactors) {
+      for (double regularisation : kRbfRegularisations) {
         auto weights =
             RbfFoldWeights(folds, training, factor * spacing, regularisation, RbfTail::kAffine);
         if (!weights.empty()) {
@@ -305,7 +279,7 @@ void PrintBlend(const Observations& observations, const std::vector<LightDirecti
         }
       }
     }
-    for (double smoothness : smoothnesses) {
+    for (double smoothness : kBilinearSmoothnesses) {
       auto weights = BilinearFoldWeights(folds, training, grid, smoothness);
       if (!weights.empty()) bilinears.push_back({0.0, 0.0, smoothness, std::move(weights)});
     }
@@ -370,7 +344,8 @@ void PrintPolyharmonic(const Observations& observations, const std::vector<Light
                        const HoldOut& hold_out, double peak) {
   const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
   const std::vector<LightDirection> held = LightsOf(lights, hold_out.held_out);
-  const std::vector<double> regularisations{0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
+  // The polyharmonic splines get the rbf fit's regularisations.
+  const auto& regularisations = kRbfRegularisations;
   for (int order : {1, 2, 3}) {
     for (double regularisation : regularisations) {
       const Eigen::MatrixXd w = PolyharmonicWeights(training, held, order, regularisation);
@@ -384,7 +359,7 @@ void PrintPolyharmonic(const Observations& observations, const std::vector<Light
     }
   }
   const Eigen::MatrixXd gram = observations.Gram()(hold_out.selected, hold_out.selected);
-  const double spacing = MedianSpacingDegrees(training);
+  const double spacing = MedianNearestNeighbourDegrees(training);
   for (LeaveOut scheme : {LeaveOut::kOne, LeaveOut::kBlock, LeaveOut::kEdge, LeaveOut::kSide}) {
     const LeaveOutFolds folds(gram, scheme, training);
     struct Choice {
@@ -440,7 +415,7 @@ void PrintPolyharmonic(const Observations& observations, const std::vector<Light
       }
     }
     any = cubic;
-    for (double factor : {0.25, 0.354, 0.5, 0.707, 1.0, 1.414, 2.0, 2.83, 4.0}) {
+    for (double factor : kRbfWidthFactors) {
       for (double regularisation : regularisations) {
         const double width = factor * spacing;
         const auto fold_weights =

@@ -16,24 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::array<double, 9> kWidthFactors = {0.25,   0.3536, 0.5,    0.7071, 1.0,
-                                                 1.4142, 2.0,    2.8284, 4.0};
-constexpr std::array<double, 7> kRegularisations = {0.0, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0};
-constexpr std::array<double, 6> kBilinearSmoothnesses = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
-
-double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights) {
-  std::vector<double> nearest;
-  for (std::size_t i = 0; i < lights.size(); ++i) {
-    double best = 180.0;
-    for (std::size_t j = 0; j < lights.size(); ++j) {
-      if (j != i) best = std::min(best, lights[i].AngleToDegrees(lights[j]));
-    }
-    nearest.push_back(best);
-  }
-  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
-  return nearest[nearest.size() / 2];
-}
-
 // The position in LeaveOutFolds::Scores of `planes` (0: every axis).
 Eigen::Index ScoreIndex(int planes, Eigen::Index fold_size) {
   return (planes == 0 ? fold_size : std::min<Eigen::Index>(planes, fold_size)) - 1;
@@ -91,6 +73,19 @@ std::vector<LightDirection> Select(const std::vector<LightDirection>& lights,
 }
 
 }  // namespace
+
+double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights) {
+  std::vector<double> nearest;
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    double best = 180.0;
+    for (std::size_t j = 0; j < lights.size(); ++j) {
+      if (j != i) best = std::min(best, lights[i].AngleToDegrees(lights[j]));
+    }
+    nearest.push_back(best);
+  }
+  std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+  return nearest[nearest.size() / 2];
+}
 
 std::vector<Eigen::MatrixXd> RbfFoldWeights(const LeaveOutFolds& folds,
                                             const std::vector<LightDirection>& lights, double width,
@@ -607,12 +602,12 @@ RbfParameters ChooseRbfParameters(const std::vector<LightDirection>& lights,
     widths.push_back(*options.rbf_width_degrees);
   } else {
     const double spacing = MedianNearestNeighbourDegrees(lights);
-    for (double factor : kWidthFactors) widths.push_back(std::min(180.0, factor * spacing));
+    for (double factor : kRbfWidthFactors) widths.push_back(std::min(180.0, factor * spacing));
   }
   if (options.rbf_regularisation) {
     regularisations.push_back(*options.rbf_regularisation);
   } else {
-    regularisations.assign(kRegularisations.begin(), kRegularisations.end());
+    regularisations.assign(kRbfRegularisations.begin(), kRbfRegularisations.end());
   }
   const RbfTail tail = options.rbf_tail;
   const std::vector<int> planes = CandidatePlanes(options, static_cast<int>(lights.size()));

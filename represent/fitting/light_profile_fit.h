@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -19,6 +20,20 @@ namespace photomat {
 
 // The fits of the light-profile methods `rbf` and `bilinear`
 // (represent/model/light_profile_basis.h, README "RBF and bilinear").
+
+// What the fits choose among by their leave-out score where the options fix nothing
+// (IMPLEMENTER CHOICE, README "RBF and bilinear"): rbf kernel widths as factors of
+// MedianNearestNeighbourDegrees of the fitted lights (half-octave steps from 1/4 to 4), rbf
+// regularisations and bilinear smoothnesses (decades).
+inline constexpr std::array<double, 9> kRbfWidthFactors = {0.25,   0.3536, 0.5,    0.7071, 1.0,
+                                                           1.4142, 2.0,    2.8284, 4.0};
+inline constexpr std::array<double, 7> kRbfRegularisations = {0.0,  1e-5, 1e-4, 1e-3,
+                                                              1e-2, 1e-1, 1.0};
+inline constexpr std::array<double, 6> kBilinearSmoothnesses = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0};
+
+// The median over `lights` of the angle in degrees from a light to its nearest other light: the
+// scale of the rbf kernel widths.
+double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights);
 
 // Leave-out scores over the capture of a whole light-profile fit, interpolation and PCA together,
 // from the Gram matrix G = P^T P of the fitted profiles alone (no pass over the pixels). A fold
