@@ -118,9 +118,6 @@ Eigen::MatrixXd PolyharmonicWeights(const std::vector<LightDirection>& nodes,
 
 void PrintClampedScores(const Observations& observations, const std::vector<LightDirection>& lights,
                         const HoldOut& hold_out, double peak) {
-  const Eigen::MatrixXd& gram = observations.Gram();
-  const Eigen::MatrixXf& matrix = observations.matrix();
-  const auto rows = static_cast<double>(matrix.rows());
   const std::vector<LightDirection> training = LightsOf(lights, hold_out.selected);
   const double spacing = MedianNearestNeighbourDegrees(training);
   // The mean PSNR of lights `held` predicted from lights `others` (indices into the set).
@@ -128,23 +125,10 @@ void PrintClampedScores(const Observations& observations, const std::vector<Ligh
     std::vector<int> held, others;
   };
   const auto mean_psnr = [&](const Split& split, double width, double regularisation, int planes) {
-    const Eigen::MatrixXd weights = RbfWeights(LightsOf(lights, split.others),
-                                               LightsOf(lights, split.held), width, regularisation)
-                                        .transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(gram(split.others, split.others));
-    const Eigen::MatrixXd axes = solver.eigenvectors().rightCols(planes);
-    const Eigen::MatrixXf combination = (axes * (axes.transpose() * weights)).cast<float>();
-    const Eigen::MatrixXf predicted =
-        (matrix(Eigen::all, split.others) * combination).cwiseMax(0.0f).cwiseMin(float(peak));
-    double total = 0.0;
-    for (std::size_t h = 0; h < split.held.size(); ++h) {
-      const double error =
-          (predicted.col(h) - matrix.col(split.held[h]).cwiseMax(0.0f).cwiseMin(float(peak)))
-              .cast<double>()
-              .squaredNorm();
-      total += 10.0 * std::log10(peak * peak * rows / error);
-    }
-    return total / static_cast<double>(split.held.size());
+    return ClampedHeldOutPsnr(observations, HoldOut{"", split.held, split.others},
+                              RbfWeights(LightsOf(lights, split.others),
+                                         LightsOf(lights, split.held), width, regularisation),
+                              planes, peak);
   };
   std::vector<Split> folds(LeaveOutFolds::kBlockStride);
   for (std::size_t t = 0; t < hold_out.selected.size(); ++t) {
