@@ -5,7 +5,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "apps/batch/batch_summary.h"
 #include "apps/batch/recipe.h"
@@ -36,7 +40,9 @@ void AddPlan(CLI::App& batch) {
   command->add_option("--out", options->out, "The batch folder")->required();
   command
       ->add_option("--large-capture", options->large,
-                   "Pixels x images above which a capture is flagged large (a tiling candidate)")
+                   "Pixels x images above which a capture is flagged large when a step of the "
+                   "recipe holds every image in memory (calibrate, .ptm/.rti, evaluate, maps or "
+                   "viewer from the capture)")
       ->capture_default_str();
   command->callback([options] {
     const Recipe recipe = ReadRecipe(options->recipe);
@@ -46,10 +52,19 @@ void AddPlan(CLI::App& batch) {
     CreateFolder(options->out);
     WriteTaskPlan(options->out, plan);
     int done = 0, large = 0;
+    std::int64_t largest_need = 0;
+    std::vector<std::string> whole_set_steps;
     for (const Task& task : plan.tasks) {
       const bool is_done = IsTaskDone(task);
       done += is_done;
       large += task.large;
+      if (task.large) {
+        largest_need = std::max(largest_need, TaskMemoryNeedBytes(task, std::nullopt));
+        whole_set_steps.clear();
+        for (const TaskStep& step : task.steps) {
+          if (StepHoldsWholeSet(step)) whole_set_steps.push_back(step.name);
+        }
+      }
       fmt::print("{:>5}  {:<20} {:>2} steps  {:>9.3g} Mpx*img{}  -> {}\n", task.index, task.name,
                  task.steps.size(), static_cast<double>(task.pixel_images) / 1e6,
                  is_done ? "  done" : (task.large ? "  large" : ""), task.folder.string());
@@ -57,10 +72,13 @@ void AddPlan(CLI::App& batch) {
     fmt::print("{} tasks ({} already done) -> {}\n", plan.tasks.size(), done,
                (options->out / kTaskPlanName).string());
     if (large > 0) {
+      // The steps come from the recipe, so every large task has the same ones.
       fmt::print(
-          "{} large capture(s) over {:.3g} pixels x images run as one task each: tiled tasks "
-          "need photomat's streamed fitting, which is not there yet\n",
-          large, options->large);
+          "{} large capture(s) over {:.3g} pixels x images: the steps {} hold every image in "
+          "memory (about {:.1f} GB for the largest); the fit, and maps and viewer made from the "
+          "stacks, stream in bands (README \"Large captures\")\n",
+          large, options->large, fmt::join(whole_set_steps, ", "),
+          static_cast<double>(largest_need) / 1e9);
     }
   });
 }

@@ -11,20 +11,48 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "relight/web/viewer_pyramid.h"
 
 namespace photomat::batch {
 namespace {
 
 namespace fs = std::filesystem;
 
-// A task never measured needs about kBaseBytes + kBytesPerPixelImage x pixels x images: the
+// A task never measured needs what its largest step needs. Every step needs kBaseBytes, the
 // resident size of a photomat process before it reads a capture (measured: 148 MB for
-// `photomat --version`), and what fitting and evaluation add per pixel and image (the test
-// recipe's measured peaks: 150 MB at 32 x 24 x 36, 198 MB at 192 x 192 x 36, i.e. 36 bytes; 40
-// with a little room). The request adds --mem-margin on top.
+// `photomat --version`), and then:
+// - a step that holds the whole set (StepHoldsWholeSet): kBytesPerPixelImage x pixels x images,
+//   what in-memory fitting and evaluation add per pixel and image (the test recipe's measured
+//   peaks: 150 MB at 32 x 24 x 36, 198 MB at 192 x 192 x 36, i.e. 36 bytes; 40 with a little
+//   room);
+// - a streamed step (fit; maps and viewer from the stacks): kStreamedStepBytes for its bands (64
+//   MiB by default, two at a time), decoders' chunks and writers, plus kStreamedBytesPerPixel x
+//   pixels for what grows with the image, the tiled Poisson height's coarse grid above all.
+//   Measured at 8688 x 5792 x 50 (README "Streamed fitting", "Web viewer and evaluation
+//   report"): fit 246-279 MB, the maps' export 394 MB, the export of the viewer's maps 977 MB
+//   peak RSS; the estimate there is 1.2 GB. (The maps' export streams whenever the in-memory
+//   one would not fit the memory limit, which Slurm's --mem sets.)
+// - except the viewer of stacks up to kViewerTilingThresholdPixels, which is made in memory
+//   whatever the limit: kInMemoryViewerBytesPerPixel x pixels (measured at 2048 x 2048: 226
+//   bytes per pixel for one PTM stack, 505 for Gradient, PTM and HSH9 together (54 maps); at
+//   4096 x 3072 for PTM, 217; 600 covers about 65 maps).
+// The request adds --mem-margin on top.
 constexpr std::int64_t kBaseBytes = 150LL << 20;
 constexpr double kBytesPerPixelImage = 40.0;
+constexpr std::int64_t kStreamedStepBytes = 256LL << 20;
+constexpr double kStreamedBytesPerPixel = 16.0;
+constexpr double kInMemoryViewerBytesPerPixel = 600.0;
 constexpr std::size_t kMaxArrayIndices = 1000;
+
+double StepNeedBytes(const TaskStep& step, const Task& task) {
+  const auto pixels = static_cast<double>(task.pixels);
+  if (StepHoldsWholeSet(step)) return kBytesPerPixelImage * static_cast<double>(task.pixel_images);
+  if (step.name == "viewer" &&
+      task.pixels <= static_cast<std::uint64_t>(kViewerTilingThresholdPixels)) {
+    return kInMemoryViewerBytesPerPixel * pixels;
+  }
+  return static_cast<double>(kStreamedStepBytes) + kStreamedBytesPerPixel * pixels;
+}
 
 std::vector<std::string> SplitWords(const std::string& text) {
   std::vector<std::string> words;
@@ -138,8 +166,12 @@ std::string Lower(std::string text) {
 
 std::int64_t TaskMemoryNeedBytes(const Task& task, const std::optional<TaskRecord>& last_attempt) {
   if (last_attempt && last_attempt->peak_rss_bytes > 0) return last_attempt->peak_rss_bytes;
-  return kBaseBytes + static_cast<std::int64_t>(
-                          std::ceil(kBytesPerPixelImage * static_cast<double>(task.pixel_images)));
+  std::int64_t step_need = 0;
+  for (const TaskStep& step : task.steps) {
+    step_need =
+        std::max(step_need, static_cast<std::int64_t>(std::ceil(StepNeedBytes(step, task))));
+  }
+  return kBaseBytes + step_need;
 }
 
 std::int64_t MemoryRequestMib(std::int64_t need_bytes, double margin) {

@@ -30,7 +30,9 @@ struct SlurmOptions {
 };
 
 // Memory one task needs: its own measured peak (an earlier attempt's record) when there is one,
-// else an estimate from its pixels x images (constants measured on photomat's steps; see .cc).
+// else the estimate of its largest step: from pixels x images for a step that holds the whole set
+// (StepHoldsWholeSet), from the pixels alone for a streamed one (constants measured on photomat's
+// steps; see .cc).
 std::int64_t TaskMemoryNeedBytes(const Task& task, const std::optional<TaskRecord>& last_attempt);
 // The --mem request in MiB for a need: need x margin, rounded up to 64 MiB, at least 256 MiB.
 std::int64_t MemoryRequestMib(std::int64_t need_bytes, double margin);

@@ -113,6 +113,7 @@ TEST(SlurmMemoryTest, RequestIsTheNeedTimesTheMarginInWholeSteps) {
   EXPECT_EQ(MemoryRequestMib(1000LL << 20, 1.5), 1536);  // 1500 MiB, up to 64 MiB steps
   EXPECT_EQ(MemoryRequestMib(1024LL << 20, 2.0), 2048);
   Task task;
+  task.steps = {{"evaluate", {"evaluate", "capture", "--methods", "ptm"}}};
   task.pixel_images = 0;
   const std::int64_t base = TaskMemoryNeedBytes(task, std::nullopt);
   task.pixel_images = 100'000'000;
@@ -120,6 +121,42 @@ TEST(SlurmMemoryTest, RequestIsTheNeedTimesTheMarginInWholeSteps) {
   TaskRecord measured;
   measured.peak_rss_bytes = 123LL << 20;
   EXPECT_EQ(TaskMemoryNeedBytes(task, measured), 123LL << 20);  // a measurement wins
+}
+
+// Streamed steps need memory for their bands and for what grows with the image, not with the
+// number of images: a 48 MP x 50 task of fit, maps and viewer from the stacks asks for about what
+// its steps were measured to take there (at most 977 MB peak RSS, README "Streamed fitting"),
+// where one step that holds the whole set asks for tens of GB.
+TEST(SlurmMemoryTest, StreamedStepsNeedWhatTheirBandsAndPixelsNeed) {
+  Task task;
+  task.steps = {{"fit", {"fit", "capture", "--method", "ptm", "--out", "stacks"}},
+                {"maps", {"export", "stacks", "--method", "ptm", "--out", "maps"}},
+                {"viewer", {"export", "stacks", "--viewer", "viewer"}}};
+  task.pixels = 8688ULL * 5792ULL;
+  task.pixel_images = task.pixels * 50;
+  const std::int64_t streamed = TaskMemoryNeedBytes(task, std::nullopt);
+  EXPECT_GT(streamed, 977LL * 1000 * 1000);
+  EXPECT_LT(streamed, 1300LL * 1000 * 1000);
+  task.pixel_images = task.pixels * 80;  // more lights: the same bands
+  EXPECT_EQ(TaskMemoryNeedBytes(task, std::nullopt), streamed);
+  task.steps.push_back({"calibrate", {"calibrate", "apply", "capture", "--out", "calibrated"}});
+  EXPECT_GT(TaskMemoryNeedBytes(task, std::nullopt),
+            40 * static_cast<std::int64_t>(task.pixel_images));
+}
+
+// The viewer of a stack up to 4096 x 4096 pixels is made in memory, whatever the limit: the same
+// task of a 4096 x 3072 x 50 capture (PTM) was measured at 2823 MB peak RSS by `batch run`, its
+// viewer step; one pixel above the tiling threshold the viewer is tiled and streamed.
+TEST(SlurmMemoryTest, ViewersBelowTheTilingThresholdAreMadeInMemory) {
+  Task task;
+  task.steps = {{"fit", {"fit", "capture", "--method", "ptm", "--out", "stacks"}},
+                {"viewer", {"export", "stacks", "--viewer", "viewer"}}};
+  task.pixels = 4096ULL * 3072ULL;
+  task.pixel_images = task.pixels * 50;
+  EXPECT_GT(TaskMemoryNeedBytes(task, std::nullopt), 2823LL << 20);
+  task.pixels = 4096ULL * 4096ULL + 1;
+  task.pixel_images = task.pixels * 50;
+  EXPECT_LT(TaskMemoryNeedBytes(task, std::nullopt), 1000LL << 20);
 }
 
 TEST_F(SlurmTest, ArraysGroupTasksByMemoryAndLeaveDoneTasksOut) {

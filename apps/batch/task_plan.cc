@@ -3,6 +3,8 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "capture/io/load_photometric_set.h"
 #include "core/digest.h"
 #include "core/error.h"
@@ -13,6 +15,9 @@ namespace photomat::batch {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The folder of a task's map stacks, which the exports after the fit read.
+constexpr char kStacksFolder[] = "stacks";
 
 void Append(std::vector<std::string>& arguments, std::initializer_list<std::string> more) {
   arguments.insert(arguments.end(), more.begin(), more.end());
@@ -35,19 +40,25 @@ void AppendRobust(std::vector<std::string>& arguments, const RecipeFit& fit) {
   if (fit.robust) Append(arguments, {"--robust", "--loss", fit.loss});
 }
 
-// Pixels x images without decoding any image: the light file's count and the first image's
-// header (every layout photomat reads keeps one size per capture).
-std::uint64_t PixelImages(const fs::path& capture) {
+struct CaptureSize {
+  std::uint64_t pixels = 0, pixel_images = 0;
+};
+
+// Without decoding any image: the light file's count and the first image's header (every layout
+// photomat reads keeps one size per capture). Zeros for a broken capture: its task fails with
+// photomat's own error.
+CaptureSize MeasureCapture(const fs::path& capture) {
   try {
     const std::size_t images = ReadLightDirections(capture).size();
     const std::vector<fs::path> files = ListImageFiles(capture);
-    if (files.empty()) return 0;
+    if (files.empty()) return {};
     auto input = OIIO::ImageInput::open(files.front().string());
-    if (!input) return 0;
+    if (!input) return {};
     const OIIO::ImageSpec& spec = input->spec();
-    return static_cast<std::uint64_t>(spec.width) * spec.height * images;
+    const auto pixels = static_cast<std::uint64_t>(spec.width) * spec.height;
+    return {pixels, pixels * images};
   } catch (const Error&) {
-    return 0;  // a broken capture: its task fails with photomat's own error
+    return {};
   }
 }
 
@@ -71,6 +82,14 @@ std::string TaskHash(const Task& task) {
                  {"steps", StepsToJson(task.steps)}});
 }
 
+bool StepHoldsWholeSet(const TaskStep& step) {
+  if (step.name == "fit") return false;
+  if (step.name == "maps" || step.name == "viewer") {
+    return step.arguments.size() < 2 || step.arguments[1] != kStacksFolder;
+  }
+  return true;
+}
+
 std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
   const RecipeCapture& capture = recipe.captures.at(index);
   const RecipeExports& exports = recipe.exports;
@@ -82,14 +101,15 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
     input = "calibrated";
   }
   if (exports.stacks) {
-    std::vector<std::string> fit{"fit", input, "--method", recipe.fit.methods, "--out", "stacks"};
+    std::vector<std::string> fit{"fit",   input,        "--method", recipe.fit.methods,
+                                 "--out", kStacksFolder};
     AppendRobust(fit, recipe.fit);
     steps.push_back({"fit", fit});
   }
   if (exports.maps) {
     const RecipeMaps& maps = *exports.maps;
     std::vector<std::string> arguments{
-        "export", exports.stacks ? "stacks" : input, "--method", maps.method, "--out", "maps"};
+        "export", exports.stacks ? kStacksFolder : input, "--method", maps.method, "--out", "maps"};
     Append(arguments, {"--normal-convention", maps.normal_convention, "--height", maps.height});
     if (!maps.gltf) arguments.push_back("--no-gltf");
     steps.push_back({"maps", arguments});
@@ -109,7 +129,7 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
     steps.push_back({"interchange", arguments});
   }
   if (exports.viewer) {
-    std::vector<std::string> arguments{"export", exports.stacks ? "stacks" : input, "--viewer",
+    std::vector<std::string> arguments{"export", exports.stacks ? kStacksFolder : input, "--viewer",
                                        "viewer"};
     steps.push_back({"viewer", arguments});
   }
@@ -140,8 +160,11 @@ TaskPlan PlanTasks(const Recipe& recipe, const PlanOptions& options) {
     task.capture = recipe.captures[i].folder;
     task.folder = CaptureOutputFolder(recipe, i);
     task.steps = TaskSteps(recipe, i);
-    task.pixel_images = PixelImages(task.capture);
-    task.large = task.pixel_images > options.large_capture_pixel_images;
+    const CaptureSize size = MeasureCapture(task.capture);
+    task.pixels = size.pixels;
+    task.pixel_images = size.pixel_images;
+    task.large = task.pixel_images > options.large_capture_pixel_images &&
+                 std::any_of(task.steps.begin(), task.steps.end(), StepHoldsWholeSet);
     task.hash = TaskHash(task);
     plan.tasks.push_back(std::move(task));
   }
@@ -155,6 +178,7 @@ void WriteTaskPlan(const fs::path& batch_dir, const TaskPlan& plan) {
                      {"name", task.name},
                      {"capture", task.capture.string()},
                      {"folder", task.folder.string()},
+                     {"pixels", task.pixels},
                      {"pixel_images", task.pixel_images},
                      {"large", task.large},
                      {"hash", task.hash},
@@ -184,8 +208,9 @@ TaskPlan ReadTaskPlan(const fs::path& batch_dir) {
     task.name = entry["name"].String();
     task.capture = entry["capture"].String();
     task.folder = entry["folder"].String();
-    const double pixel_images = entry["pixel_images"].Number();
-    task.pixel_images = static_cast<std::uint64_t>(pixel_images);
+    // Plans written before "pixels" existed leave it 0 (unknown).
+    if (entry.Has("pixels")) task.pixels = static_cast<std::uint64_t>(entry["pixels"].Number());
+    task.pixel_images = static_cast<std::uint64_t>(entry["pixel_images"].Number());
     task.large = entry["large"].Boolean();
     task.hash = entry["hash"].String();
     const JsonReader steps = entry["steps"];

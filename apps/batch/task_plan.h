@@ -26,20 +26,29 @@ struct Task {
   std::filesystem::path capture;  // absolute
   std::filesystem::path folder;   // the final output folder, absolute
   std::vector<TaskStep> steps;
-  // Pixels x images of the capture, read from its light file and first image header at planning
-  // time; 0 when that failed (the task itself then reports why).
+  // Pixels (width x height) and pixels x images of the capture, read from its first image's header
+  // and its light file at planning time; 0 when that failed (the task itself then reports why).
+  std::uint64_t pixels = 0;
   std::uint64_t pixel_images = 0;
-  // Over the plan's large-capture threshold: a candidate for tiling (README: tiling waits for the
-  // streamed fitting; such tasks run whole).
+  // Over the plan's large-capture threshold with a step that holds every image in memory
+  // (StepHoldsWholeSet): its memory grows with pixels x images (README "Large captures").
   bool large = false;
   // Hex digest of what the task does (capture, folder, steps): a done record with another hash
   // belongs to a different recipe, and the task runs again.
   std::string hash;
 };
 
+// Whether `step` holds every image of its capture in memory at once, so that its memory grows with
+// pixels x images: calibrate, the fits of the photographs for .ptm and .rti (interchange),
+// evaluate, and maps or a viewer made from the capture. The fit, and maps and a viewer made from
+// the stacks, stream in bands (README "Streamed fitting", "Streamed relighting and export"):
+// their memory does not grow with the number of images.
+bool StepHoldsWholeSet(const TaskStep& step);
+
 struct PlanOptions {
-  // Pixels x images above which a capture is large. Default: 5e8, about 13.5 GB at the 27 bytes
-  // per pixel and image that fitting measured, over half of a 24 GB machine.
+  // Pixels x images above which a capture with a step that holds the whole set is large.
+  // Default: 5e8, about 13.5 GB at the 27 bytes per pixel and image that an in-memory fit
+  // measured, over half of a 24 GB machine.
   std::uint64_t large_capture_pixel_images = 500'000'000;
 };
 

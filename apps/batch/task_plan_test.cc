@@ -130,10 +130,39 @@ TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
   PlanOptions options;
   options.large_capture_pixel_images = 20 * 20 * 36 - 1;
   const TaskPlan plan = PlanTasks(Parse(json), options);
+  EXPECT_EQ(plan.tasks[0].pixels, 20u * 20u);
   EXPECT_EQ(plan.tasks[0].pixel_images, 20u * 20u * 36u);  // the thesis grid has 36 lights
-  EXPECT_TRUE(plan.tasks[0].large);
+  EXPECT_TRUE(plan.tasks[0].large);           // its .ptm, .rti and evaluation hold the whole set
   EXPECT_EQ(plan.tasks[1].pixel_images, 0u);  // an empty folder: unknown, its task will say why
   EXPECT_FALSE(plan.tasks[1].large);
+  fs::create_directories(dir_ / "written");
+  WriteTaskPlan(dir_ / "written", plan);
+  EXPECT_EQ(ReadTaskPlan(dir_ / "written").tasks[0].pixels, 20u * 20u);
+
+  // Only streamed steps (the fit, maps and viewer from the stacks): not large at any size.
+  json["exports"].erase("ptm");
+  json["exports"].erase("rti");
+  json["exports"].erase("evaluation");
+  const TaskPlan streamed = PlanTasks(Parse(json), options);
+  EXPECT_EQ(streamed.tasks[0].pixel_images, 20u * 20u * 36u);
+  EXPECT_FALSE(streamed.tasks[0].large);
+}
+
+TEST_F(TaskPlanTest, OnlyTheFitAndTheExportsOfTheStacksStream) {
+  const auto whole_set_steps = [&](const nlohmann::json& json) {
+    const TaskPlan plan = PlanTasks(Parse(json));
+    std::vector<std::string> names;
+    for (const TaskStep& step : plan.tasks[0].steps) {
+      if (StepHoldsWholeSet(step)) names.push_back(step.name);
+    }
+    return names;
+  };
+  nlohmann::json json = Full();
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("calibrate", "interchange", "evaluate"));
+  // Without stacks, maps and viewer are made from the capture, in memory.
+  json["exports"]["stacks"] = false;
+  EXPECT_THAT(whole_set_steps(json),
+              ElementsAre("calibrate", "maps", "interchange", "viewer", "evaluate"));
 }
 
 TEST(ShellCommandTest, QuotesWhatAShellWouldSplitOrExpand) {
