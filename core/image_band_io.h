@@ -77,6 +77,10 @@ std::vector<std::filesystem::path> ListImageFiles(const std::filesystem::path& f
 // anti-aliased masks of real data sets at 50 %).
 Mask ReadMask(const std::filesystem::path& path);
 
+// The channel names an image without names is written with: Y, Y A, R G B, R G B A, else
+// channel0, channel1, ...
+std::vector<std::string> DefaultChannelNames(int channels);
+
 // An image file written in order, band by band, to a temporary name (PendingFile) that Commit()
 // renames: a map stack written straight from a streamed fit. WriteImage is this writer with one
 // band. Float, half or integer samples as ImageWriteOptions say.

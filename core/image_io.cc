@@ -378,24 +378,6 @@ OIIO::TypeDesc ToOiio(SampleType type) {
   return OIIO::TypeDesc::FLOAT;
 }
 
-std::vector<std::string> DefaultChannelNames(int channels) {
-  switch (channels) {
-    case 1:
-      return {"Y"};
-    case 2:
-      return {"Y", "A"};
-    case 3:
-      return {"R", "G", "B"};
-    case 4:
-      return {"R", "G", "B", "A"};
-    default:
-      break;
-  }
-  std::vector<std::string> names;
-  for (int c = 0; c < channels; ++c) names.push_back(fmt::format("channel{}", c));
-  return names;
-}
-
 constexpr std::array<NamedValue<ExrCompression>, 5> kExrCompressionNames = {
     {{ExrCompression::kNone, "none"},
      {ExrCompression::kRle, "rle"},
@@ -461,6 +443,24 @@ float PrepareForQuantising(float value, ColourSpace encoding) {
 }
 
 }  // namespace
+
+std::vector<std::string> DefaultChannelNames(int channels) {
+  switch (channels) {
+    case 1:
+      return {"Y"};
+    case 2:
+      return {"Y", "A"};
+    case 3:
+      return {"R", "G", "B"};
+    case 4:
+      return {"R", "G", "B", "A"};
+    default:
+      break;
+  }
+  std::vector<std::string> names;
+  for (int c = 0; c < channels; ++c) names.push_back(fmt::format("channel{}", c));
+  return names;
+}
 
 // The open output and the interleaved buffer of one write call.
 struct ImageBandWriter::Encoder {

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <memory>
+
 #include "core/error.h"
 #include "core/json_file.h"
 
@@ -138,42 +140,103 @@ void WriteCaptureManifest(const fs::path& path, const CaptureManifest& manifest)
   WriteJsonFile(path, document);
 }
 
-CaptureManifest SavePhotometricSet(const fs::path& folder, const PhotometricSet& set,
-                                   const SaveSetOptions& options, Progress* progress) {
+struct CaptureBandWriter::Images {
+  std::vector<std::unique_ptr<ImageBandWriter>> writers;
+};
+
+CaptureBandWriter::CaptureBandWriter(fs::path folder, int height, const SaveSetOptions& options)
+    : folder_(std::move(folder)), height_(height), options_(options) {
   std::error_code ec;
-  fs::create_directories(folder, ec);
-  if (ec) throw Error(folder, fmt::format("cannot create folder: {}", ec.message()));
+  created_folder_ = fs::create_directories(folder_, ec);
+  if (ec) throw Error(folder_, fmt::format("cannot create folder: {}", ec.message()));
   const bool exr =
       options.sample_type == SampleType::kFloat || options.sample_type == SampleType::kHalf;
-  CaptureManifest manifest;
-  manifest.colour_space = exr ? ColourSpace::kLinear : options.encoding;
-  ImageWriteOptions write;
-  write.sample_type = options.sample_type;
-  write.encoding = *manifest.colour_space;
+  manifest_.colour_space = exr ? ColourSpace::kLinear : options.encoding;
+  manifest_.provenance = options.provenance;
+}
+
+CaptureBandWriter::~CaptureBandWriter() {
+  images_.reset();  // removes the images' temporaries unless Finish renamed them
+  if (created_folder_ && !finished_) {
+    std::error_code ec;
+    fs::remove(folder_, ec);  // only when empty: fails harmlessly otherwise
+  }
+}
+
+void CaptureBandWriter::WriteNext(const PhotometricSet& band, Progress* progress) {
+  const std::optional<NearLighting>& near = band.near_lighting();
+  if (near && (near->first_row != rows_written_ || near->height != height_)) {
+    band.Fail("cannot save rows of a capture with near lamps as a capture of its own");
+  }
+  if (rows_written_ + band.height() > height_) {
+    band.Fail(fmt::format("{} rows after {} of {}", band.height(), rows_written_, height_));
+  }
+  if (!images_) {
+    images_ = std::make_unique<Images>();
+    const bool exr =
+        options_.sample_type == SampleType::kFloat || options_.sample_type == SampleType::kHalf;
+    ImageWriteOptions write;
+    write.sample_type = options_.sample_type;
+    write.encoding = *manifest_.colour_space;
+    for (int i = 0; i < band.size(); ++i) {
+      CaptureManifestImage entry{
+          fmt::format("{}_{:03}.{}", options_.prefix, i, exr ? "exr" : "png"),
+          band.light(i),
+          {},
+          {}};
+      if (!band.intensities().empty()) entry.intensity = band.intensities()[i];
+      if (near) entry.lamp = near->lamps[static_cast<std::size_t>(i)].position;
+      const Image& image = band.image(i);
+      images_->writers.push_back(std::make_unique<ImageBandWriter>(
+          folder_ / entry.file, image.width(), height_,
+          image.channel_names().empty() ? DefaultChannelNames(image.channels())
+                                        : image.channel_names(),
+          write));
+      manifest_.images.push_back(std::move(entry));
+    }
+    if (band.mask()) {
+      manifest_.mask = "mask.png";
+      mask_.emplace(band.width(), height_, false);
+    }
+  }
+  if (band.size() != static_cast<int>(images_->writers.size())) {
+    band.Fail(
+        fmt::format("a band of {} images for a set of {}", band.size(), images_->writers.size()));
+  }
   NullProgress no_progress;
   Progress& report = OrNull(progress, no_progress);
-  const std::optional<NearLighting>& near = set.near_lighting();
-  if (near && (near->first_row != 0 || near->height != set.height())) {
-    set.Fail("cannot save rows of a capture with near lamps as a capture of its own");
-  }
-  report.Start("write", set.size());
-  for (int i = 0; i < set.size(); ++i) {
-    CaptureManifestImage entry{
-        fmt::format("{}_{:03}.{}", options.prefix, i, exr ? "exr" : "png"), set.light(i), {}, {}};
-    if (!set.intensities().empty()) entry.intensity = set.intensities()[i];
-    if (near) entry.lamp = near->lamps[static_cast<std::size_t>(i)].position;
-    WriteImage(folder / entry.file, set.image(i), write);
-    manifest.images.push_back(std::move(entry));
+  for (int i = 0; i < band.size(); ++i) {
+    images_->writers[static_cast<std::size_t>(i)]->WriteNext(band.image(i).View());
     report.Advance();
   }
-  report.Finish();
-  if (set.mask()) {
-    manifest.mask = "mask.png";
-    WriteMask(folder / *manifest.mask, *set.mask());
+  if (mask_ && band.mask()) {
+    for (int y = 0; y < band.height(); ++y) {
+      for (int x = 0; x < band.width(); ++x) mask_->Set(x, rows_written_ + y, (*band.mask())(x, y));
+    }
   }
-  manifest.provenance = options.provenance;
-  WriteCaptureManifest(folder / kCaptureManifestName, manifest);
-  return manifest;
+  rows_written_ += band.height();
+}
+
+CaptureManifest CaptureBandWriter::Finish() {
+  if (!images_ || rows_written_ != height_) {
+    throw Error(folder_, fmt::format("{} of {} rows written", rows_written_, height_));
+  }
+  for (const auto& writer : images_->writers) writer->Commit();
+  if (mask_) WriteMask(folder_ / *manifest_.mask, *mask_);
+  WriteCaptureManifest(folder_ / kCaptureManifestName, manifest_);
+  finished_ = true;
+  return manifest_;
+}
+
+CaptureManifest SavePhotometricSet(const fs::path& folder, const PhotometricSet& set,
+                                   const SaveSetOptions& options, Progress* progress) {
+  CaptureBandWriter writer(folder, set.height(), options);
+  NullProgress no_progress;
+  Progress& report = OrNull(progress, no_progress);
+  report.Start("write", set.size());
+  writer.WriteNext(set, &report);
+  report.Finish();
+  return writer.Finish();
 }
 
 }  // namespace photomat

@@ -2,12 +2,14 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/colour.h"
+#include "core/image_band_io.h"
 #include "core/image_io.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
@@ -69,6 +71,43 @@ struct SaveSetOptions {
   // File names are "<prefix>_000.png", ...
   std::string prefix = "img";
   nlohmann::json provenance;
+};
+
+// A photometric set written band by band of rows, as SavePhotometricSet writes it (which is this
+// writer with one band): every image to a temporary name as its rows come (ImageBandWriter), then
+// in Finish renamed into place, and the mask and manifest.json written last. A writer destroyed
+// before Finish removes its temporaries: a fault part-way leaves no image and no manifest.
+class CaptureBandWriter {
+ public:
+  // `height`: the rows of every image. Creates `folder` if needed (Error naming it otherwise);
+  // a folder it created is removed again, if empty, when the writer ends without Finish.
+  CaptureBandWriter(std::filesystem::path folder, int height, const SaveSetOptions& options = {});
+  ~CaptureBandWriter();
+  CaptureBandWriter(const CaptureBandWriter&) = delete;
+  CaptureBandWriter& operator=(const CaptureBandWriter&) = delete;
+
+  // The next rows of every image. The first band sets the images' count, width, channels,
+  // lights, intensities and near lamps (its NearLighting must be the whole frame's, first_row
+  // 0); later bands continue them (their near lamps' first_row where the rows continue).
+  // Throws Error naming the set's source for a band that does not continue the first, and
+  // naming the file for a write that fails. `progress` advances once per image.
+  void WriteNext(const PhotometricSet& band, Progress* progress = nullptr);
+  int rows_written() const { return rows_written_; }
+  // Every row written: renames the images into place, writes the mask (the bands' rows of it)
+  // and manifest.json, and returns the manifest.
+  CaptureManifest Finish();
+
+ private:
+  struct Images;
+  std::filesystem::path folder_;
+  int height_ = 0;
+  int rows_written_ = 0;
+  bool created_folder_ = false;
+  bool finished_ = false;
+  SaveSetOptions options_;
+  CaptureManifest manifest_;
+  std::optional<Mask> mask_;
+  std::unique_ptr<Images> images_;
 };
 
 // Writes the images of `set` (named img_000.png, ...; negative values clamp to 0 in integer
