@@ -201,27 +201,64 @@ FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions
   return FlatField(std::move(gains), target.lights());
 }
 
-FlatField FlatFieldFromNearLights(const std::vector<NearLight>& lights, int width, int height,
-                                  int channels) {
-  if (lights.empty()) throw Error("no near lights");
-  std::vector<Image> gains(lights.size());
-  tbb::parallel_for(std::size_t{0}, lights.size(), [&](std::size_t i) {
-    const NearLight& light = lights[i];
-    const double nominal_z = NominalDirection(light).z();
-    Image gain(width, height, channels);
-    for (int y = 0; y < height; ++y) {
-      for (int x = 0; x < width; ++x) {
-        const Eigen::Vector3d to_light = light.position - SamplePoint(width, height, x, y);
-        const double distance = to_light.norm();
-        const double value =
-            light.intensity * to_light.z() / (distance * distance * distance) / nominal_z;
-        for (int c = 0; c < channels; ++c) gain.at(x, y, c) = static_cast<float>(value);
+FlatField FlatField::Rows(int first, int count) const {
+  std::vector<Image> rows;
+  rows.reserve(gains_.size());
+  for (const Image& gain : gains_) rows.emplace_back(gain.Rows(first, count));
+  return FlatField(std::move(rows), lights_);
+}
+
+NearLightGains::NearLightGains(std::vector<NearLight> lights, int width, int height, int channels)
+    : lights_(std::move(lights)), width_(width), height_(height), channels_(channels) {
+  if (lights_.empty()) throw Error("no near lights");
+  for (const NearLight& light : lights_) nominal_z_.push_back(NominalDirection(light).z());
+  // As NormaliseGains: a mean of 1 over every light and pixel (the same in every channel). Each
+  // light's sum is taken alone, in parallel, and the sums added in light order, so that the
+  // scale does not depend on the threads.
+  std::vector<double> sums(lights_.size(), 0.0);
+  tbb::parallel_for(std::size_t{0}, lights_.size(), [&](std::size_t i) {
+    double sum = 0.0;
+    for (int y = 0; y < height_; ++y) {
+      for (int x = 0; x < width_; ++x) sum += Unnormalised(i, x, y);
+    }
+    sums[i] = sum;
+  });
+  double sum = 0.0;
+  for (double s : sums) sum += s;
+  const double count = static_cast<double>(lights_.size()) * width_ * height_;
+  scale_ = static_cast<float>(count / sum);
+}
+
+float NearLightGains::Unnormalised(std::size_t i, int x, int y) const {
+  const NearLight& light = lights_[i];
+  const Eigen::Vector3d to_light = light.position - SamplePoint(width_, height_, x, y);
+  const double distance = to_light.norm();
+  return static_cast<float>(light.intensity * to_light.z() / (distance * distance * distance) /
+                            nominal_z_[i]);
+}
+
+FlatField NearLightGains::Rows(int first, int count) const {
+  if (first < 0 || count < 1 || first + count > height_) {
+    throw Error(fmt::format("rows {}..{} of near-light gains {} rows high", first,
+                            first + count - 1, height_));
+  }
+  std::vector<Image> gains(lights_.size());
+  tbb::parallel_for(std::size_t{0}, lights_.size(), [&](std::size_t i) {
+    Image gain(width_, count, channels_);
+    for (int y = 0; y < count; ++y) {
+      for (int x = 0; x < width_; ++x) {
+        const float value = Unnormalised(i, x, first + y) * scale_;
+        for (int c = 0; c < channels_; ++c) gain.at(x, y, c) = value;
       }
     }
     gains[i] = std::move(gain);
   });
-  NormaliseGains(gains);
-  return FlatField(std::move(gains), NominalDirections(lights));
+  return FlatField(std::move(gains), NominalDirections(lights_));
+}
+
+FlatField FlatFieldFromNearLights(const std::vector<NearLight>& lights, int width, int height,
+                                  int channels) {
+  return NearLightGains(lights, width, height, channels).Rows(0, height);
 }
 
 PhotometricSet ApplyFlatField(const PhotometricSet& set, const FlatField& flat_field,

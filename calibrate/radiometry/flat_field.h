@@ -52,6 +52,8 @@ class FlatField {
   const std::vector<Image>& gains() const { return gains_; }
   // The nominal light of each gain map (for checking a sample set against it).
   const std::vector<LightDirection>& lights() const { return lights_; }
+  // Rows [first, first + count) of every gain map: the flat-field of a band of a capture.
+  FlatField Rows(int first, int count) const;
 
  private:
   std::vector<Image> gains_;
@@ -64,7 +66,29 @@ class FlatField {
 FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions& options = {});
 
 // The gains near lights at known positions would give on a flat target (no target needed):
-// intensity * P.z / |P - p|^3 / l.z, for `channels` channels.
+// intensity * P.z / |P - p|^3 / l.z, for `channels` channels, normalised as every flat-field.
+// Computed band by band (a streamed `calibrate apply`): the normalisation over every light and
+// pixel is summed once, from the lamps alone, so the gains of any band equal those rows of the
+// whole field bit for bit.
+class NearLightGains {
+ public:
+  // Throws Error when there are no lights.
+  NearLightGains(std::vector<NearLight> lights, int width, int height, int channels);
+  const std::vector<NearLight>& lights() const { return lights_; }
+  // The gains of rows [first, first + count).
+  FlatField Rows(int first, int count) const;
+
+ private:
+  // Light i's gain at pixel (x, y) before the normalisation.
+  float Unnormalised(std::size_t i, int x, int y) const;
+
+  std::vector<NearLight> lights_;
+  std::vector<double> nominal_z_;
+  int width_ = 0, height_ = 0, channels_ = 0;
+  float scale_ = 1.0f;
+};
+
+// The whole field: NearLightGains(...).Rows(0, height).
 FlatField FlatFieldFromNearLights(const std::vector<NearLight>& lights, int width, int height,
                                   int channels);
 
