@@ -4,6 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere_refinement.h"
 #include "calibrate/radiometry/near_light.h"
@@ -193,6 +196,64 @@ TEST(CalibrateCliTest, ApplyNearLightsThenFitImprovesNormals) {
   };
   const double before = error(dir / "near"), after = error(dir / "corrected");
   EXPECT_GT(before, 5.0 * after) << before << " " << after;
+}
+
+// `calibrate apply` streams: bands of a few rows (a small --memory) write the images and the
+// manifest that one band of every row writes, and a capture truncated part-way leaves nothing.
+TEST(CalibrateCliTest, ApplyInBandsWritesWhatOneBandWritesAndATruncatedImageLeavesNothing) {
+  TempDir dir;
+  SyntheticMaterialOptions material_options;
+  material_options.width = material_options.height = 48;
+  const SyntheticMaterial material = MakeSyntheticMaterial(material_options);
+  std::vector<NearLight> lamps;
+  std::string lamp_file, intensity_file;
+  for (const LightDirection& direction : ThesisLightGrid()) {
+    NearLight lamp;
+    lamp.position = 96.0 * direction.vector();
+    lamp.intensity = lamp.position.squaredNorm();
+    lamps.push_back(lamp);
+    lamp_file += fmt::format("{} {} {} {}\n", lamp.position.x(), lamp.position.y(),
+                             lamp.position.z(), lamp.intensity);
+    intensity_file += "1 0.9 1.1\n";
+  }
+  WriteSyntheticCapture(dir / "near", material, RenderNearLightCapture(material, lamps), {});
+  testing::WriteFile(dir / "lamps.txt", lamp_file);
+  testing::WriteFile(dir / "intensities.txt", intensity_file);
+  Image dark(48, 48, 1);
+  for (int y = 0; y < 48; ++y) {
+    for (int x = 0; x < 48; ++x) dark.at(x, y, 0) = 0.002f * static_cast<float>((x + 2 * y) % 7);
+  }
+  WriteImage(dir / "dark.exr", dark);
+  const auto apply = [&](const fs::path& out, int memory_mb) {
+    return RunPhotomat(fmt::format(
+        "calibrate apply {} --near-lights {} --dark {} --intensities {} --memory {} --out {}",
+        (dir / "near").string(), (dir / "lamps.txt").string(), (dir / "dark.exr").string(),
+        (dir / "intensities.txt").string(), memory_mb, out.string()));
+  };
+  const RunResult bands = apply(dir / "bands", 1);
+  ASSERT_EQ(bands.exit_code, 0) << bands.output;
+  EXPECT_THAT(bands.output, HasSubstr("bands of 12 rows"));  // 1 MB / (4 x 36 x 3 x 4 x 48)
+  const RunResult whole = apply(dir / "whole", 4000);
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  EXPECT_THAT(whole.output, HasSubstr("bands of 48 rows"));
+  const nlohmann::json manifest = ReadJsonFile(dir / "whole" / "manifest.json");
+  EXPECT_EQ(ReadJsonFile(dir / "bands" / "manifest.json"), manifest);
+  ASSERT_EQ(manifest["images"].size(), lamps.size());
+  for (const auto& entry : manifest["images"]) {
+    const std::string file = entry["file"].get<std::string>();
+    const Image a = ReadImage(dir / "bands" / file).image,
+                b = ReadImage(dir / "whole" / file).image;
+    ASSERT_TRUE(a.SameShape(b)) << file;
+    EXPECT_TRUE(std::equal(a.values().begin(), a.values().end(), b.values().begin())) << file;
+  }
+
+  // Truncated part-way: the error names the file, and no image, manifest or folder is left.
+  const fs::path damaged = dir / "near" / "img_010.png";
+  fs::resize_file(damaged, fs::file_size(damaged) * 2 / 3);
+  const RunResult truncated = apply(dir / "truncated", 1);
+  EXPECT_EQ(truncated.exit_code, 1);
+  EXPECT_THAT(truncated.output, HasSubstr("img_010.png"));
+  EXPECT_FALSE(fs::exists(dir / "truncated")) << truncated.output;
 }
 
 TEST(CalibrateCliTest, FitAndEvaluateRobust) {

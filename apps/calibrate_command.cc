@@ -14,6 +14,7 @@
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere.h"
 #include "calibrate/lights/mirror_sphere_refinement.h"
+#include "calibrate/radiometry/capture_corrections.h"
 #include "calibrate/radiometry/exposure.h"
 #include "calibrate/radiometry/flat_field.h"
 #include "calibrate/radiometry/near_light.h"
@@ -21,11 +22,14 @@
 #include "calibrate/radiometry/semi_calibrated.h"
 #include "capture/io/capture_manifest.h"
 #include "capture/io/lp_file.h"
+#include "capture/io/streamed_set.h"
 #include "core/atomic_file.h"
 #include "core/colour.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/memory_limits.h"
 #include "core/progress.h"
 #include "core/text_parsing.h"
 #include "represent/fitting/robust_intensities.h"
@@ -34,6 +38,9 @@ namespace photomat::app {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The least memory `calibrate apply`'s bands may be given (--memory).
+constexpr std::size_t kMinimumApplyMemory = std::size_t{16} << 20;
 
 bool IsMaskName(const fs::path& path) {
   return ToLower(path.stem().string()).find("mask") != std::string::npos;
@@ -446,6 +453,18 @@ void AddResponseCommand(CLI::App& calibrate) {
   });
 }
 
+// IMPLEMENTER CHOICE: the rows `calibrate apply` corrects at a time: a band of every image, its
+// corrected copies (each correction makes one; two are alive at once) and, with a flat-field or
+// near lamps, the band's gain maps, as float; `budget` beyond the fixed buffers (the dark frame
+// and a target's whole flat-field).
+int ApplyBandRows(std::size_t budget, const StreamedSet& set, const CaptureCorrections& c) {
+  const auto samples = static_cast<std::size_t>(set.size()) * set.channels();
+  const std::size_t copies = 3 + (c.flat_field || c.near_lights ? 1 : 0);
+  const std::size_t per_row = copies * samples * 4 * static_cast<std::size_t>(set.width());
+  return static_cast<int>(std::clamp<std::size_t>(budget / std::max<std::size_t>(per_row, 1), 1,
+                                                  static_cast<std::size_t>(set.height())));
+}
+
 void AddApplyCommand(CLI::App& calibrate) {
   struct Options {
     fs::path input;
@@ -458,13 +477,15 @@ void AddApplyCommand(CLI::App& calibrate) {
     bool semi_calibrated = false;
     bool ignore_intensities = false;
     bool png16 = false;
+    std::size_t memory_mb = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = calibrate.add_subcommand(
       "apply",
       "Write a corrected copy of a capture: linearise (--response), subtract a dark frame, "
       "divide by a flat-field (a target's or near lamps'), and by light intensities (a file, "
-      "semi-calibrated estimates, or the input's own); the result is a manifest set.");
+      "semi-calibrated estimates, or the input's own); the result is a manifest set. Streamed "
+      "in bands of rows (the whole capture at once with --semi-calibrated).");
   command->add_option("input", options->input, "Photometric set")->required();
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_option("--response", options->response,
@@ -484,6 +505,8 @@ void AddApplyCommand(CLI::App& calibrate) {
                     "Do not divide by the intensities the input gives");
   command->add_flag("--png16", options->png16,
                     "16-bit linear PNG (clips at 1) instead of float EXR");
+  AddBandMemoryOption(*command, options->memory_mb, "the bands of rows corrected at a time",
+                      kMinimumApplyMemory);
   command->callback([options] {
     const int sources = !options->intensities.empty() + options->semi_calibrated;
     if (sources > 1) throw Error("give at most one of --intensities and --semi-calibrated");
@@ -493,19 +516,19 @@ void AddApplyCommand(CLI::App& calibrate) {
     LoadOptions load;
     load.apply_intensities = false;
     if (!options->response.empty()) load.colour_space = ColourSpace::kLinear;
-    const LoadedSet loaded = LoadSetForCommand(options->input, load);
-    PhotometricSet set = loaded.set;
+    StreamedSet set = OpenStreamedSet(options->input, load);
+    CaptureCorrections corrections;
     nlohmann::json steps = nlohmann::json::array();
     if (!options->response.empty()) {
-      set = LineariseSet(set, ReadResponseCurve(options->response));
+      corrections.response = ReadResponseCurve(options->response);
       steps.push_back({{"response", fs::absolute(options->response).generic_string()}});
     }
     if (!options->dark.empty()) {
-      set = SubtractDarkFrame(set, ReadDarkFrame(options->dark));
+      corrections.dark = ReadDarkFrame(options->dark);
       steps.push_back({{"dark", fs::absolute(options->dark).generic_string()}});
     }
     if (!options->flat_field.empty()) {
-      set = ApplyFlatField(set, LoadFlatField(options->flat_field));
+      corrections.flat_field = LoadFlatField(options->flat_field);
       steps.push_back({{"flat_field", fs::absolute(options->flat_field).generic_string()}});
     }
     if (!options->near_lights.empty()) {
@@ -514,36 +537,61 @@ void AddApplyCommand(CLI::App& calibrate) {
         throw Error(options->near_lights,
                     fmt::format("{} lamps for {} images", lamps.size(), set.size()));
       }
-      set = ApplyFlatField(
-          set, FlatFieldFromNearLights(lamps, set.width(), set.height(), set.channels()));
-      // The lamps travel with the corrected capture (its manifest's "lamp"s): the pbr fit lights
-      // each pixel from its own lamp direction (core/near_light.h).
-      set.set_near_lighting({lamps, set.width(), set.height(), 0});
+      corrections.near_lights.emplace(lamps, set.width(), set.height(), set.channels());
       steps.push_back({{"near_lights", fs::absolute(options->near_lights).generic_string()}});
     }
+    // The intensities each band is divided by, after the corrections.
+    std::optional<std::vector<std::vector<float>>> intensities;  // nullopt: the input's own
     if (!options->intensities.empty()) {
-      set.set_intensities(ReadLightIntensities(options->intensities));
+      intensities = ReadLightIntensities(options->intensities);
       steps.push_back({{"intensities", fs::absolute(options->intensities).generic_string()}});
-    } else if (options->semi_calibrated) {
-      set.set_intensities(EstimateLightIntensitiesRobust(set).intensities);
-      steps.push_back({{"intensities", "semi-calibrated"}});
     } else if (options->ignore_intensities) {
-      set.set_intensities({});
+      intensities.emplace();
+    } else if (options->semi_calibrated) {
+      steps.push_back({{"intensities", "semi-calibrated"}});
     } else if (!set.intensities().empty()) {
       steps.push_back({{"intensities", "the input's"}});
     }
-    set.ApplyIntensities();
     SaveSetOptions save;
     save.sample_type = options->png16 ? SampleType::kUint16 : SampleType::kFloat;
     save.provenance = {{"source", fs::absolute(options->input).generic_string()},
                        {"calibration", steps}};
+    const std::size_t bytes_per_sample = options->png16 ? 2 : 4;
+    CheckDiskSpace(options->out,
+                   static_cast<std::size_t>(set.size()) * set.channels() * bytes_per_sample *
+                       static_cast<std::size_t>(set.width()) * set.height(),
+                   "the corrected capture");
+    // Semi-calibrated intensities are estimated from the whole corrected capture: one band.
+    const std::size_t budget =
+        options->memory_mb > 0 ? options->memory_mb << 20 : DefaultBandBudget(kMinimumApplyMemory);
+    const int rows =
+        options->semi_calibrated ? set.height() : ApplyBandRows(budget, set, corrections);
+    CaptureBandWriter writer(options->out, set.height(), save);
     TerminalProgressBar bar;
-    CaptureManifest manifest = SavePhotometricSet(options->out, set, save, &bar);
-    if (loaded.ground_truth_normals) {
-      manifest.ground_truth_normals = fs::absolute(*loaded.ground_truth_normals).generic_string();
+    bar.Start("calibrate apply", static_cast<std::size_t>((set.height() + rows - 1) / rows));
+    while (writer.rows_written() < set.height()) {
+      const int first = writer.rows_written();
+      PhotometricSet band =
+          CorrectCaptureBand(set.ReadBand(std::min(rows, set.height() - first), true), first,
+                             set.height(), corrections);
+      if (options->semi_calibrated) {
+        band.set_intensities(EstimateLightIntensitiesRobust(band).intensities);
+      } else if (intensities) {
+        band.set_intensities(*intensities);
+      }
+      band.ApplyIntensities();
+      writer.WriteNext(band);
+      bar.Advance();
+    }
+    bar.Finish();
+    WarnAboutClippedPixels(set.SaturatedPixels(), set.image_names());
+    CaptureManifest manifest = writer.Finish();
+    if (set.ground_truth_normals()) {
+      manifest.ground_truth_normals = fs::absolute(*set.ground_truth_normals()).generic_string();
       WriteCaptureManifest(options->out / kCaptureManifestName, manifest);
     }
-    fmt::print("{} images, {} step(s) -> {}\n", set.size(), steps.size(), options->out.string());
+    fmt::print("{} images, {} step(s), bands of {} rows -> {}\n", set.size(), steps.size(), rows,
+               options->out.string());
   });
 }
 
