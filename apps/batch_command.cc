@@ -41,8 +41,8 @@ void AddPlan(CLI::App& batch) {
   command
       ->add_option("--large-capture", options->large,
                    "Pixels x images above which a capture is flagged large when a step of the "
-                   "recipe holds every image in memory (calibrate, .ptm/.rti, evaluate, maps or "
-                   "viewer from the capture)")
+                   "recipe holds every image in memory (calibrate with a flat-field or "
+                   "semi-calibration, .ptm/.rti, evaluate, maps or viewer from the capture)")
       ->capture_default_str();
   command->callback([options] {
     const Recipe recipe = ReadRecipe(options->recipe);
@@ -75,8 +75,8 @@ void AddPlan(CLI::App& batch) {
       // The steps come from the recipe, so every large task has the same ones.
       fmt::print(
           "{} large capture(s) over {:.3g} pixels x images: the steps {} hold every image in "
-          "memory (about {:.1f} GB for the largest); the fit, and maps and viewer made from the "
-          "stacks, stream in bands (README \"Large captures\")\n",
+          "memory, or as much (about {:.1f} GB for the largest); the other steps stream in bands "
+          "(README \"Large captures\")\n",
           large, options->large, fmt::join(whole_set_steps, ", "),
           static_cast<double>(largest_need) / 1e9);
     }

@@ -27,10 +27,11 @@ namespace fs = std::filesystem;
 //   room);
 // - a streamed step (fit; maps and viewer from the stacks): kStreamedStepBytes for its bands (64
 //   MiB by default, two at a time), decoders' chunks and writers, plus kStreamedBytesPerPixel x
-//   pixels for what grows with the image, the tiled Poisson height's coarse grid above all.
+//   pixels for what grows with the image: the tiled Poisson height's coarse grid, a dark frame
+//   (12 bytes per pixel) while calibrating.
 //   Measured at 8688 x 5792 x 50 (README "Streamed fitting", "Web viewer and evaluation
 //   report"): fit 246-279 MB, the maps' export 394 MB, the export of the viewer's maps 977 MB
-//   peak RSS; the estimate there is 1.2 GB. (The maps' export streams whenever the in-memory
+//   peak RSS; the estimate there is 2.0 GB. (The maps' export streams whenever the in-memory
 //   one would not fit the memory limit, which Slurm's --mem sets.)
 // - except the viewer of stacks up to kViewerTilingThresholdPixels, which is made in memory
 //   whatever the limit: kInMemoryViewerBytesPerPixel x pixels (measured at 2048 x 2048: 226
@@ -40,7 +41,7 @@ namespace fs = std::filesystem;
 constexpr std::int64_t kBaseBytes = 150LL << 20;
 constexpr double kBytesPerPixelImage = 40.0;
 constexpr std::int64_t kStreamedStepBytes = 256LL << 20;
-constexpr double kStreamedBytesPerPixel = 16.0;
+constexpr double kStreamedBytesPerPixel = 32.0;
 constexpr double kInMemoryViewerBytesPerPixel = 600.0;
 constexpr std::size_t kMaxArrayIndices = 1000;
 

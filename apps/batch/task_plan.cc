@@ -84,6 +84,13 @@ std::string TaskHash(const Task& task) {
 
 bool StepHoldsWholeSet(const TaskStep& step) {
   if (step.name == "fit") return false;
+  if (step.name == "calibrate") {
+    // Streamed, but semi-calibrated intensities are estimated from the whole capture, and a
+    // target's flat-field holds a gain map per light.
+    return std::any_of(step.arguments.begin(), step.arguments.end(), [](const std::string& a) {
+      return a == "--semi-calibrated" || a == "--flat-field";
+    });
+  }
   if (step.name == "maps" || step.name == "viewer") {
     return step.arguments.size() < 2 || step.arguments[1] != kStacksFolder;
   }

@@ -148,7 +148,7 @@ TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
   EXPECT_FALSE(streamed.tasks[0].large);
 }
 
-TEST_F(TaskPlanTest, OnlyTheFitAndTheExportsOfTheStacksStream) {
+TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   const auto whole_set_steps = [&](const nlohmann::json& json) {
     const TaskPlan plan = PlanTasks(Parse(json));
     std::vector<std::string> names;
@@ -163,6 +163,11 @@ TEST_F(TaskPlanTest, OnlyTheFitAndTheExportsOfTheStacksStream) {
   json["exports"]["stacks"] = false;
   EXPECT_THAT(whole_set_steps(json),
               ElementsAre("calibrate", "maps", "interchange", "viewer", "evaluate"));
+  // calibrate apply streams unless it estimates semi-calibrated intensities or divides by a
+  // target's flat-field (a gain map per light).
+  json = Full();
+  json["calibration"] = {{"dark", "flat"}};
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("interchange", "evaluate"));
 }
 
 TEST(ShellCommandTest, QuotesWhatAShellWouldSplitOrExpand) {
