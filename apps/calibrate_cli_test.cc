@@ -156,25 +156,33 @@ TEST(CalibrateCliTest, AFailingSphereImageIsNamed) {
   EXPECT_FALSE(fs::exists(dir / "lights.lp"));
 }
 
-TEST(CalibrateCliTest, ApplyNearLightsThenFitImprovesNormals) {
-  TempDir dir;
+// A 48 x 48 synthetic sample under a lamp 96 pixels along each of the thesis grid's directions
+// (its intensity the squared distance: about 1 at the centre), written to dir/near with samples
+// of `type`, and the lamps to dir/lamps.txt as calibrate apply --near-lights reads them.
+std::vector<NearLight> WriteNearLampCapture(const fs::path& dir, SampleType type) {
   SyntheticMaterialOptions material_options;
   material_options.width = material_options.height = 48;
   const SyntheticMaterial material = MakeSyntheticMaterial(material_options);
   std::vector<NearLight> lamps;
-  std::string lamp_file;
+  std::string text;
   for (const LightDirection& direction : ThesisLightGrid()) {
     NearLight lamp;
     lamp.position = 96.0 * direction.vector();
     lamp.intensity = lamp.position.squaredNorm();
     lamps.push_back(lamp);
-    lamp_file += fmt::format("{} {} {} {}\n", lamp.position.x(), lamp.position.y(),
-                             lamp.position.z(), lamp.intensity);
+    text += fmt::format("{} {} {} {}\n", lamp.position.x(), lamp.position.y(), lamp.position.z(),
+                        lamp.intensity);
   }
-  SaveSetOptions exr;
-  exr.sample_type = SampleType::kFloat;
-  WriteSyntheticCapture(dir / "near", material, RenderNearLightCapture(material, lamps), exr);
-  testing::WriteFile(dir / "lamps.txt", lamp_file);
+  SaveSetOptions save;
+  save.sample_type = type;
+  WriteSyntheticCapture(dir / "near", material, RenderNearLightCapture(material, lamps), save);
+  testing::WriteFile(dir / "lamps.txt", text);
+  return lamps;
+}
+
+TEST(CalibrateCliTest, ApplyNearLightsThenFitImprovesNormals) {
+  TempDir dir;
+  const std::vector<NearLight> lamps = WriteNearLampCapture(dir.path(), SampleType::kFloat);
   const RunResult apply =
       RunPhotomat("calibrate apply " + (dir / "near").string() + " --near-lights " +
                   (dir / "lamps.txt").string() + " --out " + (dir / "corrected").string());
@@ -202,22 +210,9 @@ TEST(CalibrateCliTest, ApplyNearLightsThenFitImprovesNormals) {
 // manifest that one band of every row writes, and a capture truncated part-way leaves nothing.
 TEST(CalibrateCliTest, ApplyInBandsWritesWhatOneBandWritesAndATruncatedImageLeavesNothing) {
   TempDir dir;
-  SyntheticMaterialOptions material_options;
-  material_options.width = material_options.height = 48;
-  const SyntheticMaterial material = MakeSyntheticMaterial(material_options);
-  std::vector<NearLight> lamps;
-  std::string lamp_file, intensity_file;
-  for (const LightDirection& direction : ThesisLightGrid()) {
-    NearLight lamp;
-    lamp.position = 96.0 * direction.vector();
-    lamp.intensity = lamp.position.squaredNorm();
-    lamps.push_back(lamp);
-    lamp_file += fmt::format("{} {} {} {}\n", lamp.position.x(), lamp.position.y(),
-                             lamp.position.z(), lamp.intensity);
-    intensity_file += "1 0.9 1.1\n";
-  }
-  WriteSyntheticCapture(dir / "near", material, RenderNearLightCapture(material, lamps), {});
-  testing::WriteFile(dir / "lamps.txt", lamp_file);
+  const std::vector<NearLight> lamps = WriteNearLampCapture(dir.path(), SampleType::kUint16);
+  std::string intensity_file;
+  for (std::size_t i = 0; i < lamps.size(); ++i) intensity_file += "1 0.9 1.1\n";
   testing::WriteFile(dir / "intensities.txt", intensity_file);
   Image dark(48, 48, 1);
   for (int y = 0; y < 48; ++y) {
