@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <optional>
+#include <string>
 
 #include "calibrate/lights/light_list.h"
 #include "calibrate/lights/mirror_sphere_refinement.h"
@@ -17,6 +19,7 @@
 #include "core/atomic_file.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "tests/support/layouts.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {
@@ -249,6 +252,48 @@ TEST(CalibrateCliTest, ApplyInBandsWritesWhatOneBandWritesAndATruncatedImageLeav
   EXPECT_EQ(truncated.exit_code, 1);
   EXPECT_THAT(truncated.output, HasSubstr("img_010.png"));
   EXPECT_FALSE(fs::exists(dir / "truncated")) << truncated.output;
+}
+
+// What streaming is for: under a hard address-space limit far below what the whole capture needs,
+// `calibrate apply` with the default budget succeeds and writes what one band writes without the
+// limit. 1536 x 1536 x 36 lights x RGB as half-float EXR: the capture as float is 1.02 GB, and
+// one band of every row peaked at 2.74 GB of address space (VmPeak, no limit), the default bands
+// at 1.02-1.05 GB, of which 0.41 GB is the program before it reads anything (`--help`) and most
+// of the rest is per open image (36 readers and 36 writers; with bands of 2 rows 1.01 GB). The
+// limit, 1400 MB, is half of the one band's need; under it one band fails and leaves nothing.
+TEST(CalibrateCliTest, ApplyUnderAnAddressSpaceLimitFarBelowTheCaptureSucceedsAndMatches) {
+  TempDir dir;
+  const std::string lights =
+      testing::WriteLargeLambertianCapture(dir / "capture", 1536, 1536).string();
+  Image dark(1536, 1536, 1);
+  for (int y = 0; y < 1536; ++y) {
+    for (int x = 0; x < 1536; ++x) dark.at(x, y, 0) = 0.001f * static_cast<float>((x + y) % 3);
+  }
+  WriteImage(dir / "dark.exr", dark);
+  const auto apply = [&](const std::string& out, const std::string& more,
+                         std::optional<std::size_t> limit) {
+    const std::string arguments = "calibrate apply " + lights + " --dark " +
+                                  (dir / "dark.exr").string() + " --out " + (dir / out).string() +
+                                  more;
+    return limit ? RunPhotomat(arguments, {*limit}) : RunPhotomat(arguments);
+  };
+  const std::size_t limit = std::size_t{1400} << 20;
+  const RunResult limited = apply("limited", "", limit);
+  ASSERT_EQ(limited.exit_code, 0) << limited.output;
+  EXPECT_THAT(limited.output, ::testing::Not(HasSubstr("bands of 1536 rows")));
+  const RunResult one_band_limited = apply("refused", " --memory 100000", limit);
+  EXPECT_EQ(one_band_limited.exit_code, 1) << one_band_limited.output;
+  EXPECT_THAT(one_band_limited.output, HasSubstr("out of memory"));
+  EXPECT_FALSE(fs::exists(dir / "refused"));
+  const RunResult whole = apply("whole", " --memory 100000", std::nullopt);
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  EXPECT_THAT(whole.output, HasSubstr("bands of 1536 rows"));
+  for (const char* file : {"img_000.exr", "img_017.exr", "img_035.exr"}) {
+    const Image a = ReadImage(dir / "limited" / file).image;
+    const Image b = ReadImage(dir / "whole" / file).image;
+    ASSERT_TRUE(a.SameShape(b)) << file;
+    EXPECT_TRUE(std::equal(a.values().begin(), a.values().end(), b.values().begin())) << file;
+  }
 }
 
 TEST(CalibrateCliTest, FitAndEvaluateRobust) {

@@ -14,6 +14,7 @@
 #include "core/image_io.h"
 #include "core/light_direction.h"
 #include "represent/stack/map_stack.h"
+#include "tests/support/layouts.h"
 #include "tests/support/test_support.h"
 
 namespace photomat {
@@ -58,55 +59,6 @@ TEST(FitStreamCliTest, ImageTruncatedMidwayFailsNamingItAndLeavesNoOutput) {
   EXPECT_EQ(FilesIn(dir / "out"), 0u) << fit.output;
 }
 
-// A Lambertian capture of `width` x `height` on the thesis grid (slants 30, 45, 60 x 12 tilts),
-// written image by image (never the whole set in this process) as half-float EXR without
-// compression (quick to write and read back), with its .lp file.
-fs::path WriteLargeCapture(const fs::path& folder, int width, int height) {
-  fs::create_directories(folder);
-  std::vector<LightDirection> lights;
-  for (double slant : {30.0, 45.0, 60.0}) {
-    for (int t = 0; t < 12; ++t) lights.push_back(LightDirection::FromSlantTilt(slant, 30.0 * t));
-  }
-  // Normals of a gently waved surface, and an albedo that varies per channel.
-  Image normals(width, height, 3);
-  Image albedo(width, height, 3);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      const double gx = 0.3 * std::cos(x / 37.0), gy = 0.3 * std::sin(y / 53.0);
-      const double norm = std::sqrt(gx * gx + gy * gy + 1.0);
-      const auto n = normals.pixel(x, y);
-      n[0] = static_cast<float>(-gx / norm);
-      n[1] = static_cast<float>(-gy / norm);
-      n[2] = static_cast<float>(1.0 / norm);
-      const auto a = albedo.pixel(x, y);
-      for (int c = 0; c < 3; ++c)
-        a[c] = 0.3f + 0.2f * c + 0.1f * std::sin((x + 2 * y) / (9.0f + c));
-    }
-  }
-  ImageWriteOptions half;
-  half.sample_type = SampleType::kHalf;
-  half.exr_compression = ExrCompression::kNone;
-  std::string lp = std::to_string(lights.size()) + "\n";
-  Image image(width, height, 3);
-  for (std::size_t i = 0; i < lights.size(); ++i) {
-    const Eigen::Vector3f l = lights[i].vector().cast<float>();
-    for (int y = 0; y < height; ++y) {
-      for (int x = 0; x < width; ++x) {
-        const auto n = normals.pixel(x, y);
-        const float shading = std::max(0.0f, n[0] * l.x() + n[1] * l.y() + n[2] * l.z());
-        const auto a = albedo.pixel(x, y);
-        const auto out = image.pixel(x, y);
-        for (int c = 0; c < 3; ++c) out[c] = a[c] * shading;
-      }
-    }
-    const std::string name = fmt::format("img_{:03}.exr", i);
-    WriteImage(folder / name, image, half);
-    lp += fmt::format("{} {} {} {}\n", name, l.x(), l.y(), l.z());
-  }
-  testing::WriteFile(folder / "lights.lp", lp);
-  return folder / "lights.lp";
-}
-
 // What streaming is for (README, "Streamed fitting"): under a hard address-space limit far below
 // what a whole-set fit needs, with the default budget, the fit succeeds and its maps equal those
 // of a fit without the limit in one band. 1536 x 1536 x 36 lights x RGB: the whole set as float
@@ -118,7 +70,8 @@ fs::path WriteLargeCapture(const fs::path& folder, int width, int height) {
 // how many arenas the threads happened to make; measured now: bands of 100 rows, peak 776 MB.)
 TEST(FitStreamCliTest, FitUnderAnAddressSpaceLimitFarBelowTheWholeSetSucceedsAndMatches) {
   const TempDir dir;
-  const std::string lights = WriteLargeCapture(dir / "capture", 1536, 1536).string();
+  const std::string lights =
+      testing::WriteLargeLambertianCapture(dir / "capture", 1536, 1536).string();
   const std::string methods = " --method gradient,ptm,eigen6 --out ";
   const std::size_t limit = std::size_t{1000} << 20;
   const RunResult limited =

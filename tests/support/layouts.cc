@@ -2,7 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
 #include "core/image_io.h"
+#include "core/light_direction.h"
 #include "core/text_parsing.h"
 #include "tests/support/test_support.h"
 
@@ -70,6 +75,52 @@ std::vector<LayoutWriter> Layouts() {
        },
        "manifest.json"},
   };
+}
+
+fs::path WriteLargeLambertianCapture(const fs::path& folder, int width, int height) {
+  fs::create_directories(folder);
+  std::vector<LightDirection> lights;
+  for (double slant : {30.0, 45.0, 60.0}) {
+    for (int t = 0; t < 12; ++t) lights.push_back(LightDirection::FromSlantTilt(slant, 30.0 * t));
+  }
+  // Normals of a gently waved surface, and an albedo that varies per channel.
+  Image normals(width, height, 3);
+  Image albedo(width, height, 3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const double gx = 0.3 * std::cos(x / 37.0), gy = 0.3 * std::sin(y / 53.0);
+      const double norm = std::sqrt(gx * gx + gy * gy + 1.0);
+      const auto n = normals.pixel(x, y);
+      n[0] = static_cast<float>(-gx / norm);
+      n[1] = static_cast<float>(-gy / norm);
+      n[2] = static_cast<float>(1.0 / norm);
+      const auto a = albedo.pixel(x, y);
+      for (int c = 0; c < 3; ++c)
+        a[c] = 0.3f + 0.2f * c + 0.1f * std::sin((x + 2 * y) / (9.0f + c));
+    }
+  }
+  ImageWriteOptions half;
+  half.sample_type = SampleType::kHalf;
+  half.exr_compression = ExrCompression::kNone;
+  std::string lp = std::to_string(lights.size()) + "\n";
+  Image image(width, height, 3);
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    const Eigen::Vector3f l = lights[i].vector().cast<float>();
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        const auto n = normals.pixel(x, y);
+        const float shading = std::max(0.0f, n[0] * l.x() + n[1] * l.y() + n[2] * l.z());
+        const auto a = albedo.pixel(x, y);
+        const auto out = image.pixel(x, y);
+        for (int c = 0; c < 3; ++c) out[c] = a[c] * shading;
+      }
+    }
+    const std::string name = fmt::format("img_{:03}.exr", i);
+    WriteImage(folder / name, image, half);
+    lp += fmt::format("{} {} {} {}\n", name, l.x(), l.y(), l.z());
+  }
+  WriteFile(folder / "lights.lp", lp);
+  return folder / "lights.lp";
 }
 
 }  // namespace photomat::testing

@@ -29,4 +29,11 @@ std::vector<LayoutWriter> Layouts();
 void WriteImages(const std::filesystem::path& dir, const std::vector<std::string>& names,
                  int width = 6, int height = 4);
 
+// A Lambertian capture of `width` x `height` on the thesis grid (slants 30, 45, 60 x 12 tilts),
+// written image by image (never the whole set in this process) as half-float EXR without
+// compression (quick to write and read back), with its .lp file, whose path it returns: for tests
+// of streamed steps under a memory limit.
+std::filesystem::path WriteLargeLambertianCapture(const std::filesystem::path& folder, int width,
+                                                  int height);
+
 }  // namespace photomat::testing
