@@ -1,6 +1,7 @@
 #include "capture/io/capture_manifest.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <memory>
 
@@ -203,12 +204,12 @@ void CaptureBandWriter::WriteNext(const PhotometricSet& band, Progress* progress
     band.Fail(
         fmt::format("a band of {} images for a set of {}", band.size(), images_->writers.size()));
   }
-  NullProgress no_progress;
-  Progress& report = OrNull(progress, no_progress);
-  for (int i = 0; i < band.size(); ++i) {
+  // The images are encoded in parallel (PNG's compression is the slow part of writing).
+  tbb::parallel_for(0, band.size(), [&](int i) {
     images_->writers[static_cast<std::size_t>(i)]->WriteNext(band.image(i).View());
-    report.Advance();
-  }
+  });
+  NullProgress no_progress;
+  OrNull(progress, no_progress).Advance(static_cast<std::size_t>(band.size()));
   if (mask_ && band.mask()) {
     for (int y = 0; y < band.height(); ++y) {
       for (int x = 0; x < band.width(); ++x) mask_->Set(x, rows_written_ + y, (*band.mask())(x, y));
