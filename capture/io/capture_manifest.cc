@@ -15,6 +15,9 @@ namespace fs = std::filesystem;
 
 constexpr double kSlantTiltAgreementDegrees = 0.05;
 
+// A saved set's images: float and half samples as OpenEXR, integer ones as PNG.
+bool WritesExr(SampleType type) { return type == SampleType::kFloat || type == SampleType::kHalf; }
+
 LightDirection ReadLight(const JsonReader& entry) {
   const bool has_vector = entry.Has("light");
   const bool has_angles = entry.Has("slant_deg") || entry.Has("tilt_deg");
@@ -150,9 +153,7 @@ CaptureBandWriter::CaptureBandWriter(fs::path folder, int height, const SaveSetO
   std::error_code ec;
   created_folder_ = fs::create_directories(folder_, ec);
   if (ec) throw Error(folder_, fmt::format("cannot create folder: {}", ec.message()));
-  const bool exr =
-      options.sample_type == SampleType::kFloat || options.sample_type == SampleType::kHalf;
-  manifest_.colour_space = exr ? ColourSpace::kLinear : options.encoding;
+  manifest_.colour_space = WritesExr(options.sample_type) ? ColourSpace::kLinear : options.encoding;
   manifest_.provenance = options.provenance;
 }
 
@@ -174,17 +175,13 @@ void CaptureBandWriter::WriteNext(const PhotometricSet& band, Progress* progress
   }
   if (!images_) {
     images_ = std::make_unique<Images>();
-    const bool exr =
-        options_.sample_type == SampleType::kFloat || options_.sample_type == SampleType::kHalf;
+    const char* extension = WritesExr(options_.sample_type) ? "exr" : "png";
     ImageWriteOptions write;
     write.sample_type = options_.sample_type;
     write.encoding = *manifest_.colour_space;
     for (int i = 0; i < band.size(); ++i) {
       CaptureManifestImage entry{
-          fmt::format("{}_{:03}.{}", options_.prefix, i, exr ? "exr" : "png"),
-          band.light(i),
-          {},
-          {}};
+          fmt::format("{}_{:03}.{}", options_.prefix, i, extension), band.light(i), {}, {}};
       if (!band.intensities().empty()) entry.intensity = band.intensities()[i];
       if (near) entry.lamp = near->lamps[static_cast<std::size_t>(i)].position;
       const Image& image = band.image(i);
