@@ -342,13 +342,27 @@ TEST(CalibrateCliTest, FlatFieldFromATargetMakesItUniform) {
                 .exit_code,
             0);
   EXPECT_TRUE(fs::exists(dir / "ff" / "flatfield.json"));
-  const RunResult applied =
-      RunPhotomat("calibrate apply " + (dir / "target").string() + " --flat-field " +
-                  (dir / "ff").string() + " --out " + (dir / "flat").string());
+  const auto apply = [&](const std::string& out, int memory_mb) {
+    return RunPhotomat(fmt::format("calibrate apply {} --flat-field {} --memory {} --out {}",
+                                   (dir / "target").string(), (dir / "ff").string(), memory_mb,
+                                   (dir / out).string()));
+  };
+  const RunResult applied = apply("flat", 4000);
   ASSERT_EQ(applied.exit_code, 0) << applied.output;
+  EXPECT_THAT(applied.output, HasSubstr("bands of 40 rows"));
   const LoadedSet flat = LoadPhotometricSet(dir / "flat");
   const Image& image = flat.set.image(20);
   EXPECT_NEAR(image.at(0, 0, 1) / image.at(39, 39, 1), 1.0, 0.01);  // uniform after the gains
+  // The gain maps are read band by band (FlatFieldBandReader): bands of 15 rows (1 MB / (4 x 36
+  // x 3 x 4 x 40)) write what one band of every row writes.
+  const RunResult bands = apply("bands", 1);
+  ASSERT_EQ(bands.exit_code, 0) << bands.output;
+  EXPECT_THAT(bands.output, HasSubstr("bands of 15 rows"));
+  const LoadedSet banded = LoadPhotometricSet(dir / "bands");
+  ASSERT_EQ(banded.set.size(), flat.set.size());
+  for (int i = 0; i < flat.set.size(); ++i) {
+    EXPECT_TRUE(testing::SameBits(banded.set.image(i), flat.set.image(i))) << i;
+  }
 }
 
 TEST(CalibrateCliTest, SemiCalibratedIntensities) {

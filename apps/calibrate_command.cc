@@ -455,8 +455,8 @@ void AddResponseCommand(CLI::App& calibrate) {
 
 // IMPLEMENTER CHOICE: the rows `calibrate apply` corrects at a time: a band of every image, its
 // corrected copies (each correction makes one; two are alive at once) and, with a flat-field or
-// near lamps, the band's gain maps, as float; `budget` beyond the fixed buffers (the dark frame
-// and a target's whole flat-field).
+// near lamps, the band's gain maps, as float; `budget` beyond the fixed buffers (the dark frame;
+// a target's gain maps are read band by band from their folder, FlatFieldBandReader).
 int ApplyBandRows(std::size_t budget, const StreamedSet& set, const CaptureCorrections& c) {
   const auto samples = static_cast<std::size_t>(set.size()) * set.channels();
   const std::size_t copies = 3 + (c.flat_field || c.near_lights ? 1 : 0);
@@ -528,7 +528,7 @@ void AddApplyCommand(CLI::App& calibrate) {
       steps.push_back({{"dark", fs::absolute(options->dark).generic_string()}});
     }
     if (!options->flat_field.empty()) {
-      corrections.flat_field = LoadFlatField(options->flat_field);
+      corrections.flat_field.emplace(options->flat_field);
       steps.push_back({{"flat_field", fs::absolute(options->flat_field).generic_string()}});
     }
     if (!options->near_lights.empty()) {

@@ -12,10 +12,11 @@ namespace {
 
 // The whole frame's size is checked here: a band's rows of a frame of another height would pass
 // the band-sized checks of SubtractDarkFrame and ApplyFlatField.
-void CheckFrameSize(const PhotometricSet& band, int height, const Image& frame, const char* what) {
-  if (frame.width() != band.width() || frame.height() != height) {
+void CheckFrameSize(const PhotometricSet& band, int height, int frame_width, int frame_height,
+                    int frame_channels, const char* what) {
+  if (frame_width != band.width() || frame_height != height) {
     band.Fail(fmt::format("the {} is {}x{} with {} channels but the images are {}x{} with {}", what,
-                          frame.width(), frame.height(), frame.channels(), band.width(), height,
+                          frame_width, frame_height, frame_channels, band.width(), height,
                           band.channels()));
   }
 }
@@ -23,11 +24,21 @@ void CheckFrameSize(const PhotometricSet& band, int height, const Image& frame, 
 }  // namespace
 
 PhotometricSet CorrectCaptureBand(PhotometricSet band, int first_row, int height,
-                                  const CaptureCorrections& corrections) {
+                                  CaptureCorrections& corrections) {
   const int rows = band.height();
-  if (corrections.dark) CheckFrameSize(band, height, *corrections.dark, "dark frame");
+  if (corrections.dark) {
+    const Image& dark = *corrections.dark;
+    CheckFrameSize(band, height, dark.width(), dark.height(), dark.channels(), "dark frame");
+  }
   if (corrections.flat_field) {
-    CheckFrameSize(band, height, corrections.flat_field->gain(0), "flat-field");
+    const FlatFieldBandReader& gains = *corrections.flat_field;
+    CheckFrameSize(band, height, gains.width(), gains.height(), gains.channels(), "flat-field");
+    if (gains.next_row() != first_row) {
+      band.Fail(
+          fmt::format("rows from {} corrected after the flat-field's rows up to {}: the "
+                      "bands must come in row order",
+                      first_row, gains.next_row()));
+    }
   }
   PhotometricSet corrected = std::move(band);
   if (corrections.response) corrected = LineariseSet(corrected, *corrections.response);
@@ -35,7 +46,7 @@ PhotometricSet CorrectCaptureBand(PhotometricSet band, int first_row, int height
     corrected = SubtractDarkFrame(corrected, Image(corrections.dark->Rows(first_row, rows)));
   }
   if (corrections.flat_field) {
-    corrected = ApplyFlatField(corrected, corrections.flat_field->Rows(first_row, rows));
+    corrected = ApplyFlatField(corrected, corrections.flat_field->ReadNext(rows));
   }
   if (corrections.near_lights) {
     corrected = ApplyFlatField(corrected, corrections.near_lights->Rows(first_row, rows));

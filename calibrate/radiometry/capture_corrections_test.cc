@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "core/error.h"
@@ -64,9 +67,13 @@ Image Dark(int width, int height) {
 
 // Every correction acts on a pixel alone (the near lamps' normalisation is the whole field's),
 // so bands of any height give the rows of the whole capture corrected at once, bit for bit.
-void ExpectBandsEqualTheWhole(const PhotometricSet& set, const CaptureCorrections& corrections) {
-  const PhotometricSet whole = CorrectCaptureBand(set, 0, set.height(), corrections);
+// `make` gives the corrections afresh for each pass (a flat-field folder is read in row order).
+void ExpectBandsEqualTheWhole(const PhotometricSet& set,
+                              const std::function<CaptureCorrections()>& make) {
+  CaptureCorrections once = make();
+  const PhotometricSet whole = CorrectCaptureBand(set, 0, set.height(), once);
   for (int rows : {1, 3, 5}) {
+    CaptureCorrections corrections = make();
     for (int first = 0; first < set.height(); first += rows) {
       const int count = std::min(rows, set.height() - first);
       const PhotometricSet band =
@@ -89,28 +96,72 @@ void ExpectBandsEqualTheWhole(const PhotometricSet& set, const CaptureCorrection
 
 TEST(CaptureCorrectionsTest, BandsOfResponseDarkAndNearLampsEqualTheWholeCapture) {
   const PhotometricSet set = Capture();
-  CaptureCorrections corrections;
-  corrections.response = ResponseCurve::Srgb(3, 256);
-  corrections.dark = Dark(set.width(), set.height());
-  corrections.near_lights.emplace(Lamps(set), set.width(), set.height(), set.channels());
-  ExpectBandsEqualTheWhole(set, corrections);
+  const auto make = [&] {
+    CaptureCorrections corrections;
+    corrections.response = ResponseCurve::Srgb(3, 256);
+    corrections.dark = Dark(set.width(), set.height());
+    corrections.near_lights.emplace(Lamps(set), set.width(), set.height(), set.channels());
+    return corrections;
+  };
+  ExpectBandsEqualTheWhole(set, make);
   // The corrections did something: the near lamps' fall-off is divided out.
+  CaptureCorrections corrections = make();
   const PhotometricSet whole = CorrectCaptureBand(set, 0, set.height(), corrections);
   EXPECT_NE(whole.image(0).at(0, 0, 0), set.image(0).at(0, 0, 0));
 }
 
-TEST(CaptureCorrectionsTest, BandsOfATargetsFlatFieldEqualTheWholeCapture) {
-  const PhotometricSet set = Capture();
+// A target's gain maps as SaveFlatField writes them, with values that differ per light, pixel
+// and channel.
+std::filesystem::path SaveGains(const PhotometricSet& set, const std::string& name) {
   std::vector<Image> gains;
   for (int i = 0; i < set.size(); ++i) {
     Image gain(set.width(), set.height(), set.channels());
-    for (float& v : gain.values()) v = 0.5f + 0.01f * static_cast<float>(i);
-    gain.at(3, 4, 1) = 2.0f;
+    for (int c = 0; c < set.channels(); ++c) {
+      for (int y = 0; y < set.height(); ++y) {
+        for (int x = 0; x < set.width(); ++x) {
+          gain.at(x, y, c) = 0.5f + 0.01f * static_cast<float>(i + x + 2 * y + 3 * c);
+        }
+      }
+    }
     gains.push_back(std::move(gain));
   }
+  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / name;
+  std::filesystem::remove_all(folder);
+  SaveFlatField(folder, FlatField(std::move(gains), set.lights()));
+  return folder;
+}
+
+TEST(CaptureCorrectionsTest, BandsOfATargetsFlatFieldEqualTheWholeCapture) {
+  const PhotometricSet set = Capture();
+  const std::filesystem::path folder = SaveGains(set, "capture_corrections_flat");
+  ExpectBandsEqualTheWhole(set, [&] {
+    CaptureCorrections corrections;
+    corrections.flat_field.emplace(folder);
+    corrections.dark = Dark(set.width(), set.height());
+    return corrections;
+  });
+  // The gains read band by band are the whole field's (LoadFlatField), and they were divided out.
   CaptureCorrections corrections;
-  corrections.flat_field.emplace(std::move(gains), set.lights());
-  ExpectBandsEqualTheWhole(set, corrections);
+  corrections.flat_field.emplace(folder);
+  const PhotometricSet corrected = CorrectCaptureBand(set, 0, set.height(), corrections);
+  const FlatField whole = LoadFlatField(folder);
+  EXPECT_FLOAT_EQ(corrected.image(5).at(7, 9, 2),
+                  set.image(5).at(7, 9, 2) / whole.gain(5).at(7, 9, 2));
+}
+
+// The flat-field's rows are read in order: a band that skips or repeats rows is refused.
+TEST(CaptureCorrectionsTest, BandsOutOfOrderAreRefusedWithAFlatField) {
+  const PhotometricSet set = Capture();
+  CaptureCorrections corrections;
+  corrections.flat_field.emplace(SaveGains(set, "capture_corrections_order"));
+  CorrectCaptureBand(Band(set, 0, 4), 0, set.height(), corrections);
+  try {
+    CorrectCaptureBand(Band(set, 6, 4), 6, set.height(), corrections);
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), testing::HasSubstr("rows from 6 corrected after the flat-field's "
+                                                 "rows up to 4"));
+  }
 }
 
 // A band's rows of a dark frame or flat-field of another height would fit the band: the whole

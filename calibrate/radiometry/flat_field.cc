@@ -316,7 +316,7 @@ void SaveFlatField(const fs::path& folder, const FlatField& flat_field) {
   WriteJsonFile(folder / kFlatFieldFile, json);
 }
 
-FlatField LoadFlatField(const fs::path& path) {
+FlatFieldBandReader::FlatFieldBandReader(const fs::path& path) {
   const fs::path file = fs::is_directory(path) ? path / kFlatFieldFile : path;
   const nlohmann::json json = ReadJsonFile(file);
   const JsonReader reader(json, file);
@@ -324,24 +324,39 @@ FlatField LoadFlatField(const fs::path& path) {
     reader["format"].Fail(fmt::format("expected \"{}\"", kFlatFieldFormat));
   }
   const JsonReader entries = reader["gains"];
-  std::vector<Image> gains;
-  std::vector<LightDirection> lights;
   for (std::size_t i = 0; i < entries.ArraySize(); ++i) {
     const JsonReader entry = entries[i];
     const std::vector<double> l = entry["light"].Numbers();
     if (l.size() != 3) entry["light"].Fail("expected an array of 3 numbers");
     try {
-      lights.push_back(LightDirection::FromVector(l[0], l[1], l[2]));
+      lights_.push_back(LightDirection::FromVector(l[0], l[1], l[2]));
     } catch (const Error& e) {
       entry["light"].Fail(e.fault());
     }
-    gains.push_back(ReadImage(file.parent_path() / entry["file"].String()).image);
-    if (!gains.back().SameShape(gains.front())) {
+    readers_.emplace_back(file.parent_path() / entry["file"].String());
+    const ImageBandReader& first = readers_.front();
+    const ImageBandReader& gain = readers_.back();
+    if (gain.width() != first.width() || gain.height() != first.height() ||
+        gain.channels() != first.channels()) {
       entry["file"].Fail("the gain maps differ in size or channel count");
     }
   }
-  if (gains.empty()) reader["gains"].Fail("no gain maps");
-  return FlatField(std::move(gains), std::move(lights));
+  if (readers_.empty()) reader["gains"].Fail("no gain maps");
+}
+
+FlatField FlatFieldBandReader::ReadNext(int rows) {
+  std::vector<Image> gains(readers_.size());
+  tbb::parallel_for(std::size_t{0}, readers_.size(), [&](std::size_t i) {
+    Image band(width(), rows, channels());
+    readers_[i].ReadNext(band.View());
+    gains[i] = std::move(band);
+  });
+  return FlatField(std::move(gains), lights_);
+}
+
+FlatField LoadFlatField(const fs::path& path) {
+  FlatFieldBandReader reader(path);
+  return reader.ReadNext(reader.height());
 }
 
 }  // namespace photomat

@@ -7,6 +7,7 @@
 
 #include "calibrate/radiometry/near_light.h"
 #include "core/image.h"
+#include "core/image_band_io.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
 #include "core/progress.h"
@@ -101,7 +102,36 @@ PhotometricSet ApplyFlatField(const PhotometricSet& set, const FlatField& flat_f
 // A folder with flatfield.json and one half-float EXR per light (gain_000.exr, ...), written
 // atomically file by file.
 void SaveFlatField(const std::filesystem::path& folder, const FlatField& flat_field);
-// Reads a folder (or its flatfield.json). Throws Error naming the file at fault.
+
+// A flat-field folder (SaveFlatField's) read band by band, in row order: what a streamed
+// `calibrate apply` holds instead of the whole field, whose gain maps (one per light, each of the
+// capture's size) are as large as the capture itself. Every gain map is opened once (an
+// ImageBandReader each, core/image_band_io.h); ReadNext decodes the next rows of every one, in
+// parallel. The rows equal LoadFlatField's, which is this reader with one band.
+class FlatFieldBandReader {
+ public:
+  // Reads the folder's flatfield.json (or `path` itself when it is that file) and opens its gain
+  // maps. Throws Error naming the file at fault: a malformed description, a gain map missing or
+  // unreadable, gain maps of different sizes or channel counts.
+  explicit FlatFieldBandReader(const std::filesystem::path& path);
+
+  int size() const { return static_cast<int>(readers_.size()); }
+  int width() const { return readers_.front().width(); }
+  int height() const { return readers_.front().height(); }
+  int channels() const { return readers_.front().channels(); }
+  const std::vector<LightDirection>& lights() const { return lights_; }
+  // The first row the next ReadNext reads.
+  int next_row() const { return readers_.front().next_row(); }
+  // The next `rows` rows of every gain map. Throws Error naming the gain map at fault (rows past
+  // its end, a file truncated or corrupt there).
+  FlatField ReadNext(int rows);
+
+ private:
+  std::vector<ImageBandReader> readers_;
+  std::vector<LightDirection> lights_;
+};
+
+// Reads a folder (or its flatfield.json) whole. Throws Error naming the file at fault.
 FlatField LoadFlatField(const std::filesystem::path& path);
 
 }  // namespace photomat
