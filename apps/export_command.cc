@@ -1,16 +1,19 @@
 #include "apps/export_command.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <functional>
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "capture/io/streamed_set.h"
 #include "core/colour.h"
 #include "core/disk_space.h"
 #include "core/error.h"
 #include "core/memory_limits.h"
+#include "core/scratch_folder.h"
 #include "relight/export/export.h"
 #include "relight/export/streamed_interchange.h"
 #include "relight/formats/compact_stack.h"
@@ -24,6 +27,7 @@
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
 #include "represent/stack/stack_band_reader.h"
+#include "represent/streaming/streamed_fit.h"
 
 namespace photomat::app {
 namespace {
@@ -211,36 +215,55 @@ void WriteMapsStreamed(const ExportCommandOptions& options, StackBandReader& sta
       options.out.string(), description["normals"]["source"].get<std::string>(), report.band_rows);
 }
 
-// The .ptm and .rti files of a stack read in bands (ExportPtmStreamed, ExportRtiStreamed).
-void WriteInterchangeFilesStreamed(const ExportCommandOptions& options, StackBandReader& stack) {
-  const Representation& r = stack.header().representation;
+std::filesystem::path FolderOf(const std::filesystem::path& file) {
+  return file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+}
+
+StreamedInterchangeOptions InterchangeOptions(const ExportCommandOptions& options,
+                                              Progress& progress) {
   StreamedInterchangeOptions streamed;
   // Without --memory the bands take DefaultBandBudget's few tens of MB, not the whole budget.
   streamed.memory_bytes = options.memory_mb << 20;
-  TerminalProgressBar bar;
-  streamed.progress = &bar;
+  streamed.progress = &progress;
+  return streamed;
+}
+
+// --ptm of a stack read in bands (ExportPtmStreamed), as `method`.
+void WritePtmFileStreamed(const ExportCommandOptions& options, StackBandReader& stack,
+                          const Method& method) {
   const std::size_t pixels = static_cast<std::size_t>(stack.width()) * stack.height();
-  const auto folder = [](const std::filesystem::path& file) {
-    return file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
-  };
+  // At most 18 bytes per pixel (RGB) and the header.
+  CheckDiskSpace(FolderOf(options.ptm), pixels * 18 + kImageFileOverhead, "the .ptm file");
+  TerminalProgressBar bar;
   StreamedInterchangeReport report;
+  const PtmFile ptm =
+      ExportPtmStreamed(stack, options.ptm, method, InterchangeOptions(options, bar), &report);
+  fmt::print("wrote {} ({}, {}x{}; streamed in bands of {} rows)\n", options.ptm.string(),
+             ToString(ptm.format), ptm.width, ptm.height, report.band_rows);
+}
+
+// --rti of a stack read in bands (ExportRtiStreamed), as `method`.
+void WriteRtiFileStreamed(const ExportCommandOptions& options, StackBandReader& stack,
+                          const Method& method) {
+  const std::size_t pixels = static_cast<std::size_t>(stack.width()) * stack.height();
+  const auto channels = static_cast<std::size_t>(stack.header().representation.output_channels());
+  CheckDiskSpace(FolderOf(options.rti), pixels * 16 * channels + kImageFileOverhead,
+                 "the .rti file");
+  TerminalProgressBar bar;
+  StreamedInterchangeReport report;
+  const RtiFile rti =
+      ExportRtiStreamed(stack, options.rti, method, InterchangeOptions(options, bar), &report);
+  fmt::print("wrote {} (HSH, {} terms, {}x{}; streamed in bands of {} rows)\n",
+             options.rti.string(), rti.terms, rti.width, rti.height, report.band_rows);
+}
+
+// The .ptm and .rti files of a stack read in bands.
+void WriteInterchangeFilesStreamed(const ExportCommandOptions& options, StackBandReader& stack) {
+  const Representation& r = stack.header().representation;
   if (!options.ptm.empty()) {
-    const Method method = PtmMethod(options, r.method(), r.output_channels());
-    // At most 18 bytes per pixel (RGB) and the header.
-    CheckDiskSpace(folder(options.ptm), pixels * 18 + kImageFileOverhead, "the .ptm file");
-    const PtmFile ptm = ExportPtmStreamed(stack, options.ptm, method, streamed, &report);
-    fmt::print("wrote {} ({}, {}x{}; streamed in bands of {} rows)\n", options.ptm.string(),
-               ToString(ptm.format), ptm.width, ptm.height, report.band_rows);
+    WritePtmFileStreamed(options, stack, PtmMethod(options, r.method(), r.output_channels()));
   }
-  if (!options.rti.empty()) {
-    const Method method = HshMethod(options, r.method());
-    CheckDiskSpace(folder(options.rti),
-                   pixels * 16 * static_cast<std::size_t>(r.output_channels()) + kImageFileOverhead,
-                   "the .rti file");
-    const RtiFile rti = ExportRtiStreamed(stack, options.rti, method, streamed, &report);
-    fmt::print("wrote {} (HSH, {} terms, {}x{}; streamed in bands of {} rows)\n",
-               options.rti.string(), rti.terms, rti.width, rti.height, report.band_rows);
-  }
+  if (!options.rti.empty()) WriteRtiFileStreamed(options, stack, HshMethod(options, r.method()));
 }
 
 void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
@@ -368,6 +391,95 @@ void WriteViewerOfStacks(const ExportCommandOptions& options,
   WriteViewer(options, ViewerStacks(options.input, method));
 }
 
+// IMPLEMENTER CHOICE: a photometric set's .ptm, .rti and maps are made streamed, in bands, as a
+// stack's are (StreamsStack), when asked (--stream) or when holding the whole set
+// (kWholeSetBytesPerPixelImage per pixel and image) would not fit the memory budget, and nothing
+// made from the whole set's fits is asked (a viewer, relight web folder or compact form). The maps
+// then need the Poisson height, as a stack's.
+bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set) {
+  if (!options.viewer.empty() || !options.relight_web.empty() || !options.compact.empty()) {
+    return false;
+  }
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return false;
+  if (options.stream) return true;
+  if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
+    return false;
+  }
+  const double pixel_images =
+      static_cast<double>(set.width()) * static_cast<double>(set.height()) * set.size();
+  return kWholeSetBytesPerPixelImage * pixel_images > static_cast<double>(MemoryBudget(options));
+}
+
+// The streamed export of a photometric set (StreamsCapture): its photographs are fitted in bands
+// (FitStreamed) into scratch map stacks, which the stacks' streamed exports read: the encoded
+// fits the .ptm and .rti are made from (FitEncoded's domain: `encoded_values`, provenance "srgb",
+// which ExportPtmStreamed and ExportRtiStreamed take as they are) in one pass over the
+// photographs, the linear fit the maps come from in another. IMPLEMENTER CHOICE: scratch stacks
+// rather than a fit per pass of the exports: a .ptm takes two passes (the coefficients' ranges,
+// then the bytes) and decoding the photographs costs several times reading a float stack back.
+// The scratch folder is beside the first output (on its disk, whose free space is checked) and is
+// removed at the end, however the export ends. The files equal the in-memory export's to float
+// rounding (a fit's matrix product rounds by band, streamed_interchange.h), so a quantised
+// coefficient may differ by one code.
+void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set) {
+  if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
+    // Refused before minutes of fitting, as ExportMapsStreamed would after them.
+    throw Error(options.input,
+                "a streamed export integrates the height by tiled Poisson only (--height fc "
+                "needs the whole map in memory)");
+  }
+  std::vector<Method> encoded;
+  if (!options.ptm.empty()) encoded.push_back(PtmMethod(options, "", set.channels()));
+  if (!options.rti.empty()) encoded.push_back(HshMethod(options, ""));
+  const std::filesystem::path beside = FolderOf(!options.out.empty()   ? options.out
+                                                : !options.ptm.empty() ? options.ptm
+                                                                       : options.rti);
+  CreateFolder(beside);
+  const ScratchFolder scratch(beside, "photomat-export");
+  TerminalProgressBar bar;
+  bool warned = false;
+  const auto fit_into_scratch = [&](const std::vector<Method>& methods, bool encoded_values) {
+    StreamedFitOptions fit;
+    fit.memory_bytes = options.memory_mb << 20;
+    fit.encoded_values = encoded_values;
+    const std::size_t pixels = static_cast<std::size_t>(set.width()) * set.height();
+    fit.compression = FittedStackCompression("auto", set.SelectedPixels(0, set.height()) < pixels);
+    fit.provenance = {set.lights(), encoded_values ? "srgb" : "linear", options.input.string(),
+                      set.encodings()};
+    fit.progress = &bar;
+    CheckDiskSpace(scratch.path(), StreamedStackBytes(set, methods), "the scratch map stacks");
+    std::vector<std::filesystem::path> paths;
+    for (const Method& method : methods) paths.push_back(scratch.path() / (method.Name() + ".exr"));
+    const StreamedFitReport report = FitStreamed(set, methods, paths, fit);
+    if (!warned) WarnAboutClippedPixels(report.saturated_pixels, set.image_names());
+    warned = true;
+    std::vector<std::string> names;
+    for (const Method& method : methods) names.push_back(method.Name());
+    fmt::print("fitted {} to the {} photographs ({}) in bands of {} of {} rows\n",
+               fmt::join(names, ", "), set.size(), encoded_values ? "sRGB-encoded" : "linear",
+               report.band_rows, set.height());
+    return paths;
+  };
+  if (!encoded.empty()) {
+    const std::vector<std::filesystem::path> stacks = fit_into_scratch(encoded, true);
+    std::size_t next = 0;
+    if (!options.ptm.empty()) {
+      StackBandReader stack(stacks[next]);
+      WritePtmFileStreamed(options, stack, encoded[next++]);
+    }
+    if (!options.rti.empty()) {
+      StackBandReader stack(stacks[next]);
+      WriteRtiFileStreamed(options, stack, encoded[next]);
+    }
+  }
+  if (!options.out.empty()) {
+    const std::vector<std::filesystem::path> stacks = fit_into_scratch(
+        {Method::Parse(options.method.empty() ? "gradient" : options.method)}, false);
+    StackBandReader stack(stacks.front());
+    WriteMapsStreamed(options, stack);
+  }
+}
+
 void RunExport(const ExportCommandOptions& options) {
   if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty() &&
       options.relight_web.empty() && options.compact.empty()) {
@@ -417,6 +529,13 @@ void RunExport(const ExportCommandOptions& options) {
   if (!options.colour_space.empty()) {
     load.untagged_colour_space = ParseColourSpace(options.colour_space);
     if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
+  }
+  {
+    StreamedSet set = OpenStreamedSet(options.input, load);
+    if (StreamsCapture(options, set)) {
+      ExportCaptureStreamed(options, set);
+      return;
+    }
   }
   const LoadedSet loaded = LoadSetForCommand(options.input, load);
   if (!options.viewer.empty()) {
@@ -524,14 +643,17 @@ void AddExportCommand(CLI::App& app) {
                     "costs more than the tiles themselves)");
   command->add_option(
       "--memory", options->memory_mb,
-      fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); a stack whose "
-                  "export does not fit is exported streamed, in bands (default: half the "
+      fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); a stack or "
+                  "photometric set whose export does not fit is exported streamed, in bands "
+                  "(default: half the "
                   "physical memory or of this process's memory limits, here {} MB, of which "
                   "streamed bands take {} MB)",
                   DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
   command->add_flag("--stream", options->stream,
-                    "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size "
-                    "(height by tiled Poisson; not for --height fc or --relight-web)");
+                    "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size; "
+                    "a photometric set's are fitted in bands into scratch stacks beside the "
+                    "outputs first (height by tiled Poisson; not for --height fc, --relight-web, "
+                    "--compact or a set's --viewer)");
   command->callback([options] { RunExport(*options); });
 }
 

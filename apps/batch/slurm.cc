@@ -8,6 +8,7 @@
 #include <cmath>
 #include <csignal>
 
+#include "capture/io/load_photometric_set.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
@@ -21,7 +22,8 @@ namespace fs = std::filesystem;
 // A task never measured needs what its largest step needs. Every step needs kBaseBytes, the
 // resident size of a photomat process before it reads a capture (measured: 148 MB for
 // `photomat --version`), and then:
-// - a step that holds the whole set (StepHoldsWholeSet): kBytesPerPixelImage x pixels x images,
+// - a step that holds the whole set (StepHoldsWholeSet): kWholeSetBytesPerPixelImage
+//   (capture/io/load_photometric_set.h) x pixels x images,
 //   what in-memory fitting and evaluation add per pixel and image (the test recipe's measured
 //   peaks: 150 MB at 32 x 24 x 36, 198 MB at 192 x 192 x 36, i.e. 36 bytes; 40 with a little
 //   room);
@@ -39,7 +41,6 @@ namespace fs = std::filesystem;
 //   4096 x 3072 for PTM, 217; 600 covers about 65 maps).
 // The request adds --mem-margin on top.
 constexpr std::int64_t kBaseBytes = 150LL << 20;
-constexpr double kBytesPerPixelImage = 40.0;
 constexpr std::int64_t kStreamedStepBytes = 256LL << 20;
 constexpr double kStreamedBytesPerPixel = 32.0;
 constexpr double kInMemoryViewerBytesPerPixel = 600.0;
@@ -47,7 +48,8 @@ constexpr std::size_t kMaxArrayIndices = 1000;
 
 double StepNeedBytes(const TaskStep& step, const Task& task) {
   const auto pixels = static_cast<double>(task.pixels);
-  if (StepHoldsWholeSet(step)) return kBytesPerPixelImage * static_cast<double>(task.pixel_images);
+  if (StepHoldsWholeSet(step))
+    return kWholeSetBytesPerPixelImage * static_cast<double>(task.pixel_images);
   if (step.name == "viewer" &&
       task.pixels <= static_cast<std::uint64_t>(kViewerTilingThresholdPixels)) {
     return kInMemoryViewerBytesPerPixel * pixels;

@@ -85,16 +85,17 @@ std::string TaskHash(const Task& task) {
 bool StepHoldsWholeSet(const TaskStep& step) {
   if (step.name == "fit") return false;
   if (step.name == "calibrate") {
-    // Streamed, but semi-calibrated intensities are estimated from the whole capture, and a
-    // target's flat-field holds a gain map per light.
-    return std::any_of(step.arguments.begin(), step.arguments.end(), [](const std::string& a) {
-      return a == "--semi-calibrated" || a == "--flat-field";
-    });
+    // Streamed (a target's gain maps too), but semi-calibrated intensities are estimated from the
+    // whole capture.
+    return std::find(step.arguments.begin(), step.arguments.end(), "--semi-calibrated") !=
+           step.arguments.end();
   }
   if (step.name == "maps" || step.name == "viewer") {
     return step.arguments.size() < 2 || step.arguments[1] != kStacksFolder;
   }
-  return true;
+  // export --stream fits the photographs in bands (the interchange files).
+  return std::find(step.arguments.begin(), step.arguments.end(), "--stream") ==
+         step.arguments.end();
 }
 
 std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
@@ -123,8 +124,9 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
   }
   if (exports.ptm || exports.rti) {
     // From the photographs, not the stack: .ptm/.rti are fitted to the encoded values as
-    // PTMfitter and RTIBuilder do (README, "Interchange files and exports").
-    std::vector<std::string> arguments{"export", input};
+    // PTMfitter and RTIBuilder do (README, "Interchange files and exports"); streamed, so that
+    // the task's memory does not grow with the capture.
+    std::vector<std::string> arguments{"export", input, "--stream"};
     if (exports.ptm) {
       Append(arguments, {"--ptm", capture.name + ".ptm"});
       if (!exports.ptm->empty()) Append(arguments, {"--ptm-format", *exports.ptm});

@@ -39,11 +39,11 @@ struct Task {
 };
 
 // Whether `step` holds every image of its capture in memory at once (or as much), so that its
-// memory grows with pixels x images: calibrate with semi-calibrated intensities or a target's
-// flat-field (a gain map per light), the fits of the photographs for .ptm and .rti
-// (interchange), evaluate, and maps or a viewer made from the capture. The other steps stream in
-// bands (README "Streamed fitting", "Streamed relighting and export", "Calibration"): their
-// memory does not grow with the number of images.
+// memory grows with pixels x images: calibrate with semi-calibrated intensities, evaluate, and
+// maps or a viewer made from the capture. The
+// other steps stream in bands (README "Streamed fitting", "Streamed relighting and export",
+// "Calibration"), among them an export with --stream (the interchange files, fitted to the
+// photographs in bands): their memory does not grow with the number of images.
 bool StepHoldsWholeSet(const TaskStep& step);
 
 struct PlanOptions {

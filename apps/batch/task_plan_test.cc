@@ -65,8 +65,8 @@ TEST_F(TaskPlanTest, StepsAreThePhotomatCommandLinesOfTheRecipe) {
   EXPECT_EQ(task.steps[2].arguments,
             (Arguments{"export", "stacks", "--method", "ptm", "--out", "maps",
                        "--normal-convention", "directx", "--height", "poisson", "--no-gltf"}));
-  EXPECT_EQ(task.steps[3].arguments, (Arguments{"export", "calibrated", "--ptm", "c1.ptm", "--rti",
-                                                "c1.rti", "--hsh-terms", "4"}));
+  EXPECT_EQ(task.steps[3].arguments, (Arguments{"export", "calibrated", "--stream", "--ptm",
+                                                "c1.ptm", "--rti", "c1.rti", "--hsh-terms", "4"}));
   EXPECT_EQ(task.steps[4].arguments, (Arguments{"export", "stacks", "--viewer", "viewer"}));
   EXPECT_EQ(task.steps[5].arguments,
             (Arguments{"evaluate", "calibrated", "--methods", "gradient,ptm", "--json",
@@ -132,16 +132,15 @@ TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
   const TaskPlan plan = PlanTasks(Parse(json), options);
   EXPECT_EQ(plan.tasks[0].pixels, 20u * 20u);
   EXPECT_EQ(plan.tasks[0].pixel_images, 20u * 20u * 36u);  // the thesis grid has 36 lights
-  EXPECT_TRUE(plan.tasks[0].large);           // its .ptm, .rti and evaluation hold the whole set
+  EXPECT_TRUE(plan.tasks[0].large);                        // its evaluation holds the whole set
   EXPECT_EQ(plan.tasks[1].pixel_images, 0u);  // an empty folder: unknown, its task will say why
   EXPECT_FALSE(plan.tasks[1].large);
   fs::create_directories(dir_ / "written");
   WriteTaskPlan(dir_ / "written", plan);
   EXPECT_EQ(ReadTaskPlan(dir_ / "written").tasks[0].pixels, 20u * 20u);
 
-  // Only streamed steps (the fit, maps and viewer from the stacks): not large at any size.
-  json["exports"].erase("ptm");
-  json["exports"].erase("rti");
+  // Only streamed steps (the fit, maps and viewer from the stacks, the .ptm and .rti fitted in
+  // bands): not large at any size.
   json["exports"].erase("evaluation");
   const TaskPlan streamed = PlanTasks(Parse(json), options);
   EXPECT_EQ(streamed.tasks[0].pixel_images, 20u * 20u * 36u);
@@ -158,16 +157,16 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
     return names;
   };
   nlohmann::json json = Full();
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("calibrate", "interchange", "evaluate"));
+  // The interchange files are fitted to the photographs in bands (export --stream).
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("calibrate", "evaluate"));
   // Without stacks, maps and viewer are made from the capture, in memory.
   json["exports"]["stacks"] = false;
-  EXPECT_THAT(whole_set_steps(json),
-              ElementsAre("calibrate", "maps", "interchange", "viewer", "evaluate"));
-  // calibrate apply streams unless it estimates semi-calibrated intensities or divides by a
-  // target's flat-field (a gain map per light).
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("calibrate", "maps", "viewer", "evaluate"));
+  // calibrate apply streams (a target's flat-field read band by band too) unless it estimates
+  // semi-calibrated intensities.
   json = Full();
-  json["calibration"] = {{"dark", "flat"}};
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("interchange", "evaluate"));
+  json["calibration"] = {{"dark", "flat"}, {"flat_field", "flat"}};
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
 }
 
 TEST(ShellCommandTest, QuotesWhatAShellWouldSplitOrExpand) {

@@ -46,6 +46,12 @@ struct LoadOptions {
   Progress* progress = nullptr;
 };
 
+// Peak bytes per pixel per image of a command that holds a whole loaded set (its images as float,
+// their copy for fitting, the fit's maps): measured 36 (apps/batch/slurm.cc); 40 with a margin.
+// What decides whether a command streams instead (`photomat export`) and what a batch task that
+// holds a set asks Slurm for.
+inline constexpr double kWholeSetBytesPerPixelImage = 40.0;
+
 struct LoadedSet {
   PhotometricSet set;
   InputKind kind;

@@ -1,6 +1,7 @@
 #include "represent/streaming/streamed_fit.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <numeric>
 
 #include "calibrate/radiometry/exposure.h"
+#include "core/colour.h"
 #include "core/disk_space.h"
 #include "core/error.h"
 #include "core/memory_limits.h"
@@ -27,6 +29,14 @@ std::vector<int> AllImages(int count) {
   std::vector<int> all(static_cast<std::size_t>(count));
   std::iota(all.begin(), all.end(), 0);
   return all;
+}
+
+// Each value re-encoded with the sRGB curve, as FitEncoded encodes the in-memory set's images
+// (the same bits per value).
+void EncodeSrgb(Eigen::MatrixXf& matrix) {
+  tbb::parallel_for(Eigen::Index{0}, matrix.cols(), [&](Eigen::Index column) {
+    for (float& v : matrix.col(column)) v = static_cast<float>(LinearToSrgb(v));
+  });
 }
 
 // Maps of a method's stack (an upper bound for pbr): what a band's maps of it hold per pixel.
@@ -176,6 +186,7 @@ class Streamer {
         }
       }
     }
+    if (options_.encoded_values) EncodeSrgb(matrix);
     if (indices.empty()) {
       band.observations.emplace(std::move(matrix), width, rows, channels);
     } else {
@@ -377,6 +388,9 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
       throw Error(set.source(), fmt::format("{} needs at least {} images; the set has {}",
                                             method.Name(), method.MinimumImages(), set.size()));
     }
+  }
+  if (options.encoded_values && options.robust) {
+    throw Error(set.source(), "robust fits are of linear values, not of sRGB-encoded ones");
   }
   Streamer streamer(set, methods, options);
   const int n = set.size();

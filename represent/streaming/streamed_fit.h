@@ -39,6 +39,10 @@ struct StreamedFitOptions {
   // > 0: exactly this many rows per band, whatever the budget (tests of band independence).
   int band_rows = 0;
   bool robust = false;
+  // Fit the sRGB-encoded values (each linear value, its intensity divided out, re-encoded with
+  // the sRGB curve), as FitEncoded (relight/formats/interchange.h) does in memory: the domain of
+  // the .ptm and .rti files. Least squares only; the stacks' provenance should then say "srgb".
+  bool encoded_values = false;
   // For robust fits. `measured` and `progress` are ignored: the measured masks are found per band
   // on the values as captured (MeasuredPixelMasks), before the intensities are applied.
   RobustFitOptions robust_options;

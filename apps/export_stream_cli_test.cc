@@ -1,0 +1,217 @@
+// `photomat export` of a photometric set streams (README, "Streamed relighting and export",
+// "From the photographs"): the set is fitted in bands into scratch stacks, exported from them and
+// the scratch removed. These run the built executable.
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/image_io.h"
+#include "core/json_file.h"
+#include "relight/formats/ptm_file.h"
+#include "relight/formats/rti_file.h"
+#include "tests/support/layouts.h"
+#include "tests/support/test_support.h"
+
+namespace photomat {
+namespace {
+
+namespace fs = std::filesystem;
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+using testing::RunPhotomat;
+using testing::RunResult;
+using testing::TempDir;
+
+// Names in `folder`, hidden ones (a scratch folder) included.
+std::vector<std::string> EntriesOf(const fs::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// How two files' quantised planes differ: the largest difference of a byte, and the fraction of
+// bytes that differ.
+struct PlaneDifference {
+  int largest = 0;
+  double fraction = 0.0;
+};
+
+PlaneDifference ComparePlanes(const std::vector<std::vector<std::uint8_t>>& a,
+                              const std::vector<std::vector<std::uint8_t>>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  PlaneDifference difference;
+  std::size_t differing = 0, total = 0;
+  for (std::size_t p = 0; p < std::min(a.size(), b.size()); ++p) {
+    EXPECT_EQ(a[p].size(), b[p].size());
+    for (std::size_t i = 0; i < std::min(a[p].size(), b[p].size()); ++i) {
+      const int d = std::abs(static_cast<int>(a[p][i]) - static_cast<int>(b[p][i]));
+      difference.largest = std::max(difference.largest, d);
+      differing += d != 0 ? 1 : 0;
+      ++total;
+    }
+  }
+  difference.fraction = total > 0 ? static_cast<double>(differing) / static_cast<double>(total) : 0;
+  return difference;
+}
+
+// The streamed .ptm against the in-memory one: the same header to float rounding and the same
+// bytes but for a rare one-code step (the fits round by band, README "From the photographs").
+void ExpectSamePtm(const fs::path& streamed_path, const fs::path& whole_path) {
+  const PtmFile streamed = ReadPtmFile(streamed_path), whole = ReadPtmFile(whole_path);
+  EXPECT_EQ(streamed.format, whole.format);
+  EXPECT_EQ(streamed.width, whole.width);
+  EXPECT_EQ(streamed.height, whole.height);
+  for (std::size_t j = 0; j < whole.scale.size(); ++j) {
+    EXPECT_NEAR(streamed.scale[j], whole.scale[j], 1e-4 * std::abs(whole.scale[j])) << j;
+    EXPECT_NEAR(streamed.bias[j], whole.bias[j], 1) << j;
+  }
+  const PlaneDifference difference = ComparePlanes(streamed.planes, whole.planes);
+  std::printf("%s vs in memory: largest byte difference %d, %.3g%% of the bytes differ\n",
+              streamed_path.filename().c_str(), difference.largest, 100 * difference.fraction);
+  // Measured: identical files (no byte differs) at 96 x 80 in bands of 1 row and at 1536 x 1536
+  // in bands of 36. The bounds allow what float rounding by band can make (README "From the
+  // photographs"): one-code steps, each needing a coefficient within rounding of a quantisation
+  // boundary, on at most 0.1 % of the bytes.
+  EXPECT_LE(difference.largest, 1);
+  EXPECT_LE(difference.fraction, 0.001);
+}
+
+void ExpectSameRti(const fs::path& streamed_path, const fs::path& whole_path) {
+  const RtiFile streamed = ReadRtiFile(streamed_path), whole = ReadRtiFile(whole_path);
+  EXPECT_EQ(streamed.terms, whole.terms);
+  EXPECT_EQ(streamed.width, whole.width);
+  EXPECT_EQ(streamed.height, whole.height);
+  ASSERT_EQ(streamed.scale.size(), whole.scale.size());
+  for (std::size_t j = 0; j < whole.scale.size(); ++j) {
+    EXPECT_NEAR(streamed.scale[j], whole.scale[j], 1e-4 * std::abs(whole.scale[j])) << j;
+    EXPECT_NEAR(streamed.bias[j], whole.bias[j], 1e-4 * std::abs(whole.scale[j])) << j;
+  }
+  const PlaneDifference difference = ComparePlanes(streamed.planes, whole.planes);
+  std::printf("%s vs in memory: largest byte difference %d, %.3g%% of the bytes differ\n",
+              streamed_path.filename().c_str(), difference.largest, 100 * difference.fraction);
+  EXPECT_LE(difference.largest, 1);  // as ExpectSamePtm
+  EXPECT_LE(difference.fraction, 0.001);
+}
+
+// A set exported streamed, in bands of a few rows (--stream, --memory 1), writes what the
+// in-memory export writes: .ptm (LRGB) and .rti (HSH9) to within one code, the normal and albedo
+// maps to float rounding; and leaves no scratch folder.
+TEST(ExportStreamCliTest, ASetExportedStreamedEqualsTheInMemoryExport) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(
+      RunPhotomat("generate --out " + capture + " --size 96x80 --pattern bumps --seed 8").exit_code,
+      0);
+  fs::create_directories(dir / "whole");
+  fs::create_directories(dir / "streamed");
+  const auto files = [&](const std::string& folder) {
+    return " --ptm " + (dir / folder / "c.ptm").string() + " --rti " +
+           (dir / folder / "c.rti").string() + " --out " + (dir / folder / "maps").string();
+  };
+  const RunResult whole = RunPhotomat("export " + capture + files("whole"));
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  EXPECT_THAT(whole.output, Not(HasSubstr("streamed")));
+  const RunResult streamed =
+      RunPhotomat("export " + capture + " --stream --memory 1" + files("streamed"));
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  std::printf("%s", streamed.output.c_str());
+  // Two passes over the photographs, each in several bands: the encoded PTM and HSH fits, then
+  // the linear Gradient fit.
+  EXPECT_THAT(streamed.output, HasSubstr("fitted ptm-lrgb, hsh9 to the 36 photographs "
+                                         "(sRGB-encoded) in bands of"));
+  EXPECT_THAT(streamed.output, HasSubstr("fitted gradient to the 36 photographs (linear)"));
+  EXPECT_THAT(streamed.output, Not(HasSubstr("bands of 80 of 80 rows")));
+  EXPECT_THAT(streamed.output, HasSubstr("height by tiled Poisson"));
+  ExpectSamePtm(dir / "streamed" / "c.ptm", dir / "whole" / "c.ptm");
+  ExpectSameRti(dir / "streamed" / "c.rti", dir / "whole" / "c.rti");
+  for (const char* map : {"normal.png", "albedo.png"}) {
+    const Image a = ReadImage(dir / "streamed" / "maps" / map).image;
+    const Image b = ReadImage(dir / "whole" / "maps" / map).image;
+    ASSERT_TRUE(a.SameShape(b)) << map;
+    const double difference = testing::LargestDifferenceOverLargestValue(a, b);
+    std::printf("%s vs in memory: %.3g of the largest value\n", map, difference);
+    // 16-bit PNGs of the same fit to float rounding (measured: 0): at most one code apart.
+    EXPECT_LE(difference, 1.5 / 65535) << map;
+  }
+  EXPECT_TRUE(ReadJsonFile(dir / "streamed" / "maps" / "export.json").contains("streamed"));
+  // Nothing else beside the outputs: the scratch stacks are gone.
+  EXPECT_THAT(EntriesOf(dir / "streamed"), ::testing::ElementsAre("c.ptm", "c.rti", "maps"));
+}
+
+// A photograph truncated part-way: the streamed export fails naming it and leaves no .ptm, no
+// maps and no scratch folder.
+TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 64x256 --seed 6").exit_code, 0);
+  const fs::path victim = dir / "capture" / "img_030.png";
+  fs::resize_file(victim, fs::file_size(victim) / 2);
+  fs::create_directories(dir / "out");
+  const RunResult exported =
+      RunPhotomat("export " + capture + " --stream --memory 1 --ptm " +
+                  (dir / "out" / "c.ptm").string() + " --out " + (dir / "out" / "maps").string());
+  EXPECT_EQ(exported.exit_code, 1) << exported.output;
+  EXPECT_THAT(exported.output, HasSubstr("img_030.png"));
+  EXPECT_TRUE(EntriesOf(dir / "out").empty()) << exported.output;
+}
+
+// --height fc integrates the whole map at once: a streamed export of a set refuses it before any
+// fitting, saying why.
+TEST(ExportStreamCliTest, FrankotChellappaIsRefusedBeforeFitting) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 32x24 --seed 2").exit_code, 0);
+  const RunResult exported =
+      RunPhotomat("export " + capture + " --stream --height fc --out " + (dir / "maps").string());
+  EXPECT_EQ(exported.exit_code, 1) << exported.output;
+  EXPECT_THAT(exported.output, HasSubstr("--height fc needs the whole map in memory"));
+  EXPECT_THAT(exported.output, Not(HasSubstr("fitted")));
+  EXPECT_FALSE(fs::exists(dir / "maps"));
+}
+
+// What streaming is for: under a hard address-space limit far below what holding the set needs
+// (1536 x 1536 x 36 lights x RGB: 3.4 GB at kWholeSetBytesPerPixelImage, 2.04 GB for the images
+// as float and their copy alone), `export --ptm --rti` streams by itself (the whole set does not
+// fit the default budget) and writes what the in-memory export writes without the limit; the
+// in-memory export (a budget it cannot have, --memory 100000) fails under the limit.
+TEST(ExportStreamCliTest, UnderAnAddressSpaceLimitASetStreamsByItselfAndMatches) {
+  const TempDir dir;
+  const std::string lights =
+      testing::WriteLargeLambertianCapture(dir / "capture", 1536, 1536).string();
+  const std::size_t limit = std::size_t{1000} << 20;
+  const auto files = [&](const std::string& folder) {
+    fs::create_directories(dir / folder);
+    return " --ptm " + (dir / folder / "c.ptm").string() + " --rti " +
+           (dir / folder / "c.rti").string();
+  };
+  const RunResult limited = RunPhotomat("export " + lights + files("limited"), {limit});
+  ASSERT_EQ(limited.exit_code, 0) << limited.output;
+  std::printf("%s", limited.output.c_str());
+  EXPECT_THAT(limited.output, HasSubstr("in bands of"));
+  EXPECT_THAT(limited.output, Not(HasSubstr("bands of 1536 of 1536 rows")));
+  const RunResult refused =
+      RunPhotomat("export " + lights + files("refused") + " --memory 100000", {limit});
+  EXPECT_NE(refused.exit_code, 0) << refused.output;
+  EXPECT_THAT(refused.output, HasSubstr("out of memory"));
+  EXPECT_TRUE(EntriesOf(dir / "refused").empty());
+  const RunResult whole = RunPhotomat("export " + lights + files("whole") + " --memory 100000");
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  ExpectSamePtm(dir / "limited" / "c.ptm", dir / "whole" / "c.ptm");
+  ExpectSameRti(dir / "limited" / "c.rti", dir / "whole" / "c.rti");
+  EXPECT_THAT(EntriesOf(dir / "limited"), ::testing::ElementsAre("c.ptm", "c.rti"));
+}
+
+}  // namespace
+}  // namespace photomat
