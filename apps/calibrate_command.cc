@@ -348,10 +348,11 @@ void AddFlatFieldCommand(CLI::App& calibrate) {
     flat.progress = &bar;
     LoadOptions load;
     load.apply_intensities = false;  // the gains take the lamps' brightness in
-    const LoadedSet target = LoadSetForCommand(options->input, load);
-    const FlatField flat_field = EstimateFlatField(target.set, flat);
-    SaveFlatField(options->out, flat_field);
-    fmt::print("{} gain maps ({} model) -> {}\n", flat_field.size(), ToString(flat.model),
+    // One image per thread at a time, whatever the target's size (EstimateFlatFieldStreamed).
+    StreamedSet target = OpenStreamedSet(options->input, load);
+    EstimateFlatFieldStreamed(target, options->out, flat);
+    WarnAboutClippedPixels(target.SaturatedPixels(), target.image_names());
+    fmt::print("{} gain maps ({} model) -> {}\n", target.size(), ToString(flat.model),
                options->out.string());
   });
 }

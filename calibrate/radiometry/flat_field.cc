@@ -7,12 +7,16 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
+#include "capture/io/streamed_set.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/scratch_folder.h"
 
 namespace photomat {
 namespace {
@@ -89,21 +93,131 @@ cv::Mat PolynomialFit(const cv::Mat& values, const cv::Mat& mask, int degree) {
   return fitted;
 }
 
-// Normalises the gains to a mean of 1 per channel over all lights and pixels.
-void NormaliseGains(std::vector<Image>& gains) {
-  const int channels = gains.front().channels();
-  for (int c = 0; c < channels; ++c) {
+// Per channel, the sum of a gain map's values (in double, in pixel order).
+std::vector<double> ChannelSums(const Image& gain) {
+  std::vector<double> sums(static_cast<std::size_t>(gain.channels()), 0.0);
+  for (int c = 0; c < gain.channels(); ++c) {
+    for (float v : gain.plane(c)) sums[static_cast<std::size_t>(c)] += v;
+  }
+  return sums;
+}
+
+// Per channel, what makes the gains' mean 1 over all lights and pixels: `sums` holds each light's
+// ChannelSums, added here in light order, so the scales do not depend on how the gains were made
+// (all at once, or light by light in any thread order).
+std::vector<float> NormalisationScales(const std::vector<std::vector<double>>& sums,
+                                       std::size_t pixels_per_light) {
+  std::vector<float> scales(sums.front().size());
+  for (std::size_t c = 0; c < scales.size(); ++c) {
     double sum = 0.0;
-    std::size_t count = 0;
-    for (const Image& gain : gains) {
-      for (float v : gain.plane(c)) sum += v;
-      count += gain.pixel_count();
-    }
-    const auto scale = static_cast<float>(count / sum);
-    for (Image& gain : gains) {
-      for (float& v : gain.plane(c)) v *= scale;
+    for (const std::vector<double>& light : sums) sum += light[c];
+    scales[c] = static_cast<float>(static_cast<double>(pixels_per_light * sums.size()) / sum);
+  }
+  return scales;
+}
+
+void Scale(Image& gain, const std::vector<float>& scales) {
+  for (int c = 0; c < gain.channels(); ++c) {
+    for (float& v : gain.plane(c)) v *= scales[static_cast<std::size_t>(c)];
+  }
+}
+
+// What every light's gain shares: the options checked, the target's region as an OpenCV float
+// mask and, for kSmoothed, the mask's smoothed coverage.
+struct TargetRegion {
+  cv::Mat mask;
+  cv::Mat coverage;
+};
+
+TargetRegion MakeTargetRegion(const Mask& region, const FlatFieldOptions& options,
+                              const std::function<void(const std::string&)>& fail) {
+  if (options.polynomial_degree < 0 || options.polynomial_degree > 8) {
+    throw Error("the flat-field polynomial degree must be in 0..8");
+  }
+  if (!(options.smoothing_sigma > 0.0)) throw Error("the smoothing sigma must be positive");
+  TargetRegion target;
+  target.mask = cv::Mat(region.height(), region.width(), CV_32F);
+  for (int y = 0; y < region.height(); ++y) {
+    for (int x = 0; x < region.width(); ++x)
+      target.mask.at<float>(y, x) = region(x, y) ? 1.0f : 0.0f;
+  }
+  const int terms = (options.polynomial_degree + 1) * (options.polynomial_degree + 2) / 2;
+  if (static_cast<int>(region.CountSet()) < 4 * terms) {
+    fail(fmt::format("the flat-field target covers {} pixels: too few", region.CountSet()));
+  }
+  if (options.model == FlatFieldModel::kSmoothed) {
+    cv::GaussianBlur(target.mask, target.coverage, cv::Size(0, 0), options.smoothing_sigma);
+  }
+  return target;
+}
+
+void CheckTargetLights(const std::vector<LightDirection>& lights,
+                       const std::vector<std::string>& names,
+                       const std::function<void(const std::string&)>& fail) {
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    if (lights[i].z() < kMinimumLightZ) {
+      fail(fmt::format("{}: the light is at the horizon (z = {:.3f}); no flat-field", names[i],
+                       lights[i].z()));
     }
   }
+}
+
+// A light's gain before the normalisation, from its target image alone: the target's values over
+// the region (polynomial or smoothed) divided by the light's z. `fault` gets the first dark pixel
+// (a flat-field needs the target lit everywhere); empty when there is none.
+Image UnnormalisedGain(ConstImageView image, double z, const TargetRegion& target,
+                       const FlatFieldOptions& options, const std::string& name,
+                       std::string& fault) {
+  const int width = image.width(), height = image.height(), channels = image.channels();
+  Image gain(width, height, channels);
+  for (int c = 0; c < channels; ++c) {
+    // The plane as an OpenCV matrix (a header on the image's storage), times the mask.
+    const cv::Mat plane(height, width, CV_32F,
+                        const_cast<float*>(image.data() + c * image.plane_stride()),
+                        static_cast<std::size_t>(image.row_stride()) * sizeof(float));
+    cv::Mat values;
+    cv::multiply(plane, target.mask, values);
+    const cv::Mat polynomial = PolynomialFit(values, target.mask, options.polynomial_degree);
+    cv::Mat smoothed;
+    if (options.model == FlatFieldModel::kSmoothed) {
+      cv::GaussianBlur(values, smoothed, cv::Size(0, 0), options.smoothing_sigma);
+    }
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        double value = polynomial.at<float>(y, x);
+        if (options.model == FlatFieldModel::kSmoothed &&
+            target.coverage.at<float>(y, x) >= kMinimumCoverage) {
+          value = smoothed.at<float>(y, x) / target.coverage.at<float>(y, x);
+        }
+        if (!(value > 0.0) && fault.empty()) {
+          fault = fmt::format(
+              "{}: the target is dark at pixel ({}, {}) in channel {} "
+              "(value {:.3g}); a flat-field needs the target lit everywhere",
+              name, x, y, c, value);
+        }
+        gain.at(x, y, c) = static_cast<float>(value / z);
+      }
+    }
+  }
+  return gain;
+}
+
+std::string GainFileName(std::size_t light) { return fmt::format("gain_{:03d}.exr", light); }
+
+void WriteGain(const fs::path& path, const Image& gain) {
+  ImageWriteOptions write;
+  write.sample_type = SampleType::kHalf;
+  WriteImage(path, gain, write);
+}
+
+// flatfield.json: the format, and each light's gain file and nominal direction.
+nlohmann::json FlatFieldDescription(const std::vector<LightDirection>& lights) {
+  nlohmann::json entries = nlohmann::json::array();
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    const Eigen::Vector3d& l = lights[i].vector();
+    entries.push_back({{"file", GainFileName(i)}, {"light", {l.x(), l.y(), l.z()}}});
+  }
+  return {{"format", kFlatFieldFormat}, {"version", 1}, {"gains", entries}};
 }
 
 }  // namespace
@@ -130,75 +244,87 @@ FlatField::FlatField(std::vector<Image> gains, std::vector<LightDirection> light
 }
 
 FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions& options) {
-  if (options.polynomial_degree < 0 || options.polynomial_degree > 8) {
-    throw Error("the flat-field polynomial degree must be in 0..8");
-  }
-  if (!(options.smoothing_sigma > 0.0)) throw Error("the smoothing sigma must be positive");
-  const int width = target.width(), height = target.height(), channels = target.channels();
-  const Mask region = target.MaskOrAll();
-  cv::Mat mask(height, width, CV_32F);
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) mask.at<float>(y, x) = region(x, y) ? 1.0f : 0.0f;
-  }
-  const int terms = (options.polynomial_degree + 1) * (options.polynomial_degree + 2) / 2;
-  if (static_cast<int>(region.CountSet()) < 4 * terms) {
-    target.Fail(fmt::format("the flat-field target covers {} pixels: too few", region.CountSet()));
-  }
-  cv::Mat coverage;
-  if (options.model == FlatFieldModel::kSmoothed) {
-    cv::GaussianBlur(mask, coverage, cv::Size(0, 0), options.smoothing_sigma);
-  }
-  for (int i = 0; i < target.size(); ++i) {
-    if (target.light(i).z() < kMinimumLightZ) {
-      target.Fail(fmt::format("{}: the light is at the horizon (z = {:.3f}); no flat-field",
-                              target.image_name(i), target.light(i).z()));
-    }
-  }
+  const auto fail = [&](const std::string& fault) { target.Fail(fault); };
+  const TargetRegion region = MakeTargetRegion(target.MaskOrAll(), options, fail);
+  CheckTargetLights(target.lights(), target.image_names(), fail);
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
   progress.Start("flat-field", static_cast<std::size_t>(target.size()));
   std::vector<Image> gains(target.size());
+  std::vector<std::vector<double>> sums(gains.size());
   std::vector<std::string> faults(target.size());
   tbb::parallel_for(0, target.size(), [&](int i) {
-    const Image& image = target.image(i);
-    Image gain(width, height, channels);
-    const double z = target.light(i).z();
-    for (int c = 0; c < channels; ++c) {
-      // The plane as an OpenCV matrix (a header on the image's storage), times the mask.
-      const cv::Mat plane(height, width, CV_32F, const_cast<float*>(image.plane(c).data()));
-      cv::Mat values;
-      cv::multiply(plane, mask, values);
-      const cv::Mat polynomial = PolynomialFit(values, mask, options.polynomial_degree);
-      cv::Mat smoothed;
-      if (options.model == FlatFieldModel::kSmoothed) {
-        cv::GaussianBlur(values, smoothed, cv::Size(0, 0), options.smoothing_sigma);
-      }
-      for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-          double value = polynomial.at<float>(y, x);
-          if (options.model == FlatFieldModel::kSmoothed &&
-              coverage.at<float>(y, x) >= kMinimumCoverage) {
-            value = smoothed.at<float>(y, x) / coverage.at<float>(y, x);
-          }
-          if (!(value > 0.0) && faults[i].empty()) {
-            faults[i] = fmt::format(
-                "{}: the target is dark at pixel ({}, {}) in channel {} "
-                "(value {:.3g}); a flat-field needs the target lit everywhere",
-                target.image_name(i), x, y, c, value);
-          }
-          gain.at(x, y, c) = static_cast<float>(value / z);
-        }
-      }
-    }
-    gains[i] = std::move(gain);
+    gains[i] = UnnormalisedGain(target.image(i), target.light(i).z(), region, options,
+                                target.image_name(i), faults[i]);
+    sums[i] = ChannelSums(gains[i]);
     progress.Advance();
   });
   progress.Finish();
   for (const std::string& fault : faults) {
     if (!fault.empty()) target.Fail(fault);
   }
-  NormaliseGains(gains);
+  const std::vector<float> scales =
+      NormalisationScales(sums, target.images().front().pixel_count());
+  for (Image& gain : gains) Scale(gain, scales);
   return FlatField(std::move(gains), target.lights());
+}
+
+void EstimateFlatFieldStreamed(StreamedSet& target, const fs::path& folder,
+                               const FlatFieldOptions& options) {
+  const auto fail = [&](const std::string& fault) { throw Error(target.source(), fault); };
+  const int width = target.width(), height = target.height();
+  Mask mask(width, height, !target.masked());
+  for (std::size_t p : target.SelectedPixelIndices(0, height)) mask.Set(p, true);
+  const TargetRegion region = MakeTargetRegion(mask, options, fail);
+  CheckTargetLights(target.lights(), target.image_names(), fail);
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  const auto gain_of = [&](int i, ConstImageView image, std::string& fault) {
+    return UnnormalisedGain(image, target.lights()[i].z(), region, options, target.image_names()[i],
+                            fault);
+  };
+  // Pass 1: every light's sums (and faults), the gains discarded.
+  std::vector<std::vector<double>> sums(static_cast<std::size_t>(target.size()));
+  std::vector<std::string> faults(sums.size());
+  progress.Start("flat-field: normalisation", sums.size());
+  if (target.next_row() != 0) target.Rewind();
+  target.VisitBand(height, [&](int i, ConstImageView image) {
+    sums[i] = ChannelSums(gain_of(i, image, faults[i]));
+    progress.Advance();
+  });
+  progress.Finish();
+  for (const std::string& fault : faults) {
+    if (!fault.empty()) fail(fault);
+  }
+  const std::vector<float> scales =
+      NormalisationScales(sums, static_cast<std::size_t>(width) * height);
+  // Pass 2: the gains again (the same bits), normalised and written into a scratch folder beside
+  // `folder`, moved into place when every one is written.
+  const fs::path parent = folder.parent_path().empty() ? fs::path(".") : folder.parent_path();
+  std::error_code error;
+  fs::create_directories(parent, error);
+  if (error) throw Error(parent, "cannot create the folder: " + error.message());
+  const ScratchFolder scratch(parent, folder.filename().string());
+  progress.Start("flat-field: gains", sums.size());
+  target.Rewind();
+  target.VisitBand(height, [&](int i, ConstImageView image) {
+    std::string fault;
+    Image gain = gain_of(i, image, fault);
+    Scale(gain, scales);
+    WriteGain(scratch.path() / GainFileName(static_cast<std::size_t>(i)), gain);
+    progress.Advance();
+  });
+  progress.Finish();
+  WriteJsonFile(scratch.path() / kFlatFieldFile, FlatFieldDescription(target.lights()));
+  fs::create_directories(folder, error);
+  if (error) throw Error(folder, "cannot create the folder: " + error.message());
+  // The gain maps first, the description last: a folder with a flatfield.json is complete.
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    fs::rename(scratch.path() / GainFileName(i), folder / GainFileName(i), error);
+    if (error) throw Error(folder / GainFileName(i), "cannot move into place: " + error.message());
+  }
+  fs::rename(scratch.path() / kFlatFieldFile, folder / kFlatFieldFile, error);
+  if (error) throw Error(folder / kFlatFieldFile, "cannot move into place: " + error.message());
 }
 
 FlatField FlatField::Rows(int first, int count) const {
@@ -302,18 +428,10 @@ void SaveFlatField(const fs::path& folder, const FlatField& flat_field) {
   std::error_code error;
   fs::create_directories(folder, error);
   if (error) throw Error(folder, "cannot create the folder: " + error.message());
-  nlohmann::json json = {{"format", kFlatFieldFormat}, {"version", 1}};
-  nlohmann::json entries = nlohmann::json::array();
-  ImageWriteOptions write;
-  write.sample_type = SampleType::kHalf;
   for (int i = 0; i < flat_field.size(); ++i) {
-    const std::string file = fmt::format("gain_{:03d}.exr", i);
-    WriteImage(folder / file, flat_field.gain(i), write);
-    const Eigen::Vector3d& l = flat_field.lights()[i].vector();
-    entries.push_back({{"file", file}, {"light", {l.x(), l.y(), l.z()}}});
+    WriteGain(folder / GainFileName(static_cast<std::size_t>(i)), flat_field.gain(i));
   }
-  json["gains"] = entries;
-  WriteJsonFile(folder / kFlatFieldFile, json);
+  WriteJsonFile(folder / kFlatFieldFile, FlatFieldDescription(flat_field.lights()));
 }
 
 FlatFieldBandReader::FlatFieldBandReader(const fs::path& path) {

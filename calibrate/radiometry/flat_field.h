@@ -14,6 +14,8 @@
 
 namespace photomat {
 
+class StreamedSet;  // capture/io/streamed_set.h
+
 // Per-light gain maps that turn a capture with uneven lighting (near lamps with fall-off,
 // vignetting, lamps of unequal brightness or colour) into what equal distant lights would give.
 //
@@ -65,6 +67,19 @@ class FlatField {
 // selects the target). Throws Error naming the set's source for a target that is dark
 // somewhere under some light (non-positive gains) or a light at or below the horizon.
 FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions& options = {});
+
+// `photomat calibrate flatfield` of a target of any size (README "Calibration"): what
+// SaveFlatField(folder, EstimateFlatField(whole target)) writes, the same gain maps, from a target
+// read one image per thread at a time (StreamedSet::VisitBand of every row; each light's gain
+// comes from its own image). Two passes over the images: (1) each light's gain, for the
+// per-light sums that normalise them all (and the faults, before anything is written); (2) the
+// gains made again, normalised and written. IMPLEMENTER CHOICE: a gain is computed twice rather
+// than kept between the passes, in memory (as large as the target as float) or in scratch files
+// (as large again on disk); its cost is about the image's decoding. The files are written into a
+// scratch folder beside `folder` and moved in when all are written, flatfield.json last: a fault
+// leaves no gain map and no description. Memory: an image and its gain per thread.
+void EstimateFlatFieldStreamed(StreamedSet& target, const std::filesystem::path& folder,
+                               const FlatFieldOptions& options = {});
 
 // The gains near lights at known positions would give on a flat target (no target needed):
 // intensity * P.z / |P - p|^3 / l.z, for `channels` channels, normalised as every flat-field.

@@ -1,11 +1,20 @@
 #include "calibrate/radiometry/flat_field.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "calibrate/radiometry/near_light.h"
 #include "calibrate/testing/synthetic_calibration.h"
+#include "capture/io/capture_manifest.h"
+#include "capture/io/load_photometric_set.h"
+#include "capture/io/streamed_set.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "tests/support/test_support.h"
 
@@ -107,6 +116,95 @@ TEST(FlatFieldTest, DarkTargetIsAnError) {
   const auto lights = RingOfLamps(16);
   PhotometricSet target = RenderNearLightTarget(16, 16, lights, 0.0);
   EXPECT_THROW(EstimateFlatField(target), Error);
+}
+
+// Names in `folder`, hidden ones (a scratch folder) included, sorted.
+std::vector<std::string> EntriesOf(const std::filesystem::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A target (noisy unless `noise` is 0) whose mask leaves a border out, written as float EXR (or
+// 16-bit PNG).
+std::filesystem::path WriteTarget(const testing::TempDir& dir, const std::string& name,
+                                  double albedo, double noise,
+                                  SampleType type = SampleType::kFloat) {
+  const int width = 40, height = 32;
+  PhotometricSet target =
+      RenderNearLightTarget(width, height, RingOfLamps(width), albedo, noise, 7);
+  Mask mask(width, height, false);
+  for (int y = 3; y < height - 2; ++y) {
+    for (int x = 2; x < width - 4; ++x) mask.Set(x, y, true);
+  }
+  target.set_mask(mask);
+  SaveSetOptions save;
+  save.sample_type = type;
+  SavePhotometricSet(dir / name, target, save);
+  return dir / name;
+}
+
+LoadOptions TargetLoadOptions() {
+  LoadOptions load;
+  load.apply_intensities = false;  // as `calibrate flatfield` reads a target
+  return load;
+}
+
+// The streamed estimate (one image per thread at a time) writes what the in-memory estimate of
+// the whole target, saved, writes: the same gain maps bit for bit and the same description, for
+// both models and a masked target; no scratch folder is left.
+TEST(FlatFieldTest, StreamedEstimateWritesTheInMemoryFlatField) {
+  testing::TempDir dir;
+  const std::filesystem::path target = WriteTarget(dir, "target", 0.4, 0.004);
+  const LoadedSet whole = LoadPhotometricSet(target, TargetLoadOptions());
+  ASSERT_TRUE(whole.set.mask());
+  FlatFieldOptions smoothed;
+  smoothed.model = FlatFieldModel::kSmoothed;
+  for (const FlatFieldOptions& options : {FlatFieldOptions{}, smoothed}) {
+    const std::string model(ToString(options.model));
+    std::filesystem::create_directories(dir / "out");
+    StreamedSet streamed = OpenStreamedSet(target, TargetLoadOptions());
+    EstimateFlatFieldStreamed(streamed, dir / "out" / model, options);
+    SaveFlatField(dir / ("in-memory-" + model), EstimateFlatField(whole.set, options));
+    EXPECT_EQ(ReadTextFile(dir / "out" / model / "flatfield.json"),
+              ReadTextFile(dir / ("in-memory-" + model) / "flatfield.json"));
+    const FlatField a = LoadFlatField(dir / "out" / model);
+    const FlatField b = LoadFlatField(dir / ("in-memory-" + model));
+    ASSERT_EQ(a.size(), b.size());
+    for (int i = 0; i < a.size(); ++i) {
+      EXPECT_TRUE(testing::SameBits(a.gain(i), b.gain(i))) << model << ", light " << i;
+    }
+  }
+  EXPECT_EQ(EntriesOf(dir / "out"), (std::vector<std::string>{"polynomial", "smoothed"}));
+}
+
+// A dark target (found in the first pass) and a target image truncated part-way: an Error naming
+// the image, and no folder, gain map or scratch left.
+TEST(FlatFieldTest, StreamedEstimateOfABadTargetLeavesNothing) {
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir / "out");
+  StreamedSet dark = OpenStreamedSet(WriteTarget(dir, "dark", 0.0, 0.0), TargetLoadOptions());
+  try {
+    EstimateFlatFieldStreamed(dark, dir / "out" / "ff");
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("the target is dark at pixel"));
+  }
+  EXPECT_TRUE(EntriesOf(dir / "out").empty());
+  const std::filesystem::path target = WriteTarget(dir, "cut", 0.4, 0.004, SampleType::kUint16);
+  StreamedSet cut = OpenStreamedSet(target, TargetLoadOptions());
+  const std::filesystem::path victim = target / "img_005.png";
+  std::filesystem::resize_file(victim, std::filesystem::file_size(victim) / 2);
+  try {
+    EstimateFlatFieldStreamed(cut, dir / "out" / "ff");
+    FAIL() << "no error";
+  } catch (const Error& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("img_005.png"));
+  }
+  EXPECT_TRUE(EntriesOf(dir / "out").empty());
 }
 
 TEST(NearLightTest, ReadsPositionsAndRejectsBadLines) {
