@@ -41,8 +41,8 @@ void AddPlan(CLI::App& batch) {
   command
       ->add_option("--large-capture", options->large,
                    "Pixels x images above which a capture is flagged large when a step of the "
-                   "recipe holds every image in memory (calibrate with a flat-field or "
-                   "semi-calibration, .ptm/.rti, evaluate, maps or viewer from the capture)")
+                   "recipe holds every image in memory (evaluate, maps or viewer from the "
+                   "capture)")
       ->capture_default_str();
   command->callback([options] {
     const Recipe recipe = ReadRecipe(options->recipe);
@@ -74,7 +74,7 @@ void AddPlan(CLI::App& batch) {
     if (large > 0) {
       // The steps come from the recipe, so every large task has the same ones.
       fmt::print(
-          "{} large capture(s) over {:.3g} pixels x images: the steps {} hold every image in "
+          "{} large capture(s) over {:.3g} pixels x images: the step(s) {} hold every image in "
           "memory, or as much (about {:.1f} GB for the largest); the other steps stream in bands "
           "(README \"Large captures\")\n",
           large, options->large, fmt::join(whole_set_steps, ", "),

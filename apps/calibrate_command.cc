@@ -466,6 +466,30 @@ int ApplyBandRows(std::size_t budget, const StreamedSet& set, const CaptureCorre
                                                   static_cast<std::size_t>(set.height())));
 }
 
+// Semi-calibrated intensities of the corrected capture (EstimateLightIntensitiesRobust of the
+// whole, as `calibrate intensities` estimates them): the estimate uses a few thousand sampled
+// pixels only, so a first streamed pass corrects every band and keeps its sampled pixels
+// (SemiCalibratedSamples), and the intensities come from those, bit for bit the whole capture's.
+std::vector<std::vector<float>> SemiCalibratedIntensities(StreamedSet& set, int rows,
+                                                          CaptureCorrections& corrections,
+                                                          Progress& progress) {
+  Mask mask(set.width(), set.height(), !set.masked());
+  for (std::size_t p : set.SelectedPixelIndices(0, set.height())) mask.Set(p, true);
+  SemiCalibratedOptions options;
+  options.weigher = RobustObservationWeigher();
+  SemiCalibratedSamples samples(SemiCalibratedPixels(mask, options), set.width());
+  progress.Start("calibrate apply: samples for the intensities",
+                 static_cast<std::size_t>((set.height() + rows - 1) / rows));
+  for (int first = 0; first < set.height(); first += rows) {
+    const int count = std::min(rows, set.height() - first);
+    samples.Add(CorrectCaptureBand(set.ReadBand(count, true), first, set.height(), corrections),
+                first);
+    progress.Advance();
+  }
+  progress.Finish();
+  return EstimateLightIntensitiesFromSamples(samples.samples(), options).intensities;
+}
+
 void AddApplyCommand(CLI::App& calibrate) {
   struct Options {
     fs::path input;
@@ -486,7 +510,7 @@ void AddApplyCommand(CLI::App& calibrate) {
       "Write a corrected copy of a capture: linearise (--response), subtract a dark frame, "
       "divide by a flat-field (a target's or near lamps'), and by light intensities (a file, "
       "semi-calibrated estimates, or the input's own); the result is a manifest set. Streamed "
-      "in bands of rows (the whole capture at once with --semi-calibrated).");
+      "in bands of rows (two passes with --semi-calibrated: its samples, then the copy).");
   command->add_option("input", options->input, "Photometric set")->required();
   command->add_option("--out", options->out, "Output folder")->required();
   command->add_option("--response", options->response,
@@ -562,24 +586,25 @@ void AddApplyCommand(CLI::App& calibrate) {
                    static_cast<std::size_t>(set.size()) * set.channels() * bytes_per_sample *
                        static_cast<std::size_t>(set.width()) * set.height(),
                    "the corrected capture");
-    // Semi-calibrated intensities are estimated from the whole corrected capture: one band.
     const std::size_t budget =
         options->memory_mb > 0 ? options->memory_mb << 20 : DefaultBandBudget(kMinimumApplyMemory);
-    const int rows =
-        options->semi_calibrated ? set.height() : ApplyBandRows(budget, set, corrections);
-    CaptureBandWriter writer(options->out, set.height(), save);
+    const int rows = ApplyBandRows(budget, set, corrections);
+    const std::size_t bands = static_cast<std::size_t>((set.height() + rows - 1) / rows);
     TerminalProgressBar bar;
-    bar.Start("calibrate apply", static_cast<std::size_t>((set.height() + rows - 1) / rows));
+    if (options->semi_calibrated) {
+      intensities = SemiCalibratedIntensities(set, rows, corrections, bar);
+      set.Rewind();
+      // The flat-field's gain maps are read again, from the top.
+      if (!options->flat_field.empty()) corrections.flat_field.emplace(options->flat_field);
+    }
+    CaptureBandWriter writer(options->out, set.height(), save);
+    bar.Start("calibrate apply", bands);
     while (writer.rows_written() < set.height()) {
       const int first = writer.rows_written();
       PhotometricSet band =
           CorrectCaptureBand(set.ReadBand(std::min(rows, set.height() - first), true), first,
                              set.height(), corrections);
-      if (options->semi_calibrated) {
-        band.set_intensities(EstimateLightIntensitiesRobust(band).intensities);
-      } else if (intensities) {
-        band.set_intensities(*intensities);
-      }
+      if (intensities) band.set_intensities(*intensities);
       band.ApplyIntensities();
       writer.WriteNext(band);
       bar.Advance();

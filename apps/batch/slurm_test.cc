@@ -139,12 +139,16 @@ TEST(SlurmMemoryTest, StreamedStepsNeedWhatTheirBandsAndPixelsNeed) {
   EXPECT_LT(streamed, 2100LL * 1000 * 1000);
   task.pixel_images = task.pixels * 80;  // more lights: the same bands
   EXPECT_EQ(TaskMemoryNeedBytes(task, std::nullopt), streamed);
-  // calibrate apply streams too, but not with a target's flat-field (a gain map per light).
-  task.steps.push_back(
-      {"calibrate", {"calibrate", "apply", "capture", "--out", "calibrated", "--dark", "d.exr"}});
+  // calibrate apply streams too, with a target's flat-field (its gain maps read band by band)
+  // and semi-calibrated intensities (from sampled pixels gathered in a first pass); so do the
+  // .ptm and .rti fitted to the photographs (export --stream).
+  task.steps.push_back({"calibrate",
+                        {"calibrate", "apply", "capture", "--out", "calibrated", "--dark", "d.exr",
+                         "--flat-field", "flat", "--semi-calibrated"}});
+  task.steps.push_back({"interchange", {"export", "calibrated", "--stream", "--ptm", "c.ptm"}});
   EXPECT_EQ(TaskMemoryNeedBytes(task, std::nullopt), streamed);
-  task.steps.back().arguments.push_back("--flat-field");
-  task.steps.back().arguments.push_back("flat");
+  // An evaluation holds the whole set.
+  task.steps.push_back({"evaluate", {"evaluate", "calibrated", "--methods", "ptm"}});
   EXPECT_GT(TaskMemoryNeedBytes(task, std::nullopt),
             40 * static_cast<std::int64_t>(task.pixel_images));
 }

@@ -83,13 +83,9 @@ std::string TaskHash(const Task& task) {
 }
 
 bool StepHoldsWholeSet(const TaskStep& step) {
-  if (step.name == "fit") return false;
-  if (step.name == "calibrate") {
-    // Streamed (a target's gain maps too), but semi-calibrated intensities are estimated from the
-    // whole capture.
-    return std::find(step.arguments.begin(), step.arguments.end(), "--semi-calibrated") !=
-           step.arguments.end();
-  }
+  // calibrate apply streams whatever it corrects (a target's gain maps band by band, the
+  // semi-calibrated intensities from sampled pixels gathered in a first pass).
+  if (step.name == "fit" || step.name == "calibrate") return false;
   if (step.name == "maps" || step.name == "viewer") {
     return step.arguments.size() < 2 || step.arguments[1] != kStacksFolder;
   }

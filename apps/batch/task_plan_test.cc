@@ -156,17 +156,13 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
     }
     return names;
   };
+  // calibrate apply streams (a target's flat-field and semi-calibrated intensities too), and the
+  // interchange files are fitted to the photographs in bands (export --stream).
   nlohmann::json json = Full();
-  // The interchange files are fitted to the photographs in bands (export --stream).
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("calibrate", "evaluate"));
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
   // Without stacks, maps and viewer are made from the capture, in memory.
   json["exports"]["stacks"] = false;
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("calibrate", "maps", "viewer", "evaluate"));
-  // calibrate apply streams (a target's flat-field read band by band too) unless it estimates
-  // semi-calibrated intensities.
-  json = Full();
-  json["calibration"] = {{"dark", "flat"}, {"flat_field", "flat"}};
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("maps", "viewer", "evaluate"));
 }
 
 TEST(ShellCommandTest, QuotesWhatAShellWouldSplitOrExpand) {

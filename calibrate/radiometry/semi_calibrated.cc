@@ -49,6 +49,21 @@ Eigen::MatrixXd IntensityMatrix(const PhotometricSet& set) {
   return e;
 }
 
+// Throws Error naming the set's source when the intensities cannot be estimated from it with
+// `pixels` sampled pixels: fewer than 4 images, coplanar lights, fewer than 10 pixels.
+void CheckEstimable(const PhotometricSet& set, std::size_t pixels) {
+  if (set.size() < 4) {
+    set.Fail(fmt::format("semi-calibrated photometric stereo needs at least 4 images; {} given",
+                         set.size()));
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(LightMatrix(set.lights()));
+  if (svd.singularValues()[2] < 0.02 * svd.singularValues()[0]) {
+    set.Fail("semi-calibrated photometric stereo: the lights are coplanar");
+  }
+  if (pixels < 10)
+    set.Fail(fmt::format("semi-calibrated: only {} pixels to estimate from", pixels));
+}
+
 // The sampled pixels of every image as one-row images (see ObservationWeigher).
 PhotometricSet SampleSet(const PhotometricSet& set, const std::vector<std::size_t>& pixels) {
   std::vector<Image> images;
@@ -184,27 +199,65 @@ Eigen::MatrixXf RankWindowWeights(const PhotometricSet& samples, double dark_fra
   return weights;
 }
 
-SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
+std::vector<std::size_t> SemiCalibratedPixels(const Mask& mask,
                                               const SemiCalibratedOptions& options) {
-  const int n = set.size();
-  const int channels = set.channels();
-  if (n < 4) {
-    set.Fail(
-        fmt::format("semi-calibrated photometric stereo needs at least 4 images; {} given", n));
-  }
-  const Eigen::Matrix3Xd l = LightMatrix(set.lights());
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(l);
-  if (svd.singularValues()[2] < 0.02 * svd.singularValues()[0]) {
-    set.Fail("semi-calibrated photometric stereo: the lights are coplanar");
-  }
-  const std::vector<std::size_t> all = set.MaskOrAll().SetIndices();
+  const std::vector<std::size_t> all = mask.SetIndices();
   const std::size_t stride = std::max<std::size_t>(
       1, (all.size() + options.max_pixels - 1) / std::max(1, options.max_pixels));
   std::vector<std::size_t> pixels;
   for (std::size_t k = 0; k < all.size(); k += stride) pixels.push_back(all[k]);
-  const auto m = static_cast<Eigen::Index>(pixels.size());
-  if (m < 10) set.Fail(fmt::format("semi-calibrated: only {} pixels to estimate from", m));
-  PhotometricSet samples = SampleSet(set, pixels);
+  return pixels;
+}
+
+SemiCalibratedSamples::SemiCalibratedSamples(std::vector<std::size_t> pixels, int width)
+    : pixels_(std::move(pixels)), width_(width) {}
+
+void SemiCalibratedSamples::Add(const PhotometricSet& band, int first_row) {
+  if (strips_.empty()) {
+    for (int i = 0; i < band.size(); ++i) {
+      // As SampleSet makes them: by count, with the images' channel names.
+      Image strip(static_cast<int>(pixels_.size()), 1, band.channels());
+      if (!band.image(i).channel_names().empty()) {
+        strip.set_channel_names(band.image(i).channel_names());
+      }
+      strips_.push_back(std::move(strip));
+    }
+    lights_ = band.lights();
+    names_ = band.image_names();
+    source_ = band.source();
+  }
+  const std::size_t begin = static_cast<std::size_t>(first_row) * width_;
+  const std::size_t end = begin + static_cast<std::size_t>(band.height()) * width_;
+  const auto first = std::lower_bound(pixels_.begin(), pixels_.end(), begin);
+  for (auto it = first; it != pixels_.end() && *it < end; ++it) {
+    const int k = static_cast<int>(it - pixels_.begin());
+    for (int i = 0; i < band.size(); ++i) {
+      const auto from = band.image(i).pixel(*it - begin);
+      std::copy(from.begin(), from.end(), strips_[i].pixel(k, 0).begin());
+    }
+  }
+}
+
+PhotometricSet SemiCalibratedSamples::samples() const {
+  if (strips_.empty()) throw Error("semi-calibrated: no band of the capture was read");
+  return PhotometricSet(strips_, lights_, names_, source_);
+}
+
+SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
+                                              const SemiCalibratedOptions& options) {
+  const std::vector<std::size_t> pixels = SemiCalibratedPixels(set.MaskOrAll(), options);
+  CheckEstimable(set, pixels.size());
+  return EstimateLightIntensitiesFromSamples(SampleSet(set, pixels), options);
+}
+
+SemiCalibratedResult EstimateLightIntensitiesFromSamples(PhotometricSet samples,
+                                                         const SemiCalibratedOptions& options) {
+  const PhotometricSet& set = samples;  // errors name the capture's source, as the samples do
+  const int n = set.size();
+  const int channels = set.channels();
+  CheckEstimable(set, static_cast<std::size_t>(set.width()));
+  const Eigen::Matrix3Xd l = LightMatrix(set.lights());
+  const auto m = static_cast<Eigen::Index>(set.width());
 
   Eigen::MatrixXd e = Eigen::MatrixXd::Ones(n, channels);
   SemiCalibratedResult result;

@@ -1,7 +1,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <filesystem>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "core/photometric_set.h"
@@ -80,5 +82,39 @@ Eigen::MatrixXf RankWindowWeights(const PhotometricSet& samples, double dark_fra
 // few usable pixels, or weights of the wrong shape.
 SemiCalibratedResult EstimateLightIntensities(const PhotometricSet& set,
                                               const SemiCalibratedOptions& options = {});
+
+// The estimate uses the sampled pixels only: every k-th pixel of the mask, at most
+// options.max_pixels (linear indices y * width + x, ascending). So a capture too large to hold is
+// estimated from its samples gathered band by band (SemiCalibratedSamples), with the same result.
+std::vector<std::size_t> SemiCalibratedPixels(const Mask& mask,
+                                              const SemiCalibratedOptions& options);
+
+// The sampled pixels of a capture read band by band, in any order of bands: each band's sampled
+// pixels are copied into one-row images (the samples of ObservationWeigher).
+class SemiCalibratedSamples {
+ public:
+  // `pixels` from SemiCalibratedPixels of the capture's mask; `width` the capture's.
+  SemiCalibratedSamples(std::vector<std::size_t> pixels, int width);
+  // Copies the sampled pixels of `band`, rows [first_row, first_row + band.height()) of the
+  // capture, as captured (its intensities are ignored).
+  void Add(const PhotometricSet& band, int first_row);
+  // The samples gathered (the bands' lights, names and source); pixels of rows never added are 0.
+  PhotometricSet samples() const;
+
+ private:
+  std::vector<std::size_t> pixels_;
+  int width_ = 0;
+  // One-row images, one per capture image; empty until the first band.
+  std::vector<Image> strips_;
+  std::vector<LightDirection> lights_;
+  std::vector<std::string> names_;
+  std::filesystem::path source_;
+};
+
+// EstimateLightIntensities of a set of which only the samples are held: `samples` as
+// SemiCalibratedSamples gathers them (or the whole set's SemiCalibratedPixels, one row), the
+// result the same as the whole set's, bit for bit.
+SemiCalibratedResult EstimateLightIntensitiesFromSamples(PhotometricSet samples,
+                                                         const SemiCalibratedOptions& options = {});
 
 }  // namespace photomat

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "tests/support/synthetic_sets.h"
@@ -28,6 +31,46 @@ TEST(SemiCalibratedTest, RecoversUnequalLightIntensities) {
     for (std::size_t i = 0; i < truth.size(); ++i) {
       EXPECT_NEAR(result.intensities[i][c], truth[i][c] / mean, 0.002) << "image " << i;
     }
+  }
+}
+
+// A capture too large to hold is estimated from its sampled pixels gathered band by band: bands
+// of 5 rows, added in reverse order, give the samples of the whole set and the same intensities
+// bit for bit; with a mask too.
+TEST(SemiCalibratedTest, SamplesGatheredBandByBandGiveTheWholeSetsIntensities) {
+  SyntheticMaterialOptions material_options;
+  material_options.width = 40;
+  material_options.height = 33;
+  const SyntheticMaterial material = MakeSyntheticMaterial(material_options);
+  SyntheticRenderOptions render;
+  render.shadows = true;
+  PhotometricSet set =
+      testing::ScaleByIntensities(RenderSyntheticCapture(material, ThesisLightGrid(), render),
+                                  testing::UnequalRgbIntensities(36));
+  SemiCalibratedOptions options;
+  options.max_pixels = 300;  // every 5th pixel: samples in every band
+  for (const bool masked : {false, true}) {
+    if (masked) {
+      Mask mask(set.width(), set.height(), false);
+      for (int y = 4; y < 30; ++y) {
+        for (int x = 3 + y % 4; x < 37; ++x) mask.Set(x, y, true);
+      }
+      set.set_mask(mask);
+    }
+    SemiCalibratedSamples samples(SemiCalibratedPixels(set.MaskOrAll(), options), set.width());
+    for (int first = (set.height() - 1) / 5 * 5; first >= 0; first -= 5) {
+      const int rows = std::min(5, set.height() - first);
+      std::vector<Image> band;
+      for (const Image& image : set.images()) band.emplace_back(image.Rows(first, rows));
+      samples.Add(PhotometricSet(std::move(band), set.lights(), set.image_names(), set.source()),
+                  first);
+    }
+    const SemiCalibratedResult whole = EstimateLightIntensities(set, options);
+    const SemiCalibratedResult banded =
+        EstimateLightIntensitiesFromSamples(samples.samples(), options);
+    EXPECT_EQ(banded.intensities, whole.intensities) << (masked ? "masked" : "whole frame");
+    EXPECT_EQ(banded.iterations, whole.iterations);
+    EXPECT_GT(whole.iterations, 1);
   }
 }
 
