@@ -363,44 +363,50 @@ std::vector<std::filesystem::path> StreamableViewerStacks(
   return paths;
 }
 
+// The viewer of the map stacks at `paths` when it is tiled (--viewer-tiles, viewer_pyramid.h):
+// every stack read in bands, never whole (ExportViewerStreamed). Returns false, writing nothing,
+// when the viewer is not tiled.
+bool WriteTiledViewerOfStackFiles(const ExportCommandOptions& options,
+                                  const std::vector<std::filesystem::path>& paths) {
+  ViewerExportOptions viewer = ViewerOptions(options);
+  bool tiled = false;
+  for (const auto& path : paths) {
+    const StackBandReader stack(path);
+    tiled = UsesViewerTiles(viewer.tiling, stack.width(), stack.height());
+    const Representation& r = stack.header().representation;
+    viewer.value_encodings[r.method()] = StackValueEncoding(stack.header().provenance);
+    if (viewer.capture_lights.empty())
+      viewer.capture_lights = stack.header().provenance.capture_lights;
+  }
+  if (!tiled) return false;
+  TerminalProgressBar bar;
+  viewer.progress = &bar;
+  ExportViewerStreamed(options.viewer, paths, viewer);
+  PrintViewerWritten(options, paths.size(), true);
+  return true;
+}
+
 // IMPLEMENTER CHOICE: a stack that is tiled (--viewer-tiles, viewer_pyramid.h) is read in bands
-// when it is a map stack (.exr, fit folder), never whole; a .ptm, .rti or relight web folder, and
-// a photometric set's fits, are in memory anyway and tile from there.
+// when it is a map stack (.exr, fit folder), never whole; a .ptm, .rti or relight web folder is in
+// memory anyway and tiles from there. (A photometric set's viewer: ExportCaptureStreamed, or its
+// fits in memory.)
 void WriteViewerOfStacks(const ExportCommandOptions& options,
                          const std::optional<std::string>& method) {
   const std::vector<std::filesystem::path> paths = StreamableViewerStacks(options.input, method);
-  if (!paths.empty()) {
-    ViewerExportOptions viewer = ViewerOptions(options);
-    bool tiled = false;
-    for (const auto& path : paths) {
-      const StackBandReader stack(path);
-      tiled = UsesViewerTiles(viewer.tiling, stack.width(), stack.height());
-      const Representation& r = stack.header().representation;
-      viewer.value_encodings[r.method()] = StackValueEncoding(stack.header().provenance);
-      if (viewer.capture_lights.empty())
-        viewer.capture_lights = stack.header().provenance.capture_lights;
-    }
-    if (tiled) {
-      TerminalProgressBar bar;
-      viewer.progress = &bar;
-      ExportViewerStreamed(options.viewer, paths, viewer);
-      PrintViewerWritten(options, paths.size(), true);
-      return;
-    }
-  }
+  if (!paths.empty() && WriteTiledViewerOfStackFiles(options, paths)) return;
   WriteViewer(options, ViewerStacks(options.input, method));
 }
 
-// IMPLEMENTER CHOICE: a photometric set's .ptm, .rti and maps are made streamed, in bands, as a
-// stack's are (StreamsStack), when asked (--stream) or when holding the whole set
+// IMPLEMENTER CHOICE: a photometric set's .ptm, .rti, maps and viewer are made streamed, in
+// bands, as a stack's are (StreamsStack), when asked (--stream) or when holding the whole set
 // (kWholeSetBytesPerPixelImage per pixel and image) would not fit the memory budget, and nothing
-// made from the whole set's fits is asked (a viewer, relight web folder or compact form). The maps
-// then need the Poisson height, as a stack's.
+// made from the whole set's fits is asked (a relight web folder or compact form). The maps then
+// need the Poisson height, as a stack's.
 bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set) {
-  if (!options.viewer.empty() || !options.relight_web.empty() || !options.compact.empty()) {
+  if (!options.relight_web.empty() || !options.compact.empty()) return false;
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty()) {
     return false;
   }
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return false;
   if (options.stream) return true;
   if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
     return false;
@@ -414,13 +420,16 @@ bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set)
 // (FitStreamed) into scratch map stacks, which the stacks' streamed exports read: the encoded
 // fits the .ptm and .rti are made from (FitEncoded's domain: `encoded_values`, provenance "srgb",
 // which ExportPtmStreamed and ExportRtiStreamed take as they are) in one pass over the
-// photographs, the linear fit the maps come from in another. IMPLEMENTER CHOICE: scratch stacks
-// rather than a fit per pass of the exports: a .ptm takes two passes (the coefficients' ranges,
-// then the bytes) and decoding the photographs costs several times reading a float stack back.
-// The scratch folder is beside the first output (on its disk, whose free space is checked) and is
-// removed at the end, however the export ends. The files equal the in-memory export's to float
-// rounding (a fit's matrix product rounds by band, streamed_interchange.h), so a quantised
-// coefficient may differ by one code.
+// photographs, the linear fits the maps and the viewer come from (--method, else Gradient for the
+// maps and every method for the viewer, as in memory) in another. The viewer is tiled from the
+// stacks in bands when it is tiled (WriteTiledViewerOfStackFiles), else made from them loaded
+// whole (a viewer below the tiling threshold is made in memory whatever its source). IMPLEMENTER
+// CHOICE: scratch stacks rather than a fit per pass of the exports: a .ptm takes two passes (the
+// coefficients' ranges, then the bytes) and decoding the photographs costs several times reading a
+// float stack back. The scratch folder is beside the first output (on its disk, whose free space is
+// checked) and is removed at the end, however the export ends. The files equal the in-memory
+// export's to float rounding (a fit's matrix product rounds by band, streamed_interchange.h), so a
+// quantised coefficient may differ by one code.
 void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set) {
   if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
     // Refused before minutes of fitting, as ExportMapsStreamed would after them.
@@ -431,9 +440,22 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
   std::vector<Method> encoded;
   if (!options.ptm.empty()) encoded.push_back(PtmMethod(options, "", set.channels()));
   if (!options.rti.empty()) encoded.push_back(HshMethod(options, ""));
+  // The linear fits: the maps' method first, then the viewer's others.
+  const Method maps_method = Method::Parse(options.method.empty() ? "gradient" : options.method);
+  const std::vector<Method> viewer_methods =
+      options.method.empty() ? AllMethods() : std::vector{maps_method};
+  std::vector<Method> linear;
+  if (!options.out.empty()) linear.push_back(maps_method);
+  for (const Method& m : options.viewer.empty() ? std::vector<Method>{} : viewer_methods) {
+    if (std::none_of(linear.begin(), linear.end(),
+                     [&](const Method& l) { return l.Name() == m.Name(); })) {
+      linear.push_back(m);
+    }
+  }
   const std::filesystem::path beside = FolderOf(!options.out.empty()   ? options.out
                                                 : !options.ptm.empty() ? options.ptm
-                                                                       : options.rti);
+                                                : !options.rti.empty() ? options.rti
+                                                                       : options.viewer);
   CreateFolder(beside);
   const ScratchFolder scratch(beside, "photomat-export");
   TerminalProgressBar bar;
@@ -472,11 +494,24 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
       WriteRtiFileStreamed(options, stack, encoded[next]);
     }
   }
+  if (linear.empty()) return;
+  const std::vector<std::filesystem::path> stacks = fit_into_scratch(linear, false);
   if (!options.out.empty()) {
-    const std::vector<std::filesystem::path> stacks = fit_into_scratch(
-        {Method::Parse(options.method.empty() ? "gradient" : options.method)}, false);
     StackBandReader stack(stacks.front());
     WriteMapsStreamed(options, stack);
+  }
+  if (options.viewer.empty()) return;
+  // In photomat's method order, as a fit folder's viewer.
+  std::vector<std::filesystem::path> viewer_stacks;
+  for (const Method& m : viewer_methods) {
+    for (std::size_t k = 0; k < linear.size(); ++k) {
+      if (linear[k].Name() == m.Name()) viewer_stacks.push_back(stacks[k]);
+    }
+  }
+  if (!WriteTiledViewerOfStackFiles(options, viewer_stacks)) {
+    std::vector<LoadedStack> fits;
+    for (const auto& path : viewer_stacks) fits.push_back(LoadRepresentation(path));
+    WriteViewer(options, fits);
   }
 }
 
@@ -651,9 +686,9 @@ void AddExportCommand(CLI::App& app) {
                   DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
   command->add_flag("--stream", options->stream,
                     "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size; "
-                    "a photometric set's are fitted in bands into scratch stacks beside the "
-                    "outputs first (height by tiled Poisson; not for --height fc, --relight-web, "
-                    "--compact or a set's --viewer)");
+                    "a photometric set's (and its --viewer) are fitted in bands into scratch "
+                    "stacks beside the outputs first (height by tiled Poisson; not for --height "
+                    "fc, --relight-web or --compact)");
   command->callback([options] { RunExport(*options); });
 }
 

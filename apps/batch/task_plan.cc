@@ -86,10 +86,12 @@ bool StepHoldsWholeSet(const TaskStep& step) {
   // calibrate apply streams whatever it corrects (a target's gain maps band by band, the
   // semi-calibrated intensities from sampled pixels gathered in a first pass).
   if (step.name == "fit" || step.name == "calibrate") return false;
-  if (step.name == "maps" || step.name == "viewer") {
-    return step.arguments.size() < 2 || step.arguments[1] != kStacksFolder;
+  // Exports of the stacks read them in bands; from the capture, export --stream fits the
+  // photographs in bands first (the interchange files, and maps and viewer without stacks).
+  if ((step.name == "maps" || step.name == "viewer") && step.arguments.size() >= 2 &&
+      step.arguments[1] == kStacksFolder) {
+    return false;
   }
-  // export --stream fits the photographs in bands (the interchange files).
   return std::find(step.arguments.begin(), step.arguments.end(), "--stream") ==
          step.arguments.end();
 }
@@ -115,6 +117,9 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
     std::vector<std::string> arguments{
         "export", exports.stacks ? kStacksFolder : input, "--method", maps.method, "--out", "maps"};
     Append(arguments, {"--normal-convention", maps.normal_convention, "--height", maps.height});
+    // From the capture: fitted in bands (export --stream) unless the height is the whole-image
+    // FFT, which needs the whole map.
+    if (!exports.stacks && maps.height != "fc") arguments.push_back("--stream");
     if (!maps.gltf) arguments.push_back("--no-gltf");
     steps.push_back({"maps", arguments});
   }
@@ -136,6 +141,7 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
   if (exports.viewer) {
     std::vector<std::string> arguments{"export", exports.stacks ? kStacksFolder : input, "--viewer",
                                        "viewer"};
+    if (!exports.stacks) arguments.push_back("--stream");  // fitted in bands from the capture
     steps.push_back({"viewer", arguments});
   }
   if (exports.evaluation) {

@@ -81,10 +81,18 @@ TEST_F(TaskPlanTest, WithoutStacksTheExportsReadTheCapture) {
   const TaskPlan plan = PlanTasks(Parse(json));
   const std::string capture = (dir_.path() / "captures/c1").lexically_normal().string();
   ASSERT_EQ(plan.tasks[0].steps.size(), 2u);
+  // Fitted in bands from the capture (export --stream).
   EXPECT_EQ(plan.tasks[0].steps[0].arguments,
             (Arguments{"export", capture, "--method", "gradient", "--out", "maps",
-                       "--normal-convention", "opengl", "--height", "poisson"}));
-  EXPECT_EQ(plan.tasks[0].steps[1].arguments, (Arguments{"export", capture, "--viewer", "viewer"}));
+                       "--normal-convention", "opengl", "--height", "poisson", "--stream"}));
+  EXPECT_EQ(plan.tasks[0].steps[1].arguments,
+            (Arguments{"export", capture, "--viewer", "viewer", "--stream"}));
+  // The whole-image FFT height needs the whole map: that export holds the set.
+  json["exports"]["maps"] = {{"height", "fc"}};
+  const TaskPlan fc = PlanTasks(Parse(json));
+  EXPECT_EQ(fc.tasks[0].steps[0].arguments.back(), "fc");
+  EXPECT_TRUE(StepHoldsWholeSet(fc.tasks[0].steps[0]));
+  EXPECT_FALSE(StepHoldsWholeSet(fc.tasks[0].steps[1]));
 }
 
 TEST_F(TaskPlanTest, PlanIsDeterministicAndItsHashFollowsTheRecipe) {
@@ -160,9 +168,9 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   // interchange files are fitted to the photographs in bands (export --stream).
   nlohmann::json json = Full();
   EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
-  // Without stacks, maps and viewer are made from the capture, in memory.
+  // Without stacks, maps and viewer are made from the capture, streamed too.
   json["exports"]["stacks"] = false;
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("maps", "viewer", "evaluate"));
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
 }
 
 TEST(ShellCommandTest, QuotesWhatAShellWouldSplitOrExpand) {
