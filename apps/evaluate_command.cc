@@ -1,6 +1,7 @@
 #include "apps/evaluate_command.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <charconv>
@@ -10,10 +11,14 @@
 #include "apps/light_profile_cli.h"
 #include "apps/robust_support.h"
 #include "apps/synthesis_cli.h"
+#include "capture/io/load_photometric_set.h"
 #include "capture/io/streamed_set.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "core/memory_limits.h"
+#include "core/scratch_folder.h"
 #include "relight/web/evaluation_report.h"
 #include "relight/web/published_name.h"
 #include "represent/evaluation/evaluation.h"
@@ -21,6 +26,7 @@
 #include "represent/evaluation/streamed_evaluation.h"
 #include "represent/stack/map_stack.h"
 #include "represent/stack/stack_band_reader.h"
+#include "represent/streaming/streamed_fit.h"
 
 namespace photomat::app {
 namespace {
@@ -41,6 +47,52 @@ std::vector<int> ParseIndexList(const std::string& text) {
     start = comma + 1;
   }
   return indices;
+}
+
+// The ground-truth normals: --gt-normals, else the ones the input names.
+std::optional<std::filesystem::path> TruthPath(const std::filesystem::path& given,
+                                               const std::optional<std::filesystem::path>& named) {
+  return given.empty() ? named : std::optional(given);
+}
+
+// `evaluate INPUT --stream` (README "Streamed relighting and export"): `methods` fitted to `set`
+// in bands (FitStreamed) into scratch stacks, each then evaluated against the set streamed
+// (EvaluateStackStreamed): the same eta of reconstruction as the in-memory evaluation to float
+// rounding, and the same normal errors. IMPLEMENTER CHOICE: the scratch folder is beside `json`
+// (the output the user chose a place for), else in the current folder; its free space is checked
+// first, and it is removed however the evaluation ends.
+std::vector<MethodEvaluation> EvaluateSetStreamed(StreamedSet& set,
+                                                  const std::vector<Method>& methods,
+                                                  StreamedEvaluationOptions options,
+                                                  const std::filesystem::path& json) {
+  const std::filesystem::path beside =
+      json.empty() || json.parent_path().empty() ? std::filesystem::path(".") : json.parent_path();
+  CreateFolder(beside);
+  const ScratchFolder scratch(beside, "photomat-evaluate");
+  CheckDiskSpace(scratch.path(), StreamedStackBytes(set, methods), "the scratch map stacks");
+  std::vector<std::filesystem::path> stacks;
+  for (const Method& method : methods) stacks.push_back(scratch.path() / (method.Name() + ".exr"));
+  TerminalProgressBar bar;
+  StreamedFitOptions fit;
+  fit.memory_bytes = options.memory_bytes;
+  fit.compression = FittedStackCompression(
+      "auto", set.SelectedPixels(0, set.height()) <
+                  static_cast<std::size_t>(set.width()) * static_cast<std::size_t>(set.height()));
+  fit.provenance = {set.lights(), "linear", set.source().string(), set.encodings()};
+  fit.progress = &bar;
+  const StreamedFitReport report = FitStreamed(set, methods, stacks, fit);
+  WarnAboutClippedPixels(report.saturated_pixels, set.image_names());
+  std::vector<std::string> names;
+  for (const Method& method : methods) names.push_back(method.Name());
+  fmt::print("fitted {} to the {} photographs in bands of {} of {} rows\n", fmt::join(names, ", "),
+             set.size(), report.band_rows, set.height());
+  options.progress = &bar;
+  std::vector<MethodEvaluation> results;
+  for (const auto& path : stacks) {
+    StackBandReader stack(path);
+    results.push_back(EvaluateStackStreamed(set, stack, options));
+  }
+  return results;
 }
 
 }  // namespace
@@ -64,6 +116,7 @@ void AddEvaluateCommand(CLI::App& app) {
     LightProfileCli profile;
     std::filesystem::path stack;
     std::size_t memory_mb = 0;
+    bool stream = false;
     PbrFitOptions pbr;
   };
   auto options = std::make_shared<Options>();
@@ -118,8 +171,15 @@ void AddEvaluateCommand(CLI::App& app) {
       "--stack", options->stack,
       "Evaluate this fitted stack (.exr, or a fit folder with --methods naming one) "
       "against INPUT, both streamed in bands: the eta of reconstruction only");
-  AddBandMemoryOption(*command, options->memory_mb, "the bands (with --stack)",
+  AddBandMemoryOption(*command, options->memory_mb,
+                      "the bands (with --stack or --stream; a set held whole beyond it is "
+                      "evaluated streamed when it can be)",
                       kMinimumEvaluationMemory);
+  command->add_flag("--stream", options->stream,
+                    "Fit the methods to INPUT in bands into scratch stacks beside --json (or in "
+                    "the current folder) and evaluate those streamed: the eta of reconstruction "
+                    "and the normals' errors, whatever the set's size (needs --no-prediction; not "
+                    "with --robust, pbr, --report or --compare)");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -134,6 +194,7 @@ void AddEvaluateCommand(CLI::App& app) {
       StreamedEvaluationOptions streamed;
       streamed.memory_bytes = options->memory_mb << 20;
       streamed.literal_thesis_rms = options->literal_rms;
+      streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
       streamed.progress = &bar;
       const std::vector<MethodEvaluation> results = {EvaluateStackStreamed(set, stack, streamed)};
       fmt::print("{} images, stack {} (streamed)\n{}", set.size(), stack.path().string(),
@@ -151,17 +212,49 @@ void AddEvaluateCommand(CLI::App& app) {
     ApplyLightProfileOptions(options->profile, methods);
     LoadOptions load;
     load.apply_intensities = !options->raw_intensities;
+    const bool pbr_asked = std::any_of(methods.begin(), methods.end(), [](const Method& m) {
+      return m.kind == Method::Kind::kPbr;
+    });
+    const bool streamable = options->no_prediction && !options->robust && !pbr_asked &&
+                            options->report.empty() && !options->compare;
+    if (options->stream && !streamable) {
+      throw Error(
+          "--stream evaluates the reconstruction of least-squares fits: it needs "
+          "--no-prediction and does not go with --robust, pbr, --report or --compare");
+    }
+    {
+      StreamedSet set = OpenStreamedSet(options->input, load);
+      const double held = kWholeSetBytesPerPixelImage * static_cast<double>(set.width()) *
+                          static_cast<double>(set.height()) * set.size();
+      const std::size_t budget = options->memory_mb > 0
+                                     ? options->memory_mb << 20
+                                     : DefaultMemoryBudget(kMinimumEvaluationMemory);
+      // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
+      // held whole would not fit the budget, and what is asked can be streamed.
+      if (options->stream || (streamable && held > static_cast<double>(budget))) {
+        StreamedEvaluationOptions streamed;
+        streamed.memory_bytes = options->memory_mb << 20;
+        streamed.literal_thesis_rms = options->literal_rms;
+        streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
+        const std::vector<MethodEvaluation> results =
+            EvaluateSetStreamed(set, methods, streamed, options->json);
+        fmt::print("{} images (streamed){}\n{}", set.size(),
+                   streamed.ground_truth_normals
+                       ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
+                       : "",
+                   FormatEvaluationTable(results));
+        if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+        return;
+      }
+    }
     // pbr is fitted as `fit --method pbr` fits it, robustly (its start, the measured masks and
     // the --pbr-* options), with or without --robust.
-    const bool pbr = std::any_of(methods.begin(), methods.end(),
-                                 [](const Method& m) { return m.kind == Method::Kind::kPbr; });
-    const RobustInput input = options->robust || pbr
+    const RobustInput input = options->robust || pbr_asked
                                   ? LoadSetForRobustFit(options->input, load)
                                   : RobustInput{LoadSetForCommand(options->input, load), {}};
     const LoadedSet& loaded = input.loaded;
     std::optional<Image> truth;
-    const auto truth_path = options->gt_normals.empty() ? loaded.ground_truth_normals
-                                                        : std::optional(options->gt_normals);
+    const auto truth_path = TruthPath(options->gt_normals, loaded.ground_truth_normals);
     if (truth_path) truth = ReadImage(*truth_path).image;
     if (truth && (truth->width() != loaded.set.width() || truth->height() != loaded.set.height())) {
       throw Error(*truth_path,

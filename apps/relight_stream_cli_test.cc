@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/image_io.h"
@@ -99,6 +100,54 @@ TEST(RelightStreamCliTest, EvaluateAStackStreamedGivesTheInMemoryEta) {
   const double b = ReadJsonFile(dir / "whole.json")["ptm"]["eta_reconstruction"].get<double>();
   EXPECT_GT(b, 0.0);
   EXPECT_NEAR(a, b, 1e-9 * b);
+}
+
+// `photomat evaluate INPUT --stream` fits the methods in bands into scratch stacks and evaluates
+// those streamed: the eta of reconstruction of the in-memory evaluation to float rounding and its
+// normal errors; the scratch is gone afterwards. Prediction cannot be streamed: asked for, it is
+// refused with the reason.
+TEST(RelightStreamCliTest, EvaluateASetStreamedGivesTheInMemoryEtaAndNormalErrors) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4").exit_code,
+            0);
+  const std::string methods = " --methods gradient,ptm,eigen6 --no-prediction --json ";
+  const RunResult whole =
+      RunPhotomat("evaluate " + capture + methods + (dir / "whole.json").string());
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  fs::create_directories(dir / "out");
+  const RunResult streamed = RunPhotomat("evaluate " + capture + " --stream --memory 1" + methods +
+                                         (dir / "out" / "streamed.json").string());
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  EXPECT_THAT(streamed.output, HasSubstr("(streamed), ground truth"));
+  const nlohmann::json a = ReadJsonFile(dir / "out" / "streamed.json");
+  const nlohmann::json b = ReadJsonFile(dir / "whole.json");
+  for (const char* method : {"gradient", "ptm", "eigen6"}) {
+    const double eta = b[method]["eta_reconstruction"].get<double>();
+    std::printf("%s: eta %.9g streamed, %.9g in memory\n", method,
+                a[method]["eta_reconstruction"].get<double>(), eta);
+    // The fits equal to float rounding (StreamedFitTest): bound 1e-6 relative.
+    EXPECT_NEAR(a[method]["eta_reconstruction"].get<double>(), eta, 1e-6 * eta) << method;
+    EXPECT_EQ(a[method].contains("normals"), b[method].contains("normals")) << method;
+  }
+  for (const char* method : {"gradient", "ptm"}) {
+    const nlohmann::json& n = a[method]["normals"];
+    EXPECT_EQ(n["pixels"], b[method]["normals"]["pixels"]) << method;
+    EXPECT_NEAR(n["mean_angular_error_deg"].get<double>(),
+                b[method]["normals"]["mean_angular_error_deg"].get<double>(), 1e-6)
+        << method;
+    EXPECT_NEAR(n["median_angular_error_deg"].get<double>(),
+                b[method]["normals"]["median_angular_error_deg"].get<double>(), 1e-6)
+        << method;
+  }
+  std::vector<std::string> left;
+  for (const auto& entry : fs::directory_iterator(dir / "out")) {
+    left.push_back(entry.path().filename().string());
+  }
+  EXPECT_THAT(left, ::testing::ElementsAre("streamed.json"));
+  const RunResult refused = RunPhotomat("evaluate " + capture + " --stream --methods ptm");
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+  EXPECT_THAT(refused.output, HasSubstr("--stream evaluates the reconstruction"));
 }
 
 // `export --viewer` of a stack the limit does not let load whole: the deep-zoom tiles are written

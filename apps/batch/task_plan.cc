@@ -40,6 +40,17 @@ void AppendRobust(std::vector<std::string>& arguments, const RecipeFit& fit) {
   if (fit.robust) Append(arguments, {"--robust", "--loss", fit.loss});
 }
 
+// Whether a --method list ("gradient,pbr") names pbr, which is always fitted robustly.
+bool NamesPbr(const std::string& methods) {
+  std::size_t start = 0;
+  while (start <= methods.size()) {
+    const std::size_t comma = std::min(methods.find(',', start), methods.size());
+    if (methods.compare(start, comma - start, "pbr") == 0) return true;
+    start = comma + 1;
+  }
+  return false;
+}
+
 struct CaptureSize {
   std::uint64_t pixels = 0, pixel_images = 0;
 };
@@ -155,6 +166,11 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
              {"--report-images", fmt::format("{}", fmt::join(evaluation.report_images, ","))});
     }
     AppendRobust(arguments, recipe.fit);
+    // The reconstruction alone of least-squares fits is evaluated streamed (evaluate --stream).
+    if (!evaluation.prediction && !evaluation.report && !recipe.fit.robust &&
+        !NamesPbr(recipe.fit.methods)) {
+      arguments.push_back("--stream");
+    }
     steps.push_back({"evaluate", arguments});
   }
   return steps;

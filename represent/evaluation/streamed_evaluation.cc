@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "core/error.h"
+#include "core/image_band_io.h"
 #include "core/memory_limits.h"
 #include "represent/fitting/observations.h"
+#include "represent/model/normal_error.h"
 
 namespace photomat {
 namespace {
@@ -64,6 +67,17 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
   const int band_rows = BandRows(set, stack, options);
   const int bands = (set.height() + band_rows - 1) / band_rows;
   std::vector<ImageSums> sums(static_cast<std::size_t>(set.size()));
+  std::optional<ImageBandReader> truth;
+  if (options.ground_truth_normals) {
+    truth.emplace(*options.ground_truth_normals);
+    if (truth->width() != set.width() || truth->height() != set.height()) {
+      throw Error(*options.ground_truth_normals,
+                  fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
+                              truth->height(), set.width(), set.height()));
+    }
+  }
+  NormalErrors normal_errors;
+  bool gives_normals = truth.has_value();
   NullProgress none;
   Progress& progress = OrNull(options.progress, none);
   progress.Start("evaluate", static_cast<std::size_t>(bands));
@@ -72,6 +86,19 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
     const int rows = std::min(band_rows, set.height() - first);
     const PhotometricSet band = set.ReadBand(rows);
     const LoadedStack maps = stack.ReadNext(rows);
+    if (truth) {
+      Image truth_band(truth->width(), rows, truth->channels());
+      truth->ReadNext(truth_band.View());
+      std::optional<Image> normals;
+      if (gives_normals) normals = EstimateNormals(maps.representation);
+      gives_normals = normals.has_value();  // a method that gives none gives none in any band
+      if (normals) {
+        // The mask's rows (a band set has none where they select nothing: ReadBand).
+        Mask mask(set.width(), rows, !set.masked());
+        for (std::size_t p : set.SelectedPixelIndices(first, rows)) mask.Set(p, true);
+        normal_errors.Add(*normals, truth_band, mask);
+      }
+    }
     if (set.SelectedPixels(first, rows) == 0) {
       progress.Advance();
       continue;
@@ -99,6 +126,7 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
     total += result.reconstruction_per_image.back();
   }
   result.eta_reconstruction = total / static_cast<double>(sums.size());
+  if (gives_normals) result.normals = normal_errors.Summary();
   return result;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
+#include <optional>
 
 #include "capture/io/streamed_set.h"
 #include "core/progress.h"
@@ -15,7 +17,9 @@ namespace photomat {
 // sums that make e_k and sigma_k (count, sum of captured values and of their squares, sum of
 // squared differences, all in double) are accumulated over the bands, so memory follows the
 // band. The stack is what was fitted (it is not refitted): prediction (leave-one-out, held-out
-// lights) needs fits and stays in memory (EvaluateMethod).
+// lights) needs fits and stays in memory (EvaluateMethod). With ground-truth normals, the stack's
+// normals (EstimateNormals of each band) are compared with the truth's rows band by band
+// (NormalErrors): the same statistics as the in-memory CompareNormals, bit for bit.
 struct StreamedEvaluationOptions {
   // Bytes the bands may hold (the set's band and its observation matrix, the stack's band and
   // the relit values); 0: DefaultBandBudget(kMinimumEvaluationMemory).
@@ -23,13 +27,16 @@ struct StreamedEvaluationOptions {
   // > 0: exactly this many rows per band (tests).
   int band_rows = 0;
   bool literal_thesis_rms = false;
+  // A float image of unit normals (x right, y up, z to camera) of the set's size: the result's
+  // `normals` when the method gives normals.
+  std::optional<std::filesystem::path> ground_truth_normals;
   Progress* progress = nullptr;  // one step per band
 };
 inline constexpr std::size_t kMinimumEvaluationMemory = std::size_t{16} << 20;
 
 // eta_reconstruction and reconstruction_per_image of `stack` against `set` (from row 0; the
-// mask selects the pixels). Throws Error naming the stack when its size or output channels differ
-// from the set's.
+// mask selects the pixels), and `normals` with ground truth. Throws Error naming the stack when
+// its size or output channels differ from the set's, or the truth when its size differs.
 MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
                                        const StreamedEvaluationOptions& options = {});
 

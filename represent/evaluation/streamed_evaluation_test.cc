@@ -6,6 +6,7 @@
 #include "capture/io/capture_manifest.h"
 #include "capture/io/load_photometric_set.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
 #include "tests/support/synthetic_sets.h"
@@ -66,6 +67,41 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryEtaOfReconstruction) {
           << name << " image " << k;
     }
   }
+}
+
+// With ground-truth normals, each band's normals are compared with the truth's rows: the same
+// statistics as the in-memory evaluation's, bit for bit (the same errors, in the same order), for
+// the methods that give normals, and none for those that do not.
+TEST(StreamedEvaluationTest, BandsGiveTheInMemoryNormalErrors) {
+  testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  const Image truth(testing::ShadowedSpecularSet(40).material.normals.Rows(0, 36));
+  ImageWriteOptions exr;
+  exr.sample_type = SampleType::kFloat;
+  WriteImage(dir / "truth.exr", truth, exr);
+  const LoadedSet loaded = LoadPhotometricSet(input);
+  const Observations observations(loaded.set);
+  EvaluationOptions in_memory;
+  in_memory.prediction = false;
+  int compared = 0;
+  for (const char* name : {"gradient", "ptm", "eigen6", "hsh9"}) {
+    const Method method = Method::Parse(name);
+    SaveRepresentation(dir / "stack.exr", Fit(loaded.set, method));
+    const MethodEvaluation whole =
+        EvaluateMethod(loaded.set, observations, method, &truth, in_memory);
+    StreamedSet set = OpenStreamedSet(input);
+    StackBandReader stack(dir / "stack.exr");
+    StreamedEvaluationOptions options;
+    options.band_rows = 5;
+    options.ground_truth_normals = dir / "truth.exr";
+    const MethodEvaluation streamed = EvaluateStackStreamed(set, stack, options);
+    ASSERT_EQ(streamed.normals.has_value(), whole.normals.has_value()) << name;
+    if (!whole.normals) continue;
+    ++compared;
+    EXPECT_EQ(streamed.normals->ToJson(), whole.normals->ToJson()) << name;
+    EXPECT_GT(whole.normals->pixels, 500u) << name;
+  }
+  EXPECT_GE(compared, 2);  // Gradient and PTM give normals
 }
 
 TEST(StreamedEvaluationTest, AStackOfAnotherSizeIsRefused) {

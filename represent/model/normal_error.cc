@@ -22,6 +22,12 @@ nlohmann::json NormalErrorStats::ToJson() const {
 }
 
 NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, const Mask& mask) {
+  NormalErrors errors;
+  errors.Add(estimated, truth, mask);
+  return errors.Summary();
+}
+
+void NormalErrors::Add(const Image& estimated, const Image& truth, const Mask& mask) {
   if (estimated.width() != truth.width() || estimated.height() != truth.height()) {
     throw Error(fmt::format("ground-truth normals are {}x{} but the estimate is {}x{}",
                             truth.width(), truth.height(), estimated.width(), estimated.height()));
@@ -29,16 +35,19 @@ NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, cons
   if (estimated.channels() < 3 || truth.channels() < 3) {
     throw Error("normal maps need 3 channels (x, y, z)");
   }
-  std::vector<double> errors;
   for (std::size_t p = 0; p < truth.pixel_count(); ++p) {
     if (mask.width() == truth.width() && !mask[p]) continue;
     const auto t = truth.pixel(p);
     const auto e = estimated.pixel(p);
     const Eigen::Vector3d tv(t[0], t[1], t[2]), ev(e[0], e[1], e[2]);
     if (tv.squaredNorm() < 0.25 || ev.squaredNorm() == 0.0) continue;  // outside the truth
-    errors.push_back(AngleBetweenDegrees(tv, ev));
+    errors_.push_back(AngleBetweenDegrees(tv, ev));
   }
-  if (errors.empty()) throw Error("no pixel has both a ground-truth and an estimated normal");
+}
+
+NormalErrorStats NormalErrors::Summary() const {
+  if (errors_.empty()) throw Error("no pixel has both a ground-truth and an estimated normal");
+  std::vector<double> errors = errors_;
   NormalErrorStats stats;
   stats.pixels = errors.size();
   stats.mean_degrees =

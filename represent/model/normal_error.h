@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "core/image.h"
 
@@ -21,5 +22,20 @@ struct NormalErrorStats {
 
 // Throws Error if the images differ in size or have fewer than 3 channels, or no pixel is valid.
 NormalErrorStats CompareNormals(const Image& estimated, const Image& truth, const Mask& mask);
+
+// CompareNormals over bands of rows (a streamed evaluation): each band's angular errors are kept
+// in raster order, so that Summary() equals CompareNormals of the whole images bit for bit. Memory:
+// 8 bytes per compared pixel.
+class NormalErrors {
+ public:
+  // The same rows of the estimate, the truth and the mask (a mask of another width: every pixel).
+  // Throws Error as CompareNormals does for bands that differ in size or channels.
+  void Add(const Image& estimated, const Image& truth, const Mask& mask);
+  // Throws Error when no pixel had both a ground-truth and an estimated normal.
+  NormalErrorStats Summary() const;
+
+ private:
+  std::vector<double> errors_;
+};
 
 }  // namespace photomat
