@@ -13,6 +13,7 @@
 #include <string>
 
 #include "capture/io/streamed_set.h"
+#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -305,6 +306,8 @@ void EstimateFlatFieldStreamed(StreamedSet& target, const fs::path& folder,
   fs::create_directories(parent, error);
   if (error) throw Error(parent, "cannot create the folder: " + error.message());
   const ScratchFolder scratch(parent, folder.filename().string());
+  CheckDiskSpace(scratch.path(), sums.size() * ImageFileBytes(width, height, target.channels(), 2),
+                 "the flat-field's gain maps");
   progress.Start("flat-field: gains", sums.size());
   target.Rewind();
   target.VisitBand(height, [&](int i, ConstImageView image) {

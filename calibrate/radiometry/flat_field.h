@@ -76,8 +76,9 @@ FlatField EstimateFlatField(const PhotometricSet& target, const FlatFieldOptions
 // gains made again, normalised and written. IMPLEMENTER CHOICE: a gain is computed twice rather
 // than kept between the passes, in memory (as large as the target as float) or in scratch files
 // (as large again on disk); its cost is about the image's decoding. The files are written into a
-// scratch folder beside `folder` and moved in when all are written, flatfield.json last: a fault
-// leaves no gain map and no description. Memory: an image and its gain per thread.
+// scratch folder beside `folder` (its free space checked for them first) and moved in when all
+// are written, flatfield.json last: a fault leaves no gain map and no description. Memory: an
+// image and its gain per thread.
 void EstimateFlatFieldStreamed(StreamedSet& target, const std::filesystem::path& folder,
                                const FlatFieldOptions& options = {});
 
