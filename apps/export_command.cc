@@ -370,15 +370,30 @@ bool WriteTiledViewerOfStackFiles(const ExportCommandOptions& options,
                                   const std::vector<std::filesystem::path>& paths) {
   ViewerExportOptions viewer = ViewerOptions(options);
   bool tiled = false;
+  int maps = 0;
+  std::size_t pixels = 0;
   for (const auto& path : paths) {
     const StackBandReader stack(path);
     tiled = UsesViewerTiles(viewer.tiling, stack.width(), stack.height());
+    pixels = static_cast<std::size_t>(stack.width()) * static_cast<std::size_t>(stack.height());
     const Representation& r = stack.header().representation;
+    maps += r.maps().channels();
     viewer.value_encodings[r.method()] = StackValueEncoding(stack.header().provenance);
     if (viewer.capture_lights.empty())
       viewer.capture_lights = stack.header().provenance.capture_lights;
   }
+  // IMPLEMENTER CHOICE: auto tiling also tiles a viewer below the size threshold when making it in
+  // memory would not fit the memory budget (--memory, else half of the machine's or the process's
+  // limits), so that the viewer adapts to a process's limits (a Slurm task's --mem) as the other
+  // exports do.
+  if (!tiled && viewer.tiling == ViewerTiling::kAuto &&
+      InMemoryViewerBytes(pixels, maps) > MemoryBudget(options)) {
+    tiled = true;
+    fmt::print("the viewer in memory would take about {} MB, over the {} MB budget: tiling it\n",
+               InMemoryViewerBytes(pixels, maps) >> 20, MemoryBudget(options) >> 20);
+  }
   if (!tiled) return false;
+  viewer.tiling = ViewerTiling::kAlways;
   TerminalProgressBar bar;
   viewer.progress = &bar;
   ExportViewerStreamed(options.viewer, paths, viewer);

@@ -24,6 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 using testing::RunPhotomat;
 using testing::RunResult;
 using testing::TempDir;
@@ -150,6 +151,28 @@ TEST(RelightStreamCliTest, EvaluateASetStreamedGivesTheInMemoryEtaAndNormalError
   EXPECT_THAT(refused.output, HasSubstr("--stream evaluates the reconstruction"));
 }
 
+// Below the size threshold a viewer is made in memory, unless that would not fit the memory
+// budget: a 512 x 512 PTM stack's viewer in memory takes about 57 MB (InMemoryViewerBytes: 18
+// maps), so under --memory 30 it is tiled from the stack in bands (whose pyramid buffers need 19
+// MB), and under --memory 1000 it is not.
+TEST(RelightStreamCliTest, AViewerThatWouldNotFitTheBudgetInMemoryIsTiled) {
+  const TempDir dir;
+  const fs::path stack = WriteLargePtmStack(dir, 512);
+  const RunResult small_budget = RunPhotomat("export " + stack.string() + " --viewer " +
+                                             (dir / "tiled").string() + " --memory 30");
+  ASSERT_EQ(small_budget.exit_code, 0) << small_budget.output;
+  EXPECT_THAT(small_budget.output, HasSubstr("over the 30 MB budget: tiling it"));
+  EXPECT_THAT(small_budget.output, HasSubstr("as deep-zoom tiles"));
+  EXPECT_TRUE(
+      ReadJsonFile(dir / "tiled" / "viewer.json")["methods"][0]["data"].contains("pyramid"));
+  const RunResult large_budget = RunPhotomat("export " + stack.string() + " --viewer " +
+                                             (dir / "whole").string() + " --memory 1000");
+  ASSERT_EQ(large_budget.exit_code, 0) << large_budget.output;
+  EXPECT_THAT(large_budget.output, Not(HasSubstr("deep-zoom")));
+  EXPECT_FALSE(
+      ReadJsonFile(dir / "whole" / "viewer.json")["methods"][0]["data"].contains("pyramid"));
+}
+
 // `export --viewer` of a stack the limit does not let load whole: the deep-zoom tiles are written
 // from bands (README "Web viewer and evaluation report"), and the level-0 tiles hold the stack's
 // maps bit for bit (tiles of 256 pixels with 1 of overlap, float32 RGBA layers).
@@ -157,16 +180,20 @@ TEST(RelightStreamCliTest, ViewerTilesUnderAnAddressSpaceLimitBelowTheWholeStack
   const TempDir dir;
   const fs::path stack = WriteLargePtmStack(dir, 1536);
   const std::size_t limit = std::size_t{900} << 20;
-  // The limit binds: the whole-texture viewer loads the stack whole and runs out of memory.
-  const RunResult whole =
-      RunPhotomat("export " + stack.string() + " --viewer " + (dir / "whole").string(), {limit});
+  // The limit binds: the whole-texture viewer (--viewer-tiles never) loads the stack whole and
+  // runs out of memory.
+  const RunResult whole = RunPhotomat("export " + stack.string() + " --viewer " +
+                                          (dir / "whole").string() + " --viewer-tiles never",
+                                      {limit});
   EXPECT_NE(whole.exit_code, 0) << whole.output;
   EXPECT_THAT(whole.output, HasSubstr("bad_alloc"));
   EXPECT_FALSE(fs::exists(dir / "whole"));
-  const RunResult tiled = RunPhotomat("export " + stack.string() + " --viewer " +
-                                          (dir / "viewer").string() + " --viewer-tiles always",
-                                      {limit});
+  // By default (auto) the viewer is below the size threshold but would not fit the budget the
+  // limit leaves: it is tiled by itself.
+  const RunResult tiled =
+      RunPhotomat("export " + stack.string() + " --viewer " + (dir / "viewer").string(), {limit});
   ASSERT_EQ(tiled.exit_code, 0) << tiled.output;
+  EXPECT_THAT(tiled.output, HasSubstr("budget: tiling it"));
   EXPECT_THAT(tiled.output, HasSubstr("as deep-zoom tiles"));
   const nlohmann::json pyramid =
       ReadJsonFile(dir / "viewer" / "viewer.json")["methods"][0]["data"]["pyramid"];

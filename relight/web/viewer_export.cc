@@ -592,4 +592,8 @@ void ExportViewerStreamed(const fs::path& folder, const std::vector<fs::path>& s
   });
 }
 
+std::size_t InMemoryViewerBytes(std::size_t pixels, int maps) {
+  return pixels * (50 + 10 * static_cast<std::size_t>(std::max(maps, 0)));
+}
+
 }  // namespace photomat
