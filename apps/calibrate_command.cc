@@ -473,11 +473,10 @@ int ApplyBandRows(std::size_t budget, const StreamedSet& set, const CaptureCorre
 std::vector<std::vector<float>> SemiCalibratedIntensities(StreamedSet& set, int rows,
                                                           CaptureCorrections& corrections,
                                                           Progress& progress) {
-  Mask mask(set.width(), set.height(), !set.masked());
-  for (std::size_t p : set.SelectedPixelIndices(0, set.height())) mask.Set(p, true);
   SemiCalibratedOptions options;
   options.weigher = RobustObservationWeigher();
-  SemiCalibratedSamples samples(SemiCalibratedPixels(mask, options), set.width());
+  SemiCalibratedSamples samples(SemiCalibratedPixels(set.MaskRows(0, set.height()), options),
+                                set.width());
   progress.Start("calibrate apply: samples for the intensities",
                  static_cast<std::size_t>((set.height() + rows - 1) / rows));
   for (int first = 0; first < set.height(); first += rows) {

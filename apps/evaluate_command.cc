@@ -1,7 +1,6 @@
 #include "apps/evaluate_command.h"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <charconv>
@@ -10,10 +9,9 @@
 #include "apps/cli_support.h"
 #include "apps/light_profile_cli.h"
 #include "apps/robust_support.h"
+#include "apps/streamed_capture.h"
 #include "apps/synthesis_cli.h"
-#include "capture/io/load_photometric_set.h"
 #include "capture/io/streamed_set.h"
-#include "core/disk_space.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
@@ -69,23 +67,12 @@ std::vector<MethodEvaluation> EvaluateSetStreamed(StreamedSet& set,
       json.empty() || json.parent_path().empty() ? std::filesystem::path(".") : json.parent_path();
   CreateFolder(beside);
   const ScratchFolder scratch(beside, "photomat-evaluate");
-  CheckDiskSpace(scratch.path(), StreamedStackBytes(set, methods), "the scratch map stacks");
-  std::vector<std::filesystem::path> stacks;
-  for (const Method& method : methods) stacks.push_back(scratch.path() / (method.Name() + ".exr"));
   TerminalProgressBar bar;
   StreamedFitOptions fit;
   fit.memory_bytes = options.memory_bytes;
-  fit.compression = FittedStackCompression(
-      "auto", set.SelectedPixels(0, set.height()) <
-                  static_cast<std::size_t>(set.width()) * static_cast<std::size_t>(set.height()));
-  fit.provenance = {set.lights(), "linear", set.source().string(), set.encodings()};
   fit.progress = &bar;
-  const StreamedFitReport report = FitStreamed(set, methods, stacks, fit);
-  WarnAboutClippedPixels(report.saturated_pixels, set.image_names());
-  std::vector<std::string> names;
-  for (const Method& method : methods) names.push_back(method.Name());
-  fmt::print("fitted {} to the {} photographs in bands of {} of {} rows\n", fmt::join(names, ", "),
-             set.size(), report.band_rows, set.height());
+  const std::vector<std::filesystem::path> stacks =
+      FitIntoFolder(set, methods, scratch.path(), set.source().string(), fit, true);
   options.progress = &bar;
   std::vector<MethodEvaluation> results;
   for (const auto& path : stacks) {
@@ -222,16 +209,14 @@ void AddEvaluateCommand(CLI::App& app) {
           "--stream evaluates the reconstruction of least-squares fits: it needs "
           "--no-prediction and does not go with --robust, pbr, --report or --compare");
     }
-    {
+    if (streamable) {
       StreamedSet set = OpenStreamedSet(options->input, load);
-      const double held = kWholeSetBytesPerPixelImage * static_cast<double>(set.width()) *
-                          static_cast<double>(set.height()) * set.size();
       const std::size_t budget = options->memory_mb > 0
                                      ? options->memory_mb << 20
                                      : DefaultMemoryBudget(kMinimumEvaluationMemory);
       // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
       // held whole would not fit the budget, and what is asked can be streamed.
-      if (options->stream || (streamable && held > static_cast<double>(budget))) {
+      if (options->stream || HoldingSetExceeds(set, budget)) {
         StreamedEvaluationOptions streamed;
         streamed.memory_bytes = options->memory_mb << 20;
         streamed.literal_thesis_rms = options->literal_rms;

@@ -1,13 +1,13 @@
 #include "apps/export_command.h"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <functional>
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
+#include "apps/streamed_capture.h"
 #include "capture/io/streamed_set.h"
 #include "core/colour.h"
 #include "core/disk_space.h"
@@ -417,18 +417,20 @@ void WriteViewerOfStacks(const ExportCommandOptions& options,
 // (kWholeSetBytesPerPixelImage per pixel and image) would not fit the memory budget, and nothing
 // made from the whole set's fits is asked (a relight web folder or compact form). The maps then
 // need the Poisson height, as a stack's.
-bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set) {
+// CaptureCanStream is what the options alone decide (the set is opened only then).
+bool CaptureCanStream(const ExportCommandOptions& options) {
   if (!options.relight_web.empty() || !options.compact.empty()) return false;
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty()) {
-    return false;
-  }
+  return !options.out.empty() || !options.ptm.empty() || !options.rti.empty() ||
+         !options.viewer.empty();
+}
+
+bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set) {
+  if (!CaptureCanStream(options)) return false;
   if (options.stream) return true;
   if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
     return false;
   }
-  const double pixel_images =
-      static_cast<double>(set.width()) * static_cast<double>(set.height()) * set.size();
-  return kWholeSetBytesPerPixelImage * pixel_images > static_cast<double>(MemoryBudget(options));
+  return HoldingSetExceeds(set, MemoryBudget(options));
 }
 
 // The streamed export of a photometric set (StreamsCapture): its photographs are fitted in bands
@@ -474,31 +476,14 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
   CreateFolder(beside);
   const ScratchFolder scratch(beside, "photomat-export");
   TerminalProgressBar bar;
-  bool warned = false;
-  const auto fit_into_scratch = [&](const std::vector<Method>& methods, bool encoded_values) {
-    StreamedFitOptions fit;
-    fit.memory_bytes = options.memory_mb << 20;
-    fit.encoded_values = encoded_values;
-    const std::size_t pixels = static_cast<std::size_t>(set.width()) * set.height();
-    fit.compression = FittedStackCompression("auto", set.SelectedPixels(0, set.height()) < pixels);
-    fit.provenance = {set.lights(), encoded_values ? "srgb" : "linear", options.input.string(),
-                      set.encodings()};
-    fit.progress = &bar;
-    CheckDiskSpace(scratch.path(), StreamedStackBytes(set, methods), "the scratch map stacks");
-    std::vector<std::filesystem::path> paths;
-    for (const Method& method : methods) paths.push_back(scratch.path() / (method.Name() + ".exr"));
-    const StreamedFitReport report = FitStreamed(set, methods, paths, fit);
-    if (!warned) WarnAboutClippedPixels(report.saturated_pixels, set.image_names());
-    warned = true;
-    std::vector<std::string> names;
-    for (const Method& method : methods) names.push_back(method.Name());
-    fmt::print("fitted {} to the {} photographs ({}) in bands of {} of {} rows\n",
-               fmt::join(names, ", "), set.size(), encoded_values ? "sRGB-encoded" : "linear",
-               report.band_rows, set.height());
-    return paths;
-  };
+  StreamedFitOptions fit;
+  fit.memory_bytes = options.memory_mb << 20;
+  fit.progress = &bar;
   if (!encoded.empty()) {
-    const std::vector<std::filesystem::path> stacks = fit_into_scratch(encoded, true);
+    StreamedFitOptions encoded_fit = fit;
+    encoded_fit.encoded_values = true;
+    const std::vector<std::filesystem::path> stacks =
+        FitIntoFolder(set, encoded, scratch.path(), options.input.string(), encoded_fit, true);
     std::size_t next = 0;
     if (!options.ptm.empty()) {
       StackBandReader stack(stacks[next]);
@@ -510,7 +495,8 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
     }
   }
   if (linear.empty()) return;
-  const std::vector<std::filesystem::path> stacks = fit_into_scratch(linear, false);
+  const std::vector<std::filesystem::path> stacks = FitIntoFolder(
+      set, linear, scratch.path(), options.input.string(), fit, /*warn_clipped=*/encoded.empty());
   if (!options.out.empty()) {
     StackBandReader stack(stacks.front());
     WriteMapsStreamed(options, stack);
@@ -580,7 +566,7 @@ void RunExport(const ExportCommandOptions& options) {
     load.untagged_colour_space = ParseColourSpace(options.colour_space);
     if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
   }
-  {
+  if (CaptureCanStream(options)) {
     StreamedSet set = OpenStreamedSet(options.input, load);
     if (StreamsCapture(options, set)) {
       ExportCaptureStreamed(options, set);

@@ -274,9 +274,7 @@ void EstimateFlatFieldStreamed(StreamedSet& target, const fs::path& folder,
                                const FlatFieldOptions& options) {
   const auto fail = [&](const std::string& fault) { throw Error(target.source(), fault); };
   const int width = target.width(), height = target.height();
-  Mask mask(width, height, !target.masked());
-  for (std::size_t p : target.SelectedPixelIndices(0, height)) mask.Set(p, true);
-  const TargetRegion region = MakeTargetRegion(mask, options, fail);
+  const TargetRegion region = MakeTargetRegion(target.MaskRows(0, height), options, fail);
   CheckTargetLights(target.lights(), target.image_names(), fail);
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);

@@ -232,6 +232,14 @@ std::size_t StreamedSet::SelectedPixels(int first, int rows) const {
   return count;
 }
 
+Mask StreamedSet::MaskRows(int first, int rows) const {
+  Mask mask(width(), rows, !mask_);
+  if (!mask_) return mask;
+  const std::size_t offset = static_cast<std::size_t>(first) * width();
+  for (std::size_t p = 0; p < mask.pixel_count(); ++p) mask.Set(p, (*mask_)[offset + p]);
+  return mask;
+}
+
 std::vector<std::size_t> StreamedSet::SelectedPixelIndices(int first, int rows) const {
   const std::size_t pixels = static_cast<std::size_t>(rows) * width();
   std::vector<std::size_t> indices;
@@ -287,9 +295,7 @@ PhotometricSet StreamedSet::ReadBand(int rows, bool raw, Progress* progress) {
   ReadBandInto(views, progress);
   PhotometricSet band(std::move(images), lights_, names_, source_);
   if (mask_) {
-    Mask mask(width(), rows, false);
-    const std::size_t offset = static_cast<std::size_t>(first) * width();
-    for (std::size_t p = 0; p < mask.pixel_count(); ++p) mask.Set(p, (*mask_)[offset + p]);
+    Mask mask = MaskRows(first, rows);
     // A band outside the mask selects no pixel (SelectedPixels: callers skip its fit).
     if (mask.CountSet() > 0) band.set_mask(std::move(mask));
   }

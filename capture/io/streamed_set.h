@@ -66,6 +66,8 @@ class StreamedSet {
   std::size_t SelectedPixels(int first, int rows) const;
   // Their indices within the band ((y - first) * width + x), ascending.
   std::vector<std::size_t> SelectedPixelIndices(int first, int rows) const;
+  // Rows [first, first + rows) of the mask (every pixel set without a mask).
+  Mask MaskRows(int first, int rows) const;
   // Back to row 0 (every file reopened): a further streamed pass.
   void Rewind();
   // Per image, the clipped pixels (a channel at full scale) of the rows read so far.

@@ -92,12 +92,8 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
       std::optional<Image> normals;
       if (gives_normals) normals = EstimateNormals(maps.representation);
       gives_normals = normals.has_value();  // a method that gives none gives none in any band
-      if (normals) {
-        // The mask's rows (a band set has none where they select nothing: ReadBand).
-        Mask mask(set.width(), rows, !set.masked());
-        for (std::size_t p : set.SelectedPixelIndices(first, rows)) mask.Set(p, true);
-        normal_errors.Add(*normals, truth_band, mask);
-      }
+      // The mask's rows from the set (a band set has none where they select nothing: ReadBand).
+      if (normals) normal_errors.Add(*normals, truth_band, set.MaskRows(first, rows));
     }
     if (set.SelectedPixels(first, rows) == 0) {
       progress.Advance();
