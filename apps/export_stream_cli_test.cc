@@ -32,16 +32,6 @@ using testing::RunPhotomat;
 using testing::RunResult;
 using testing::TempDir;
 
-// Names in `folder`, hidden ones (a scratch folder) included.
-std::vector<std::string> EntriesOf(const fs::path& folder) {
-  std::vector<std::string> names;
-  for (const auto& entry : fs::directory_iterator(folder)) {
-    names.push_back(entry.path().filename().string());
-  }
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
 // How two files' quantised planes differ: the largest difference of a byte, and the fraction of
 // bytes that differ.
 struct PlaneDifference {
@@ -148,7 +138,8 @@ TEST(ExportStreamCliTest, ASetExportedStreamedEqualsTheInMemoryExport) {
   }
   EXPECT_TRUE(ReadJsonFile(dir / "streamed" / "maps" / "export.json").contains("streamed"));
   // Nothing else beside the outputs: the scratch stacks are gone.
-  EXPECT_THAT(EntriesOf(dir / "streamed"), ::testing::ElementsAre("c.ptm", "c.rti", "maps"));
+  EXPECT_THAT(testing::EntriesOf(dir / "streamed"),
+              ::testing::ElementsAre("c.ptm", "c.rti", "maps"));
 }
 
 // A photograph truncated part-way: the streamed export fails naming it and leaves no .ptm, no
@@ -165,7 +156,7 @@ TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
                   (dir / "out" / "c.ptm").string() + " --out " + (dir / "out" / "maps").string());
   EXPECT_EQ(exported.exit_code, 1) << exported.output;
   EXPECT_THAT(exported.output, HasSubstr("img_030.png"));
-  EXPECT_TRUE(EntriesOf(dir / "out").empty()) << exported.output;
+  EXPECT_TRUE(testing::EntriesOf(dir / "out").empty()) << exported.output;
 }
 
 // --height fc integrates the whole map at once: a streamed export of a set refuses it before any
@@ -248,7 +239,7 @@ TEST(ExportStreamCliTest, ASetsViewerExportedStreamedEqualsTheInMemoryViewer) {
                                       (dir / "t").string() + " --viewer-tiles always");
   ASSERT_EQ(tiled.exit_code, 0) << tiled.output;
   EXPECT_THAT(tiled.output, HasSubstr("as deep-zoom tiles"));
-  EXPECT_THAT(EntriesOf(dir.path()), ::testing::ElementsAre("capture", "s", "t", "w"));
+  EXPECT_THAT(testing::EntriesOf(dir.path()), ::testing::ElementsAre("capture", "s", "t", "w"));
 }
 
 // What streaming is for: under a hard address-space limit far below what holding the set needs
@@ -275,12 +266,12 @@ TEST(ExportStreamCliTest, UnderAnAddressSpaceLimitASetStreamsByItselfAndMatches)
       RunPhotomat("export " + lights + files("refused") + " --memory 100000", {limit});
   EXPECT_NE(refused.exit_code, 0) << refused.output;
   EXPECT_THAT(refused.output, HasSubstr("out of memory"));
-  EXPECT_TRUE(EntriesOf(dir / "refused").empty());
+  EXPECT_TRUE(testing::EntriesOf(dir / "refused").empty());
   const RunResult whole = RunPhotomat("export " + lights + files("whole") + " --memory 100000");
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
   ExpectSamePtm(dir / "limited" / "c.ptm", dir / "whole" / "c.ptm");
   ExpectSameRti(dir / "limited" / "c.rti", dir / "whole" / "c.rti");
-  EXPECT_THAT(EntriesOf(dir / "limited"), ::testing::ElementsAre("c.ptm", "c.rti"));
+  EXPECT_THAT(testing::EntriesOf(dir / "limited"), ::testing::ElementsAre("c.ptm", "c.rti"));
 }
 
 }  // namespace

@@ -141,11 +141,7 @@ TEST(RelightStreamCliTest, EvaluateASetStreamedGivesTheInMemoryEtaAndNormalError
                 b[method]["normals"]["median_angular_error_deg"].get<double>(), 1e-6)
         << method;
   }
-  std::vector<std::string> left;
-  for (const auto& entry : fs::directory_iterator(dir / "out")) {
-    left.push_back(entry.path().filename().string());
-  }
-  EXPECT_THAT(left, ::testing::ElementsAre("streamed.json"));
+  EXPECT_THAT(testing::EntriesOf(dir / "out"), ::testing::ElementsAre("streamed.json"));
   const RunResult refused = RunPhotomat("evaluate " + capture + " --stream --methods ptm");
   EXPECT_EQ(refused.exit_code, 1) << refused.output;
   EXPECT_THAT(refused.output, HasSubstr("--stream evaluates the reconstruction"));

@@ -118,16 +118,6 @@ TEST(FlatFieldTest, DarkTargetIsAnError) {
   EXPECT_THROW(EstimateFlatField(target), Error);
 }
 
-// Names in `folder`, hidden ones (a scratch folder) included, sorted.
-std::vector<std::string> EntriesOf(const std::filesystem::path& folder) {
-  std::vector<std::string> names;
-  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
-    names.push_back(entry.path().filename().string());
-  }
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
 // A target (noisy unless `noise` is 0) whose mask leaves a border out, written as float EXR (or
 // 16-bit PNG).
 std::filesystem::path WriteTarget(const testing::TempDir& dir, const std::string& name,
@@ -178,7 +168,7 @@ TEST(FlatFieldTest, StreamedEstimateWritesTheInMemoryFlatField) {
       EXPECT_TRUE(testing::SameBits(a.gain(i), b.gain(i))) << model << ", light " << i;
     }
   }
-  EXPECT_EQ(EntriesOf(dir / "out"), (std::vector<std::string>{"polynomial", "smoothed"}));
+  EXPECT_EQ(testing::EntriesOf(dir / "out"), (std::vector<std::string>{"polynomial", "smoothed"}));
 }
 
 // A dark target (found in the first pass) and a target image truncated part-way: an Error naming
@@ -193,7 +183,7 @@ TEST(FlatFieldTest, StreamedEstimateOfABadTargetLeavesNothing) {
   } catch (const Error& error) {
     EXPECT_THAT(error.what(), ::testing::HasSubstr("the target is dark at pixel"));
   }
-  EXPECT_TRUE(EntriesOf(dir / "out").empty());
+  EXPECT_TRUE(testing::EntriesOf(dir / "out").empty());
   const std::filesystem::path target = WriteTarget(dir, "cut", 0.4, 0.004, SampleType::kUint16);
   StreamedSet cut = OpenStreamedSet(target, TargetLoadOptions());
   const std::filesystem::path victim = target / "img_005.png";
@@ -204,7 +194,7 @@ TEST(FlatFieldTest, StreamedEstimateOfABadTargetLeavesNothing) {
   } catch (const Error& error) {
     EXPECT_THAT(error.what(), ::testing::HasSubstr("img_005.png"));
   }
-  EXPECT_TRUE(EntriesOf(dir / "out").empty());
+  EXPECT_TRUE(testing::EntriesOf(dir / "out").empty());
 }
 
 TEST(NearLightTest, ReadsPositionsAndRejectsBadLines) {

@@ -40,6 +40,15 @@ std::optional<std::filesystem::path> TestDataDir() {
   return std::filesystem::path(value);
 }
 
+std::vector<std::string> EntriesOf(const std::filesystem::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 TempDir::TempDir() {
   const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();

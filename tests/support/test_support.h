@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/image.h"
 #include "core/image_io.h"
@@ -36,6 +37,10 @@ bool SameBits(const Image& a, const Image& b);
 // Largest |a - b| over the largest |b|, sample by sample (a failure if the shapes differ): how
 // far two fits of the same maps differ, relative to the maps' scale.
 double LargestDifferenceOverLargestValue(const Image& a, const Image& b);
+
+// The names in `folder`, hidden ones (temporaries, scratch folders) included, sorted: what a
+// command left there.
+std::vector<std::string> EntriesOf(const std::filesystem::path& folder);
 
 // A fresh folder under the system temp folder, removed with its contents on destruction.
 class TempDir {
