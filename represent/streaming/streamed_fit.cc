@@ -1,43 +1,28 @@
 #include "represent/streaming/streamed_fit.h"
 
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <future>
 #include <map>
 #include <memory>
-#include <mutex>
-#include <numeric>
 
-#include "calibrate/radiometry/exposure.h"
-#include "core/colour.h"
 #include "core/disk_space.h"
 #include "core/error.h"
 #include "core/memory_limits.h"
 #include "represent/fitting/fit.h"
 #include "represent/fitting/light_profile_fit.h"
 #include "represent/fitting/observations.h"
+#include "represent/streaming/band_streamer.h"
 
 namespace photomat {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::vector<int> AllImages(int count) {
-  std::vector<int> all(static_cast<std::size_t>(count));
-  std::iota(all.begin(), all.end(), 0);
-  return all;
-}
-
-// Each value re-encoded with the sRGB curve, as FitEncoded encodes the in-memory set's images
-// (the same bits per value).
-void EncodeSrgb(Eigen::MatrixXf& matrix) {
-  tbb::parallel_for(Eigen::Index{0}, matrix.cols(), [&](Eigen::Index column) {
-    for (float& v : matrix.col(column)) v = static_cast<float>(LinearToSrgb(v));
-  });
-}
+using streaming_internal::Band;
+using streaming_internal::IsLightProfile;
+using streaming_internal::NeedsGram;
+using streaming_internal::Streamer;
 
 // Maps of a method's stack (an upper bound for pbr): what a band's maps of it hold per pixel.
 int MapPlanes(const Method& method, int images, int channels) {
@@ -67,191 +52,6 @@ int MapPlanes(const Method& method, int images, int channels) {
   }
   return 8 + 2 * channels;
 }
-
-bool IsLightProfile(const Method& method) {
-  return method.kind == Method::Kind::kRbf || method.kind == Method::Kind::kBilinear;
-}
-
-// Methods whose fit needs the Gram matrix of the whole set's profiles (a streamed pass first).
-bool NeedsGram(const Method& method) {
-  return method.kind == Method::Kind::kEigen || IsLightProfile(method);
-}
-
-// One band of the set, read and prepared for fitting. Not movable: the observations refer to
-// the set and the robust fit to both.
-struct Band {
-  int first = 0;
-  int rows = 0;
-  std::optional<PhotometricSet> set;  // empty when the mask selects none of its pixels
-  std::optional<Observations> observations;
-  std::vector<Mask> measured;
-  std::optional<RobustFit> robust;
-
-  Band() = default;
-  Band(const Band&) = delete;
-  Band& operator=(const Band&) = delete;
-  bool empty() const { return !observations.has_value(); }
-
-  // The profiles the Gram-based methods (Eigen-k, rbf, bilinear) fit: least squares the
-  // observations' matrix itself, robust that matrix with its down-weighted samples imputed from
-  // the robust photometric stereo (RobustFit::EigenStart), made once per band and shared.
-  const Eigen::MatrixXf& StartProfiles() {
-    if (!robust) return observations->matrix();
-    if (!imputed_start) imputed_start = robust->EigenStart();
-    return *imputed_start;
-  }
-
- private:
-  std::optional<Eigen::MatrixXf> imputed_start;
-};
-
-class Streamer {
- public:
-  Streamer(StreamedSet& set, std::span<const Method> methods, const StreamedFitOptions& options)
-      : set_(set), options_(options), all_(AllImages(set.size())) {
-    band_rows_ = options.band_rows > 0
-                     ? std::min(options.band_rows, set.height())
-                     : StreamedBandRows(options.memory_bytes > 0 ? options.memory_bytes
-                                                                 : DefaultStreamedBudget(set),
-                                        set, methods, options.robust);
-    bands_ = (set.height() + band_rows_ - 1) / band_rows_;
-  }
-
-  int band_rows() const { return band_rows_; }
-  int passes() const { return passes_; }
-
-  // Reads the next band of `rows` into `band` (which must be fresh).
-  void Read(Band& band) {
-    band.first = set_.next_row();
-    band.rows = std::min(band_rows_, set_.height() - band.first);
-    const std::size_t selected = set_.SelectedPixels(band.first, band.rows);
-    if (selected == 0) {
-      set_.VisitBand(band.rows, [](int, ConstImageView) {});  // decoded past, nothing kept
-      return;
-    }
-    if (!options_.robust) {
-      ReadLeastSquaresBand(band, selected);
-      return;
-    }
-    // Robust: a band set, whose images the robust fit looks at as captured first.
-    PhotometricSet raw = set_.ReadBand(band.rows, true);
-    band.measured = MeasuredPixelMasks(raw);
-    if (set_.apply_intensities()) raw.ApplyIntensities();
-    band.set.emplace(std::move(raw));
-    band.observations.emplace(*band.set);
-    RobustFitOptions robust = options_.robust_options;
-    robust.measured = band.measured;
-    robust.progress = nullptr;
-    // The band's lamps (their frame the whole image's, from its first row) for pbr.
-    if (band.set->near_lighting()) robust.near_lighting = &*band.set->near_lighting();
-    band.robust.emplace(*band.observations, band.set->lights(), all_, robust, set_.source());
-  }
-
-  // A least-squares band decoded straight into the columns of its image data matrix, the
-  // intensities divided out there: no band images, no zero-filling and no copy, which were a
-  // quarter of a streamed PTM fit's CPU time beside the decoding (perf, 12 MP x 50 JPEGs). A band
-  // whose every pixel takes part is decoded into the columns themselves
-  // (StreamedSet::ReadBandInto); one the mask covers in part has each image's band decoded into a
-  // scratch band of its thread and its selected pixels gathered (StreamedSet::VisitBand). Robust
-  // fits (which look at the band's images as captured) read a band set.
-  void ReadLeastSquaresBand(Band& band, std::size_t selected) {
-    const int width = set_.width(), rows = band.rows, channels = set_.channels();
-    const auto pixels = static_cast<std::ptrdiff_t>(selected);
-    Eigen::MatrixXf matrix = TakeSpareMatrix();
-    matrix.resize(pixels * channels, set_.size());  // the spare's storage when the size is kept
-    std::vector<std::size_t> indices;
-    if (selected == static_cast<std::size_t>(width) * static_cast<std::size_t>(rows)) {
-      std::vector<ImageView> columns;
-      for (int i = 0; i < set_.size(); ++i) {
-        columns.emplace_back(matrix.col(i).data(), width, rows, channels, width, pixels);
-      }
-      set_.ReadBandInto(columns);
-    } else {
-      indices = set_.SelectedPixelIndices(band.first, rows);
-      set_.VisitBand(rows, [&](int i, ConstImageView decoded) {
-        for (int c = 0; c < channels; ++c) {
-          // VisitBand's bands are contiguous: pixel p of plane c is at c * plane_stride + p.
-          const float* plane = decoded.data() + c * decoded.plane_stride();
-          float* out = matrix.col(i).data() + c * pixels;
-          for (std::ptrdiff_t k = 0; k < pixels; ++k) out[k] = plane[indices[k]];
-        }
-      });
-    }
-    if (set_.apply_intensities() && !set_.intensities().empty()) {
-      for (int i = 0; i < set_.size(); ++i) {
-        for (int c = 0; c < channels; ++c) {
-          const float intensity = set_.intensities()[i][static_cast<std::size_t>(c)];
-          // As PhotometricSet::ApplyIntensities divides (the same bits as the in-memory fit).
-          for (float& v : matrix.col(i).segment(c * pixels, pixels)) v /= intensity;
-        }
-      }
-    }
-    if (options_.encoded_values) EncodeSrgb(matrix);
-    if (indices.empty()) {
-      band.observations.emplace(std::move(matrix), width, rows, channels);
-    } else {
-      band.observations.emplace(std::move(matrix), std::move(indices), width, rows, channels);
-    }
-  }
-
-  // One streamed pass: `visit` sees every band in row order. The next band is decoded (and, for
-  // robust fits, its robust start made) on a thread of its own while `visit` fits and writes the
-  // current one, so decoding, fitting and EXR writing overlap (README, "Streamed fitting": two
-  // bands are in memory at once, StreamedBandRows counts both). Bands are read in order by one
-  // thread at a time, so the result does not depend on the overlap. An error in either stops
-  // the pass: the reader's from get(), and a visit's only once the reader has finished (the
-  // future's destructor waits), so no band outlives the pass.
-  template <typename Visit>
-  void Pass(const std::string& label, Visit&& visit) {
-    if (passes_ > 0 || set_.next_row() != 0) set_.Rewind();
-    ++passes_;
-    NullProgress none;
-    Progress& progress = OrNull(options_.progress, none);
-    progress.Start(label, static_cast<std::size_t>(bands_));
-    const auto read_band = [this] {
-      auto band = std::make_unique<Band>();
-      Read(*band);
-      return band;
-    };
-    std::unique_ptr<Band> band = read_band();
-    for (int b = 0; b < bands_; ++b) {
-      std::future<std::unique_ptr<Band>> next;
-      if (b + 1 < bands_) next = std::async(std::launch::async, read_band);
-      visit(*band);
-      progress.Advance();
-      if (band->observations) KeepSpareMatrix(std::move(*band->observations).ReleaseMatrix());
-      band.reset();
-      if (next.valid()) band = next.get();
-    }
-    progress.Finish();
-  }
-
-  const std::vector<int>& all() const { return all_; }
-
- private:
-  // A fitted band's image data matrix, kept for the next band's (ReadLeastSquaresBand). Its storage
-  // is one block larger than malloc's reuse threshold (core/memory_limits.h) as soon as a band
-  // holds more than 32 MiB, and a fresh mapping per band would be first touched page by page
-  // (system time as large as the fit's own: 6.3 s for a 12 MP PTM fit in bands of 128 MB,
-  // measured).
-  Eigen::MatrixXf TakeSpareMatrix() {
-    const std::lock_guard lock(spare_mutex_);
-    return std::move(spare_matrix_);
-  }
-  void KeepSpareMatrix(Eigen::MatrixXf matrix) {
-    const std::lock_guard lock(spare_mutex_);
-    spare_matrix_ = std::move(matrix);
-  }
-
-  StreamedSet& set_;
-  const StreamedFitOptions& options_;
-  std::vector<int> all_;
-  int band_rows_ = 1;
-  int bands_ = 1;
-  int passes_ = 0;
-  std::mutex spare_mutex_;
-  Eigen::MatrixXf spare_matrix_;
-};
 
 // The robust weights' summary over bands: counts add, means weigh by the observations.
 void AddSummary(const RobustFitSummary& band, RobustFitSummary& total, double& weight_sum,
