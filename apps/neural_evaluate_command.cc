@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/json_file.h"
 #include "represent/evaluation/evaluation.h"
+#include "represent/fitting/prediction_folds.h"
 #include "represent/neural/neural_fit.h"
 
 namespace photomat::app {
@@ -45,10 +46,9 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
     const Observations observations(set);
     MethodEvaluation evaluation;
     evaluation.method = Method::Parse("neural");
-    std::vector<int> kept;
-    for (int i = 0; i < set.size(); ++i) {
-      (i % options->hold_out_every == 0 ? evaluation.prediction_images : kept).push_back(i);
-    }
+    const PredictionFold fold = PredictionFolds(set.size(), options->hold_out_every).front();
+    evaluation.prediction_images = fold.predicted;
+    const std::vector<int>& kept = fold.fitted;
     TerminalProgressBar bar;
     const Representation r =
         FitNeural(observations, set.lights(), kept, options->neural, set.source(), &bar);

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "represent/fitting/fit.h"
+#include "represent/fitting/prediction_folds.h"
 
 namespace photomat {
 namespace {
@@ -117,50 +118,42 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
   }
   if (!options.prediction) return result;
 
-  if (options.hold_out_every > 0) {
-    std::vector<int> kept;
-    for (int i = 0; i < n; ++i) {
-      (i % options.hold_out_every == 0 ? result.prediction_images : kept).push_back(i);
-    }
-    if (static_cast<int>(kept.size()) < method.MinimumImages()) {
-      throw Error(set.source(), fmt::format("holding out every {} image(s) leaves {} for {}, which "
-                                            "needs {}",
-                                            options.hold_out_every, kept.size(), method.Name(),
-                                            method.MinimumImages()));
-    }
-    progress.Start(fmt::format("held-out {}", method.Name()), 1);
-    const Representation held_out_fit = fit(kept, nullptr);
-    progress.Advance();
-    progress.Finish();
-    const auto count = result.prediction_images.size();
-    result.prediction_per_image.resize(count);
-    result.psnr_prediction_per_image.resize(count);
-    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t j) {
-      const int k = result.prediction_images[j];
-      const Eigen::VectorXf relit = RelightObservedPixels(held_out_fit, observations, set.light(k));
-      result.prediction_per_image[j] =
-          NormalisedRmsError(observations, k, relit, options.literal_thesis_rms);
-      result.psnr_prediction_per_image[j] = PeakSignalToNoiseRatio(observations, k, relit);
-    });
-  } else {
-    progress.Start(fmt::format("leave-one-out {}", method.Name()), n);
-    result.prediction_images = all;
-    result.prediction_per_image.resize(n);
-    result.psnr_prediction_per_image.resize(n);
-    tbb::parallel_for(0, n, [&](int k) {
-      std::vector<int> others;
-      for (int i = 0; i < n; ++i) {
-        if (i != k) others.push_back(i);
-      }
-      const Representation fold = fit(others, nullptr);
-      const Eigen::VectorXf relit = RelightObservedPixels(fold, observations, set.light(k));
-      result.prediction_per_image[k] =
-          NormalisedRmsError(observations, k, relit, options.literal_thesis_rms);
-      result.psnr_prediction_per_image[k] = PeakSignalToNoiseRatio(observations, k, relit);
-      progress.Advance();
-    });
-    progress.Finish();
+  // Each fold's fit predicts its images: leave-one-out one fit per image, run in parallel; held
+  // out, one fit for all the predicted images.
+  const std::vector<PredictionFold> folds = PredictionFolds(n, options.hold_out_every);
+  if (options.hold_out_every > 0 &&
+      static_cast<int>(folds.front().fitted.size()) < method.MinimumImages()) {
+    throw Error(set.source(), fmt::format("holding out every {} image(s) leaves {} for {}, which "
+                                          "needs {}",
+                                          options.hold_out_every, folds.front().fitted.size(),
+                                          method.Name(), method.MinimumImages()));
   }
+  std::vector<std::size_t> offsets;  // per fold, its first entry of prediction_images
+  for (const PredictionFold& fold : folds) {
+    offsets.push_back(result.prediction_images.size());
+    result.prediction_images.insert(result.prediction_images.end(), fold.predicted.begin(),
+                                    fold.predicted.end());
+  }
+  const std::size_t count = result.prediction_images.size();
+  result.prediction_per_image.resize(count);
+  result.psnr_prediction_per_image.resize(count);
+  progress.Start(fmt::format("{} {}", options.hold_out_every > 0 ? "held-out" : "leave-one-out",
+                             method.Name()),
+                 folds.size());
+  tbb::parallel_for(std::size_t{0}, folds.size(), [&](std::size_t f) {
+    const PredictionFold& fold = folds[f];
+    const Representation fold_fit = fit(fold.fitted, nullptr);
+    const std::size_t first = offsets[f];
+    tbb::parallel_for(std::size_t{0}, fold.predicted.size(), [&](std::size_t j) {
+      const int k = fold.predicted[j];
+      const Eigen::VectorXf relit = RelightObservedPixels(fold_fit, observations, set.light(k));
+      result.prediction_per_image[first + j] =
+          NormalisedRmsError(observations, k, relit, options.literal_thesis_rms);
+      result.psnr_prediction_per_image[first + j] = PeakSignalToNoiseRatio(observations, k, relit);
+    });
+    progress.Advance();
+  });
+  progress.Finish();
   result.eta_prediction = Mean(result.prediction_per_image);
   result.psnr_prediction = Mean(result.psnr_prediction_per_image);
   return result;

@@ -367,17 +367,10 @@ Representation FitObservations(const Observations& observations,
       return RobustFit(observations, lights, selected, RobustFitOptions{}, source).Fit(method);
     case Method::Kind::kRbf:
     case Method::Kind::kBilinear: {
-      const auto n = static_cast<Eigen::Index>(selected.size());
-      const Eigen::MatrixXd& gram = observations.Gram();
-      Eigen::MatrixXd sub(n, n);
-      Eigen::VectorXd sums(n);
-      for (Eigen::Index a = 0; a < n; ++a) {
-        for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(selected[a], selected[b]);
-        sums[a] = observations.ColumnSums()[selected[a]];
-      }
       return ProjectLightProfiles(
-          FitLightProfileModel(sub, sums, fit.SelectedLights(), method, source), observations,
-          observations.matrix(), selected);
+          FitLightProfileModel(observations.Gram(), observations.ColumnSums(), lights, selected,
+                               method, source),
+          observations, observations.matrix(), selected);
     }
     case Method::Kind::kNeural:
       fit.Fail(NeuralIsTrainedApart());

@@ -744,6 +744,23 @@ LightProfileModel FitLightProfileModel(const Eigen::MatrixXd& gram,
   return RbfModel(gram, column_sums, lights, method.profile, source, std::move(details));
 }
 
+LightProfileModel FitLightProfileModel(const Eigen::MatrixXd& gram,
+                                       const Eigen::VectorXd& column_sums,
+                                       const std::vector<LightDirection>& lights,
+                                       std::span<const int> selected, const Method& method,
+                                       const fs::path& source) {
+  const auto n = static_cast<Eigen::Index>(selected.size());
+  Eigen::MatrixXd sub(n, n);
+  Eigen::VectorXd sums(n);
+  std::vector<LightDirection> selected_lights;
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b < n; ++b) sub(a, b) = gram(selected[a], selected[b]);
+    sums[a] = column_sums[selected[a]];
+    selected_lights.push_back(lights[static_cast<std::size_t>(selected[a])]);
+  }
+  return FitLightProfileModel(sub, sums, selected_lights, method, source);
+}
+
 Representation ProjectLightProfiles(const LightProfileModel& model,
                                     const Observations& observations, const Eigen::MatrixXf& matrix,
                                     std::span<const int> columns) {

@@ -196,6 +196,15 @@ LightProfileModel FitLightProfileModel(const Eigen::MatrixXd& gram,
                                        const std::filesystem::path& source = {},
                                        nlohmann::json details = nlohmann::json::object());
 
+// The same for the profiles over the images `selected` of a Gram matrix and column sums of every
+// image (`lights` every image's): the rows and columns `selected` picks (a prediction fold, or
+// every image).
+LightProfileModel FitLightProfileModel(const Eigen::MatrixXd& gram,
+                                       const Eigen::VectorXd& column_sums,
+                                       const std::vector<LightDirection>& lights,
+                                       std::span<const int> selected, const Method& method,
+                                       const std::filesystem::path& source = {});
+
 // The maps of `model` for the columns `columns` of `matrix` (rows in `observations`' order; the
 // observations' own matrix or an imputed copy; entry i of the model's profile is column
 // columns[i]).

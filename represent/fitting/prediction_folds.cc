@@ -1,0 +1,24 @@
+#include "represent/fitting/prediction_folds.h"
+
+namespace photomat {
+
+std::vector<PredictionFold> PredictionFolds(int images, int hold_out_every) {
+  std::vector<PredictionFold> folds;
+  if (hold_out_every > 0) {
+    PredictionFold& fold = folds.emplace_back();
+    for (int i = 0; i < images; ++i) {
+      (i % hold_out_every == 0 ? fold.predicted : fold.fitted).push_back(i);
+    }
+    return folds;
+  }
+  for (int k = 0; k < images; ++k) {
+    PredictionFold& fold = folds.emplace_back();
+    fold.predicted = {k};
+    for (int i = 0; i < images; ++i) {
+      if (i != k) fold.fitted.push_back(i);
+    }
+  }
+  return folds;
+}
+
+}  // namespace photomat
