@@ -56,30 +56,60 @@ std::optional<std::filesystem::path> TruthPath(const std::filesystem::path& give
 // `evaluate INPUT --stream` (README "Streamed relighting and export"): `methods` fitted to `set`
 // in bands (FitStreamed) into scratch stacks, each then evaluated against the set streamed
 // (EvaluateStackStreamed): the same eta of reconstruction as the in-memory evaluation to float
-// rounding, and the same normal errors. IMPLEMENTER CHOICE: the scratch folder is beside `json`
-// (the output the user chose a place for), else in the current folder; its free space is checked
-// first, and it is removed however the evaluation ends.
-std::vector<MethodEvaluation> EvaluateSetStreamed(StreamedSet& set,
-                                                  const std::vector<Method>& methods,
-                                                  StreamedEvaluationOptions options,
-                                                  const std::filesystem::path& json) {
+// rounding, and the same normal errors. With `prediction`, the folds are fitted band by band
+// first (PredictStreamed): the same eta and PSNR of prediction. IMPLEMENTER CHOICE: the scratch
+// folder is beside `json` (the output the user chose a place for), else in the current folder;
+// its free space is checked first, and it is removed however the evaluation ends.
+std::vector<MethodEvaluation> EvaluateSetStreamed(
+    StreamedSet& set, const std::vector<Method>& methods, StreamedEvaluationOptions options,
+    const std::optional<StreamedPredictionOptions>& prediction, const std::filesystem::path& json) {
   const std::filesystem::path beside =
       json.empty() || json.parent_path().empty() ? std::filesystem::path(".") : json.parent_path();
   CreateFolder(beside);
-  const ScratchFolder scratch(beside, "photomat-evaluate");
   TerminalProgressBar bar;
+  std::vector<MethodEvaluation> results(methods.size());
+  // Prediction first: a fold too small for a method fails before any fit is written.
+  if (prediction) {
+    StreamedPredictionOptions predict = *prediction;
+    predict.progress = &bar;
+    PredictStreamed(set, methods, results, predict);
+  }
+  const ScratchFolder scratch(beside, "photomat-evaluate");
   StreamedFitOptions fit;
   fit.memory_bytes = options.memory_bytes;
   fit.progress = &bar;
   const std::vector<std::filesystem::path> stacks =
       FitIntoFolder(set, methods, scratch.path(), set.source().string(), fit, true);
   options.progress = &bar;
-  std::vector<MethodEvaluation> results;
-  for (const auto& path : stacks) {
-    StackBandReader stack(path);
-    results.push_back(EvaluateStackStreamed(set, stack, options));
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    StackBandReader stack(stacks[i]);
+    MethodEvaluation reconstruction = EvaluateStackStreamed(set, stack, options);
+    results[i].method = methods[i];
+    results[i].eta_reconstruction = reconstruction.eta_reconstruction;
+    results[i].reconstruction_per_image = std::move(reconstruction.reconstruction_per_image);
+    results[i].normals = reconstruction.normals;
   }
   return results;
+}
+
+// Prints `heading` and the table of `results` (and, with `compare`, the ranking of the methods
+// over their predicted images), and writes them to `json` unless it is empty. Returns the
+// ranking.
+std::optional<MethodComparison> PrintAndSaveEvaluations(
+    const std::string& heading, const std::vector<MethodEvaluation>& results, bool compare,
+    const std::filesystem::path& json) {
+  fmt::print("{}\n{}", heading, FormatEvaluationTable(results));
+  std::optional<MethodComparison> comparison;
+  if (compare) {
+    comparison = CompareMethods(results);
+    fmt::print("\n{}", FormatComparisonTable(*comparison));
+  }
+  if (!json.empty()) {
+    nlohmann::json out = EvaluationsToJson(results);
+    if (comparison) out["comparison"] = comparison->ToJson();
+    WriteJsonFile(json, out);
+  }
+  return comparison;
 }
 
 }  // namespace
@@ -164,9 +194,9 @@ void AddEvaluateCommand(CLI::App& app) {
                       kMinimumEvaluationMemory);
   command->add_flag("--stream", options->stream,
                     "Fit the methods to INPUT in bands into scratch stacks beside --json (or in "
-                    "the current folder) and evaluate those streamed: the eta of reconstruction "
-                    "and the normals' errors, whatever the set's size (needs --no-prediction; not "
-                    "with --robust, pbr, --report or --compare)");
+                    "the current folder) and evaluate those streamed, and fit the prediction's "
+                    "folds band by band: the same numbers in memory for a band, whatever the "
+                    "set's size (least squares: not with --robust, pbr or --report)");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -202,12 +232,21 @@ void AddEvaluateCommand(CLI::App& app) {
     const bool pbr_asked = std::any_of(methods.begin(), methods.end(), [](const Method& m) {
       return m.kind == Method::Kind::kPbr;
     });
-    const bool streamable = options->no_prediction && !options->robust && !pbr_asked &&
-                            options->report.empty() && !options->compare;
+    // Checked before the evaluation, which can take minutes.
+    if (options->hold_out_every > 0 && options->no_prediction) {
+      throw Error(
+          "--hold-out-every chooses the predicted images: it does not go with --no-prediction");
+    }
+    if (options->compare && (options->no_prediction || methods.size() < 2)) {
+      throw Error(
+          "--compare ranks two or more methods by their prediction errors: it needs --methods "
+          "with at least two methods and does not go with --no-prediction");
+    }
+    const bool streamable = !options->robust && !pbr_asked && options->report.empty();
     if (options->stream && !streamable) {
       throw Error(
-          "--stream evaluates the reconstruction of least-squares fits: it needs "
-          "--no-prediction and does not go with --robust, pbr, --report or --compare");
+          "--stream evaluates least-squares fits in bands: it does not go with --robust, pbr "
+          "or --report (which draws whole images)");
     }
     if (streamable) {
       StreamedSet set = OpenStreamedSet(options->input, load);
@@ -215,20 +254,28 @@ void AddEvaluateCommand(CLI::App& app) {
                                      ? options->memory_mb << 20
                                      : DefaultMemoryBudget(kMinimumEvaluationMemory);
       // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
-      // held whole would not fit the budget, and what is asked can be streamed.
+      // held whole would not fit the budget.
       if (options->stream || HoldingSetExceeds(set, budget)) {
         StreamedEvaluationOptions streamed;
         streamed.memory_bytes = options->memory_mb << 20;
         streamed.literal_thesis_rms = options->literal_rms;
         streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
+        std::optional<StreamedPredictionOptions> prediction;
+        if (!options->no_prediction) {
+          prediction.emplace();
+          prediction->memory_bytes = streamed.memory_bytes;
+          prediction->hold_out_every = options->hold_out_every;
+          prediction->literal_thesis_rms = options->literal_rms;
+        }
         const std::vector<MethodEvaluation> results =
-            EvaluateSetStreamed(set, methods, streamed, options->json);
-        fmt::print("{} images (streamed){}\n{}", set.size(),
-                   streamed.ground_truth_normals
-                       ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
-                       : "",
-                   FormatEvaluationTable(results));
-        if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
+            EvaluateSetStreamed(set, methods, streamed, prediction, options->json);
+        PrintAndSaveEvaluations(
+            fmt::format(
+                "{} images (streamed){}", set.size(),
+                streamed.ground_truth_normals
+                    ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
+                    : ""),
+            results, options->compare, options->json);
         return;
       }
     }
@@ -245,16 +292,6 @@ void AddEvaluateCommand(CLI::App& app) {
       throw Error(*truth_path,
                   fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
                               truth->height(), loaded.set.width(), loaded.set.height()));
-    }
-    // Checked before the evaluation, which can take minutes.
-    if (options->hold_out_every > 0 && options->no_prediction) {
-      throw Error(
-          "--hold-out-every chooses the predicted images: it does not go with --no-prediction");
-    }
-    if (options->compare && (options->no_prediction || methods.size() < 2)) {
-      throw Error(
-          "--compare ranks two or more methods by their prediction errors: it needs --methods "
-          "with at least two methods and does not go with --no-prediction");
     }
     const std::vector<int> report_images = ParseIndexList(options->report_images);
     for (int index : report_images) {
@@ -283,19 +320,10 @@ void AddEvaluateCommand(CLI::App& app) {
       results.push_back(EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr,
                                        method_evaluation));
     }
-    fmt::print("{} images, {} pixels{}\n{}", loaded.set.size(), observations.pixels(),
-               truth ? fmt::format(", ground truth {}", truth_path->string()) : "",
-               FormatEvaluationTable(results));
-    std::optional<MethodComparison> comparison;
-    if (options->compare) {
-      comparison = CompareMethods(results);
-      fmt::print("\n{}", FormatComparisonTable(*comparison));
-    }
-    if (!options->json.empty()) {
-      nlohmann::json json = EvaluationsToJson(results);
-      if (comparison) json["comparison"] = comparison->ToJson();
-      WriteJsonFile(options->json, json);
-    }
+    const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
+        fmt::format("{} images, {} pixels{}", loaded.set.size(), observations.pixels(),
+                    truth ? fmt::format(", ground truth {}", truth_path->string()) : ""),
+        results, options->compare, options->json);
     if (!options->report.empty()) {
       EvaluationReportOptions report;
       report.title = fmt::format("photomat evaluation of {}", PublishedName(options->input));

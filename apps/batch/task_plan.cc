@@ -166,9 +166,9 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
              {"--report-images", fmt::format("{}", fmt::join(evaluation.report_images, ","))});
     }
     AppendRobust(arguments, recipe.fit);
-    // The reconstruction alone of least-squares fits is evaluated streamed (evaluate --stream).
-    if (!evaluation.prediction && !evaluation.report && !recipe.fit.robust &&
-        !NamesPbr(recipe.fit.methods)) {
+    // Least-squares fits are evaluated streamed, prediction too (evaluate --stream); the report
+    // draws whole images.
+    if (!evaluation.report && !recipe.fit.robust && !NamesPbr(recipe.fit.methods)) {
       arguments.push_back("--stream");
     }
     steps.push_back({"evaluate", arguments});

@@ -171,15 +171,17 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   // Without stacks, maps and viewer are made from the capture, streamed too.
   json["exports"]["stacks"] = false;
   EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
-  // The reconstruction alone (no prediction, no report) of least-squares fits streams too
-  // (evaluate --stream); a robust one, a report or prediction hold the set.
+  // The evaluation of least-squares fits without a report streams too, with or without
+  // prediction (evaluate --stream); a robust one, pbr or a report hold the set.
   json = Full();
   json["fit"] = {{"methods", {"gradient", "ptm"}}};
-  json["exports"]["evaluation"] = {{"prediction", false}, {"report", false}};
-  const TaskPlan plan = PlanTasks(Parse(json));
-  EXPECT_EQ(plan.tasks[0].steps.back().arguments.back(), "--stream");
-  EXPECT_THAT(whole_set_steps(json), ElementsAre());
-  json["exports"]["evaluation"] = {{"prediction", true}, {"report", false}};
+  for (const bool prediction : {false, true}) {
+    json["exports"]["evaluation"] = {{"prediction", prediction}, {"report", false}};
+    const TaskPlan plan = PlanTasks(Parse(json));
+    EXPECT_EQ(plan.tasks[0].steps.back().arguments.back(), "--stream");
+    EXPECT_THAT(whole_set_steps(json), ElementsAre());
+  }
+  json["exports"]["evaluation"] = {{"prediction", true}, {"report", true}};
   EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
   json["exports"]["evaluation"] = {{"prediction", false}, {"report", false}};
   json["fit"]["methods"] = {"ptm", "pbr"};

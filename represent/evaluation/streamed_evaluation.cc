@@ -1,6 +1,7 @@
 #include "represent/evaluation/streamed_evaluation.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,17 +12,35 @@
 #include "core/image_band_io.h"
 #include "core/memory_limits.h"
 #include "represent/fitting/observations.h"
+#include "represent/fitting/prediction_folds.h"
 #include "represent/model/normal_error.h"
+#include "represent/streaming/streamed_folds.h"
 
 namespace photomat {
 namespace {
 
-// The sums of one image's e_k and sigma_k over the bands so far.
+// The sums of one image's e_k, sigma_k and PSNR over the bands so far.
 struct ImageSums {
   double count = 0.0;
   double captured = 0.0;
   double captured_squared = 0.0;
   double difference_squared = 0.0;
+  double peak = -INFINITY;  // the largest captured value
+
+  // A band's captured values of the image and their relit values.
+  void Add(const Eigen::VectorXd& values, const Eigen::VectorXf& relit) {
+    count += static_cast<double>(values.size());
+    captured += values.sum();
+    captured_squared += values.squaredNorm();
+    difference_squared += (relit.cast<double>() - values).squaredNorm();
+    peak = std::max(peak, values.maxCoeff());
+  }
+
+  // As PeakSignalToNoiseRatio (evaluation.h).
+  double Psnr() const {
+    if (difference_squared == 0.0) return INFINITY;
+    return 10.0 * std::log10(peak * peak / (difference_squared / count));
+  }
 
   double NormalisedError(bool literal_thesis_rms) const {
     const double mean = captured / count;
@@ -103,12 +122,7 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
     for (int k = 0; k < set.size(); ++k) {
       const Eigen::VectorXf relit =
           RelightObservedPixels(maps.representation, observations, band.light(k));
-      const auto captured = observations.matrix().col(k).cast<double>();
-      ImageSums& image = sums[static_cast<std::size_t>(k)];
-      image.count += static_cast<double>(captured.size());
-      image.captured += captured.sum();
-      image.captured_squared += captured.squaredNorm();
-      image.difference_squared += (relit.cast<double>() - captured).squaredNorm();
+      sums[static_cast<std::size_t>(k)].Add(observations.matrix().col(k).cast<double>(), relit);
     }
     progress.Advance();
   }
@@ -124,6 +138,57 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
   result.eta_reconstruction = total / static_cast<double>(sums.size());
   if (gives_normals) result.normals = normal_errors.Summary();
   return result;
+}
+
+void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
+                     std::span<MethodEvaluation> evaluations,
+                     const StreamedPredictionOptions& options) {
+  if (methods.size() != evaluations.size()) {
+    throw Error(set.source(),
+                fmt::format("{} methods but {} evaluations", methods.size(), evaluations.size()));
+  }
+  const std::vector<PredictionFold> folds = PredictionFolds(set.size(), options.hold_out_every);
+  // Per method, per image of the set: each image is predicted by one fold only, so the folds
+  // fitted in parallel write to different sums.
+  std::vector<std::vector<ImageSums>> sums(methods.size(), std::vector<ImageSums>(set.size()));
+  FoldFitOptions fits;
+  fits.memory_bytes = options.memory_bytes;
+  fits.band_rows = options.band_rows;
+  fits.progress = options.progress;
+  VisitFoldFits(
+      set, methods, folds,
+      [&](const FoldFit& band) {
+        const std::vector<int>& predicted = folds[band.fold].predicted;
+        tbb::parallel_for(std::size_t{0}, predicted.size(), [&](std::size_t j) {
+          const int k = predicted[j];
+          const Eigen::VectorXf relit = RelightObservedPixels(
+              band.fit, band.observations, set.lights()[static_cast<std::size_t>(k)]);
+          sums[band.method][static_cast<std::size_t>(k)].Add(
+              band.observations.matrix().col(k).cast<double>(), relit);
+        });
+      },
+      fits);
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    MethodEvaluation& result = evaluations[i];
+    result.prediction_images.clear();
+    result.prediction_per_image.clear();
+    result.psnr_prediction_per_image.clear();
+    double eta = 0.0, psnr = 0.0;
+    for (const PredictionFold& fold : folds) {
+      for (int k : fold.predicted) {
+        const ImageSums& image = sums[i][static_cast<std::size_t>(k)];
+        if (image.count == 0.0) throw Error(set.source(), "the mask selects no pixel to evaluate");
+        result.prediction_images.push_back(k);
+        result.prediction_per_image.push_back(image.NormalisedError(options.literal_thesis_rms));
+        result.psnr_prediction_per_image.push_back(image.Psnr());
+        eta += result.prediction_per_image.back();
+        psnr += result.psnr_prediction_per_image.back();
+      }
+    }
+    const auto count = static_cast<double>(result.prediction_images.size());
+    result.eta_prediction = eta / count;
+    result.psnr_prediction = psnr / count;
+  }
 }
 
 }  // namespace photomat

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <optional>
+#include <span>
 
 #include "capture/io/streamed_set.h"
 #include "core/progress.h"
@@ -39,5 +40,28 @@ inline constexpr std::size_t kMinimumEvaluationMemory = std::size_t{16} << 20;
 // its size or output channels differ from the set's, or the truth when its size differs.
 MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
                                        const StreamedEvaluationOptions& options = {});
+
+// The ability of prediction streamed (VisitFoldFits, represent/streaming/streamed_folds.h): each
+// fold of the leave-one-out (or held-out) evaluation fitted band by band, its predicted images
+// relit in the band and the per-image sums of e_k, sigma_k and the PSNR (its peak the largest
+// captured value) accumulated over the bands: the same eta and PSNR of prediction as
+// EvaluateMethod, to float rounding, in memory for a band. Least squares only.
+struct StreamedPredictionOptions {
+  // Bytes the bands may hold; 0: the fit's default (DefaultStreamedBudget).
+  std::size_t memory_bytes = 0;
+  int band_rows = 0;  // > 0: exactly this many rows per band (tests)
+  // As EvaluationOptions::hold_out_every: 0 leave-one-out, K every K-th image held out.
+  int hold_out_every = 0;
+  bool literal_thesis_rms = false;
+  Progress* progress = nullptr;
+};
+
+// Sets the prediction of `evaluations[i]` (prediction_images, eta_prediction, psnr_prediction
+// and their per-image values) for `methods[i]` fitted to `set`. Throws Error naming the set's
+// source when the sizes differ, for a method that cannot be streamed (robust, pbr, neural) or a
+// fold too small for a method, and naming the image at fault for a truncated or corrupt one.
+void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
+                     std::span<MethodEvaluation> evaluations,
+                     const StreamedPredictionOptions& options = {});
 
 }  // namespace photomat

@@ -144,7 +144,7 @@ std::size_t DefaultStreamedBudget(const StreamedSet& set) {
 std::size_t DefaultFitMemory() { return DefaultMemoryBudget(kMinimumFitMemory); }
 
 int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
-                     std::span<const Method> methods, bool robust) {
+                     std::span<const Method> methods, bool robust, int concurrent_fits) {
   const auto n = static_cast<std::size_t>(set.size());
   const auto channels = static_cast<std::size_t>(set.channels());
   const auto width = static_cast<std::size_t>(set.width());
@@ -153,9 +153,9 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
   // images first and copies (4 + 4); robust: the weights (4 per image), the measured masks (1)
   // and, for Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample). Two
   // bands are held at once (the next one is decoded while this one is fitted: Streamer::Pass).
-  // One method's maps at a time, with the fit's products and the writer's interleaved copy (12
-  // bytes per map). A masked least-squares fit adds each decoding thread's scratch band (4 bytes
-  // per channel; only the band being read has them).
+  // One method's maps at a time (per concurrent fit), with the fit's products and the writer's
+  // interleaved copy (12 bytes per map). A masked least-squares fit adds each decoding thread's
+  // scratch band (4 bytes per channel; only the band being read has them).
   int planes = 0;
   bool imputed = false;
   for (const Method& method : methods) {
@@ -168,8 +168,10 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
       !robust && set.masked()
           ? static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()) * channels * 4
           : 0;
-  const std::size_t per_pixel =
-      2 * per_band_pixel + static_cast<std::size_t>(planes) * 12 + scratch;
+  const std::size_t per_pixel = 2 * per_band_pixel +
+                                static_cast<std::size_t>(planes) * 12 *
+                                    static_cast<std::size_t>(std::max(concurrent_fits, 1)) +
+                                scratch;
   const std::size_t fixed = DecoderChunkBytes(set);
   const std::size_t room = memory_bytes > fixed ? memory_bytes - fixed : 0;
   const std::size_t rows = room / std::max<std::size_t>(per_pixel * width, 1);

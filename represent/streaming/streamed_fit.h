@@ -81,9 +81,10 @@ inline constexpr std::size_t kMinimumFitMemory = std::size_t{16} << 20;
 std::size_t DefaultStreamedBudget(const StreamedSet& set);
 
 // The rows per band that `memory_bytes` allows for `methods` on `set` (at least 1, at most the
-// image height), from the bytes per row the band holds (README, "Streamed fitting").
+// image height), from the bytes per row the band holds (README, "Streamed fitting"), with
+// `concurrent_fits` fits of a band in flight at once (prediction folds: one per thread).
 int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
-                     std::span<const Method> methods, bool robust);
+                     std::span<const Method> methods, bool robust, int concurrent_fits = 1);
 
 // The bytes the stacks of `methods` fitted to `set` take on disk at most (ImageFileBytes of their
 // maps as float, core/disk_space.h): `photomat fit` checks the free space for them first.
