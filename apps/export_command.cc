@@ -412,67 +412,83 @@ void WriteViewerOfStacks(const ExportCommandOptions& options,
   WriteViewer(options, ViewerStacks(options.input, method));
 }
 
-// IMPLEMENTER CHOICE: a photometric set's .ptm, .rti, maps and viewer are made streamed, in
-// bands, as a stack's are (StreamsStack), when asked (--stream) or when holding the whole set
-// (kWholeSetBytesPerPixelImage per pixel and image) would not fit the memory budget, and nothing
-// made from the whole set's fits is asked (a relight web folder or compact form). The maps then
-// need the Poisson height, as a stack's.
-// CaptureCanStream is what the options alone decide (the set is opened only then).
+// Whether --relight-web asks relight's ptm or hsh basis (from photographs: fitted to the encoded
+// values), rather than an mrgb one (rbf, bilinear: a PCA of every pixel's profile at the nodes).
+bool RelightWebIsPolynomial(const ExportCommandOptions& options) {
+  const RelightWebBasis basis = RelightWebOptionsFor(options, "").basis;
+  return basis == RelightWebBasis::kPtm || basis == RelightWebBasis::kHsh;
+}
+
+// IMPLEMENTER CHOICE: a photometric set's exports are made from scratch stacks fitted in bands
+// (ExportCaptureStreamed) when asked (--stream) or when holding the whole set
+// (kWholeSetBytesPerPixelImage per pixel and image) would not fit the memory budget. The .ptm,
+// .rti, Poisson-height maps and viewer then read the stacks in bands too; what is made from a
+// whole stack (the maps with --height fc, the compact form's PCA, relight's ptm and hsh planes
+// and their ranges) loads its scratch stack, a fraction of the set (Gradient: 6 floats per pixel
+// against 3 per pixel and image, twice). relight's rbf and bilinear planes are a PCA of every
+// pixel's profile at the nodes, as large as the set, so a --relight-web of those is made in
+// memory. CaptureCanStream is what the options alone decide (the set is opened only then).
 bool CaptureCanStream(const ExportCommandOptions& options) {
-  if (!options.relight_web.empty() || !options.compact.empty()) return false;
+  if (!options.relight_web.empty() && !RelightWebIsPolynomial(options)) return false;
   return !options.out.empty() || !options.ptm.empty() || !options.rti.empty() ||
-         !options.viewer.empty();
+         !options.viewer.empty() || !options.relight_web.empty() || !options.compact.empty();
 }
 
 bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set) {
   if (!CaptureCanStream(options)) return false;
-  if (options.stream) return true;
-  if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
-    return false;
-  }
-  return HoldingSetExceeds(set, MemoryBudget(options));
+  return options.stream || HoldingSetExceeds(set, MemoryBudget(options));
 }
 
 // The streamed export of a photometric set (StreamsCapture): its photographs are fitted in bands
-// (FitStreamed) into scratch map stacks, which the stacks' streamed exports read: the encoded
-// fits the .ptm and .rti are made from (FitEncoded's domain: `encoded_values`, provenance "srgb",
-// which ExportPtmStreamed and ExportRtiStreamed take as they are) in one pass over the
-// photographs, the linear fits the maps and the viewer come from (--method, else Gradient for the
-// maps and every method for the viewer, as in memory) in another. The viewer is tiled from the
-// stacks in bands when it is tiled (WriteTiledViewerOfStackFiles), else made from them loaded
-// whole (a viewer below the tiling threshold is made in memory whatever its source). IMPLEMENTER
-// CHOICE: scratch stacks rather than a fit per pass of the exports: a .ptm takes two passes (the
-// coefficients' ranges, then the bytes) and decoding the photographs costs several times reading a
-// float stack back. The scratch folder is beside the first output (on its disk, whose free space is
-// checked) and is removed at the end, however the export ends. The files equal the in-memory
-// export's to float rounding (a fit's matrix product rounds by band, streamed_interchange.h), so a
-// quantised coefficient may differ by one code.
+// (FitStreamed) into scratch map stacks, which the stacks' exports read: the encoded fits the
+// .ptm, .rti and relight's ptm / hsh planes are made from (FitEncoded's domain: `encoded_values`,
+// provenance "srgb", which the exports take as they are) in one pass over the photographs, the
+// linear fits the maps, the compact form and the viewer come from (--method, else Gradient for
+// the maps and the compact form and every method for the viewer, as in memory) in another. The
+// .ptm, .rti, Poisson-height maps and a tiled viewer read the stacks in bands; the maps with
+// --height fc, the compact form, relight's planes and a viewer below the tiling threshold load
+// their stack whole (CaptureCanStream). IMPLEMENTER CHOICE: scratch stacks rather than a fit per
+// pass of the exports: a .ptm takes two passes (the coefficients' ranges, then the bytes) and
+// decoding the photographs costs several times reading a float stack back. The scratch folder is
+// beside the first output (on its disk, whose free space is checked) and is removed at the end,
+// however the export ends. The files equal the in-memory export's to float rounding (a fit's
+// matrix product rounds by band, streamed_interchange.h), so a quantised coefficient may differ
+// by one code.
 void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set) {
-  if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
-    // Refused before minutes of fitting, as ExportMapsStreamed would after them.
-    throw Error(options.input,
-                "a streamed export integrates the height by tiled Poisson only (--height fc "
-                "needs the whole map in memory)");
-  }
+  // The encoded fits, each method once: .ptm, .rti, then relight's planes.
   std::vector<Method> encoded;
-  if (!options.ptm.empty()) encoded.push_back(PtmMethod(options, "", set.channels()));
-  if (!options.rti.empty()) encoded.push_back(HshMethod(options, ""));
-  // The linear fits: the maps' method first, then the viewer's others.
+  const auto encoded_index = [&](const Method& method) {
+    for (std::size_t k = 0; k < encoded.size(); ++k) {
+      if (encoded[k].Name() == method.Name()) return k;
+    }
+    encoded.push_back(method);
+    return encoded.size() - 1;
+  };
+  std::optional<std::size_t> ptm_fit, rti_fit, relight_fit;
+  std::optional<RelightWebOptions> relight;
+  if (!options.ptm.empty()) ptm_fit = encoded_index(PtmMethod(options, "", set.channels()));
+  if (!options.rti.empty()) rti_fit = encoded_index(HshMethod(options, ""));
+  if (!options.relight_web.empty()) {
+    relight = RelightWebOptionsFor(options, "");
+    relight_fit = encoded_index(RelightWebPolynomialMethod(*relight));  // as RelightWebFromSet
+  }
+  // The linear fits: the maps' and compact form's method first, then the viewer's others.
   const Method maps_method = Method::Parse(options.method.empty() ? "gradient" : options.method);
   const std::vector<Method> viewer_methods =
       options.method.empty() ? AllMethods() : std::vector{maps_method};
   std::vector<Method> linear;
-  if (!options.out.empty()) linear.push_back(maps_method);
+  if (!options.out.empty() || !options.compact.empty()) linear.push_back(maps_method);
   for (const Method& m : options.viewer.empty() ? std::vector<Method>{} : viewer_methods) {
     if (std::none_of(linear.begin(), linear.end(),
                      [&](const Method& l) { return l.Name() == m.Name(); })) {
       linear.push_back(m);
     }
   }
-  const std::filesystem::path beside = FolderOf(!options.out.empty()   ? options.out
-                                                : !options.ptm.empty() ? options.ptm
-                                                : !options.rti.empty() ? options.rti
-                                                                       : options.viewer);
+  std::filesystem::path beside = FolderOf(options.viewer);
+  for (const std::filesystem::path& output :
+       {options.compact, options.relight_web, options.rti, options.ptm, options.out}) {
+    if (!output.empty()) beside = FolderOf(output);
+  }
   CreateFolder(beside);
   const ScratchFolder scratch(beside, "photomat-export");
   TerminalProgressBar bar;
@@ -484,22 +500,33 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
     encoded_fit.encoded_values = true;
     const std::vector<std::filesystem::path> stacks =
         FitIntoFolder(set, encoded, scratch.path(), options.input.string(), encoded_fit, true);
-    std::size_t next = 0;
-    if (!options.ptm.empty()) {
-      StackBandReader stack(stacks[next]);
-      WritePtmFileStreamed(options, stack, encoded[next++]);
+    if (ptm_fit) {
+      StackBandReader stack(stacks[*ptm_fit]);
+      WritePtmFileStreamed(options, stack, encoded[*ptm_fit]);
     }
-    if (!options.rti.empty()) {
-      StackBandReader stack(stacks[next]);
-      WriteRtiFileStreamed(options, stack, encoded[next]);
+    if (rti_fit) {
+      StackBandReader stack(stacks[*rti_fit]);
+      WriteRtiFileStreamed(options, stack, encoded[*rti_fit]);
+    }
+    if (relight_fit) {
+      PrintRelightWeb(options,
+                      RelightWebFromStack(LoadRepresentation(stacks[*relight_fit]), *relight));
     }
   }
   if (linear.empty()) return;
   const std::vector<std::filesystem::path> stacks = FitIntoFolder(
       set, linear, scratch.path(), options.input.string(), fit, /*warn_clipped=*/encoded.empty());
-  if (!options.out.empty()) {
-    StackBandReader stack(stacks.front());
-    WriteMapsStreamed(options, stack);
+  if (!options.out.empty() || !options.compact.empty()) {
+    const bool poisson = ParseHeightIntegrator(options.height) == HeightIntegrator::kPoisson;
+    if (!options.out.empty() && poisson) {
+      StackBandReader stack(stacks.front());
+      WriteMapsStreamed(options, stack);
+    }
+    if (!options.compact.empty() || !poisson) {
+      const LoadedStack stack = LoadRepresentation(stacks.front());
+      WriteCompact(options, stack);
+      if (!poisson) WriteMaps(options, stack);  // --height fc: a whole-map FFT
+    }
   }
   if (options.viewer.empty()) return;
   // In photomat's method order, as a fit folder's viewer.
@@ -565,6 +592,11 @@ void RunExport(const ExportCommandOptions& options) {
   if (!options.colour_space.empty()) {
     load.untagged_colour_space = ParseColourSpace(options.colour_space);
     if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
+  }
+  if (options.stream && !options.relight_web.empty() && !RelightWebIsPolynomial(options)) {
+    throw Error(
+        "--stream: relight's rbf and bilinear planes are a PCA of every pixel's profile at the "
+        "nodes, made with the whole set in memory: export them without --stream");
   }
   if (CaptureCanStream(options)) {
     StreamedSet set = OpenStreamedSet(options.input, load);
@@ -687,9 +719,9 @@ void AddExportCommand(CLI::App& app) {
                   DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
   command->add_flag("--stream", options->stream,
                     "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size; "
-                    "a photometric set's (and its --viewer) are fitted in bands into scratch "
-                    "stacks beside the outputs first (height by tiled Poisson; not for --height "
-                    "fc, --relight-web or --compact)");
+                    "a photometric set is fitted in bands into scratch stacks beside the outputs "
+                    "first, which its exports read (in bands, or the one stack whole for --height "
+                    "fc, --compact and --relight-web; not for relight's rbf and bilinear bases)");
   command->callback([options] { RunExport(*options); });
 }
 

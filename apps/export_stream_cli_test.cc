@@ -16,7 +16,9 @@
 #include "core/atomic_file.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "relight/formats/compact_stack.h"
 #include "relight/formats/ptm_file.h"
+#include "relight/formats/relight_web_format.h"
 #include "relight/formats/rti_file.h"
 #include "tests/support/layouts.h"
 #include "tests/support/test_support.h"
@@ -159,18 +161,70 @@ TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
   EXPECT_TRUE(testing::EntriesOf(dir / "out").empty()) << exported.output;
 }
 
-// --height fc integrates the whole map at once: a streamed export of a set refuses it before any
-// fitting, saying why.
-TEST(ExportStreamCliTest, FrankotChellappaIsRefusedBeforeFitting) {
+// What is made from a whole stack (relight's ptm planes and their ranges, the compact form's PCA,
+// the maps with --height fc, a whole-map FFT) is made, streamed, from the one scratch stack
+// fitted in bands, loaded whole: the in-memory export's files to within one code (measured: the
+// same bytes), and no scratch left. relight's rbf planes are a PCA of every pixel's profile, as
+// large as the set: --stream refuses them, saying why.
+TEST(ExportStreamCliTest, WholeStackExportsOfASetComeFromItsScratchStack) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 32x24 --seed 2").exit_code, 0);
-  const RunResult exported =
-      RunPhotomat("export " + capture + " --stream --height fc --out " + (dir / "maps").string());
-  EXPECT_EQ(exported.exit_code, 1) << exported.output;
-  EXPECT_THAT(exported.output, HasSubstr("--height fc needs the whole map in memory"));
-  EXPECT_THAT(exported.output, Not(HasSubstr("fitted")));
-  EXPECT_FALSE(fs::exists(dir / "maps"));
+  ASSERT_EQ(
+      RunPhotomat("generate --out " + capture + " --size 96x80 --pattern bumps --seed 8").exit_code,
+      0);
+  fs::create_directories(dir / "whole");
+  fs::create_directories(dir / "streamed");
+  const auto files = [&](const std::string& folder) {
+    return " --relight-web " + (dir / folder / "web").string() + " --compact " +
+           (dir / folder / "compact").string() + " --out " + (dir / folder / "maps").string() +
+           " --height fc";
+  };
+  const RunResult whole = RunPhotomat("export " + capture + files("whole"));
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  const RunResult streamed =
+      RunPhotomat("export " + capture + " --stream --memory 1" + files("streamed"));
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  std::printf("%s", streamed.output.c_str());
+  EXPECT_THAT(streamed.output, HasSubstr("fitted ptm to the 36 photographs (sRGB-encoded) in "
+                                         "bands of"));
+  EXPECT_THAT(streamed.output, HasSubstr("fitted gradient to the 36 photographs (linear)"));
+  EXPECT_THAT(streamed.output, Not(HasSubstr("bands of 80 of 80 rows")));
+  const RelightWebStack a = ReadRelightWeb(dir / "streamed" / "web");
+  const RelightWebStack b = ReadRelightWeb(dir / "whole" / "web");
+  ASSERT_EQ(a.basis, b.basis);
+  for (std::size_t p = 0; p < b.scale.size(); ++p) {
+    EXPECT_NEAR(a.scale[p], b.scale[p], 1e-4 * std::abs(b.scale[p])) << p;
+    EXPECT_NEAR(a.bias[p], b.bias[p], 1e-4) << p;
+  }
+  const PlaneDifference web = ComparePlanes(a.planes, b.planes);
+  std::printf("relight web planes vs in memory: largest byte difference %d, %.3g%% differ\n",
+              web.largest, 100 * web.fraction);
+  EXPECT_LE(web.largest, 1);  // as ExpectSamePtm (JPEG planes of the same bytes decode alike)
+  EXPECT_LE(web.fraction, 0.001);
+  const LoadedStack compact_a = ReadCompactStack(dir / "streamed" / "compact");
+  const LoadedStack compact_b = ReadCompactStack(dir / "whole" / "compact");
+  EXPECT_EQ(compact_a.representation.method(), "gradient");
+  const double compact = testing::LargestDifferenceOverLargestValue(
+      compact_a.representation.maps(), compact_b.representation.maps());
+  std::printf("compact maps vs in memory: %.3g of the largest value\n", compact);
+  EXPECT_LE(compact, 1.5 / 255);  // 8-bit planes: at most one code apart
+  for (const char* map : {"normal.png", "albedo.png", "height.exr"}) {
+    const Image x = ReadImage(dir / "streamed" / "maps" / map).image;
+    const Image y = ReadImage(dir / "whole" / "maps" / map).image;
+    ASSERT_TRUE(x.SameShape(y)) << map;
+    const double difference = testing::LargestDifferenceOverLargestValue(x, y);
+    std::printf("%s vs in memory: %.3g of the largest value\n", map, difference);
+    EXPECT_LE(difference, 1.5 / 65535) << map;  // as the maps above
+  }
+  EXPECT_EQ(ReadJsonFile(dir / "streamed" / "maps" / "export.json")["height_map"]["integrator"],
+            "fc");
+  EXPECT_THAT(testing::EntriesOf(dir / "streamed"),
+              ::testing::ElementsAre("compact", "maps", "web"));
+  const RunResult rbf = RunPhotomat("export " + capture + " --stream --relight-basis rbf " +
+                                    "--relight-web " + (dir / "rbf").string());
+  EXPECT_EQ(rbf.exit_code, 1) << rbf.output;
+  EXPECT_THAT(rbf.output, HasSubstr("export them without --stream"));
+  EXPECT_FALSE(fs::exists(dir / "rbf"));
 }
 
 // Every file under `folder` (relative paths, sorted).

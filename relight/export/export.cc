@@ -210,7 +210,9 @@ nlohmann::json ExportDescription(const LoadedStack& stack, int width, int height
         {"encoding", "16-bit linear, (n + 1) / 2 per component"},
         {"source", normals_source}}},
       {"albedo", {{"file", "albedo.png"}, {"encoding", "8-bit sRGB"}}},
-      {"height",
+      // Not "height" (the image's, above): a second key of that name was dropped by the JSON
+      // object, so the height map went undescribed until 2026-12-06.
+      {"height_map",
        {{"file", "height.exr"},
         {"png", "height.png"},
         {"units", "pixels"},

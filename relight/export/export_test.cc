@@ -240,6 +240,15 @@ TEST(ExportTest, WritesEveryMapAValidGltfTileAndAStackWithHeight) {
   const LoadedImage height_png = ReadImage(dir / "height.png");
   EXPECT_EQ(height_png.info.bits_per_sample, 16);
   EXPECT_EQ(height_png.info.attributes.count("photomat:height_min"), 1u);
+  // export.json gives the image's size and describes the height map, with its range.
+  EXPECT_EQ(description["width"], 48);
+  EXPECT_EQ(description["height"], 48);
+  const nlohmann::json& height_map = description["height_map"];
+  EXPECT_EQ(height_map["file"], "height.exr");
+  EXPECT_EQ(height_map["integrator"], "poisson");
+  const double min = std::stod(height_png.info.attributes.at("photomat:height_min"));
+  EXPECT_NEAR(height_map["min"].get<double>(), min, 1e-8 * std::abs(min));  // 9 digits there
+  EXPECT_LT(height_map["min"].get<double>(), height_map["max"].get<double>());
   // stack.exr relights as the stack did and carries the height layer.
   const LoadedStack reloaded = LoadRepresentation(dir / "stack.exr");
   EXPECT_EQ(reloaded.extra_layers.channel_names(), std::vector<std::string>{"height"});

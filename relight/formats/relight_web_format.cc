@@ -688,17 +688,23 @@ void CheckOptions(const RelightWebOptions& options) {
 
 }  // namespace
 
+Method RelightWebPolynomialMethod(const RelightWebOptions& options) {
+  CheckOptions(options);
+  if (options.basis == RelightWebBasis::kPtm) return Method::Parse("ptm");
+  if (options.basis != RelightWebBasis::kHsh) {
+    throw Error(fmt::format("relight's {} basis is not a polynomial", ToString(options.basis)));
+  }
+  if (options.hsh_terms != 4 && options.hsh_terms != 9) {
+    throw Error(
+        fmt::format("relight's web format holds HSH of 4 or 9 terms, not {}", options.hsh_terms));
+  }
+  return Method::Parse(fmt::format("hsh{}", options.hsh_terms));
+}
+
 RelightWebStack RelightWebFromSet(const PhotometricSet& set, const RelightWebOptions& options) {
   CheckOptions(options);
   if (options.basis == RelightWebBasis::kPtm || options.basis == RelightWebBasis::kHsh) {
-    const std::string method =
-        options.basis == RelightWebBasis::kPtm ? "ptm" : fmt::format("hsh{}", options.hsh_terms);
-    if (options.basis == RelightWebBasis::kHsh && options.hsh_terms != 4 &&
-        options.hsh_terms != 9) {
-      throw Error(
-          fmt::format("relight's web format holds HSH of 4 or 9 terms, not {}", options.hsh_terms));
-    }
-    const LoadedStack fit{FitEncoded(set, Method::Parse(method)),
+    const LoadedStack fit{FitEncoded(set, RelightWebPolynomialMethod(options)),
                           StackProvenance(set.lights(), "srgb", set.source())};
     return PolynomialFromStack(fit, options);
   }

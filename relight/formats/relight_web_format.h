@@ -9,6 +9,7 @@
 
 #include "core/photometric_set.h"
 #include "represent/model/light_basis.h"
+#include "represent/model/method.h"
 #include "represent/model/representation.h"
 #include "represent/stack/map_stack.h"
 
@@ -141,6 +142,12 @@ struct RelightWebOptions {
 // coefficients are projected onto the basis as stored (after its integer rounding). Throws Error
 // for pbr (a nonlinear shading) and for option values relight does not read.
 RelightWebStack RelightWebFromStack(const LoadedStack& stack, const RelightWebOptions& options);
+
+// The method relight's ptm or hsh planes are fitted as from photographs, to their encoded values
+// (ptm, hsh4 or hsh9): what RelightWebFromSet fits, and what a streamed export fits in bands
+// before RelightWebFromStack. Throws Error for the rbf and bilinear bases and for options relight
+// does not read (JPEG quality, range quantile, HSH other than 4 or 9 terms).
+Method RelightWebPolynomialMethod(const RelightWebOptions& options);
 
 // The same from photographs, as relight-cli builds from them: ptm/hsh fitted to the sRGB-encoded
 // values (FitEncoded), rbf with the encoded photographs themselves as the node values, bilinear
