@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -58,12 +59,14 @@ int BandRows(const StreamedSet& set, const StackBandReader& stack,
   const std::size_t memory =
       options.memory_bytes > 0 ? options.memory_bytes : DefaultBandBudget(kMinimumEvaluationMemory);
   // Per pixel: the set's band and its observation matrix (4 bytes x images x channels each), the
-  // stack's band as stored and gathered, and one image's relit values.
+  // stack's band as stored and gathered, and the relit values of the images relit at once (one
+  // per thread).
+  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
   const std::size_t pixel =
       8 * static_cast<std::size_t>(set.size()) * static_cast<std::size_t>(set.channels()) +
-      4 * static_cast<std::size_t>(stack.stored_channels() +
-                                   stack.header().representation.maps().channels() +
-                                   set.channels());
+      4 * (static_cast<std::size_t>(stack.stored_channels() +
+                                    stack.header().representation.maps().channels()) +
+           threads * static_cast<std::size_t>(set.channels()));
   const std::size_t rows = memory / std::max<std::size_t>(pixel * set.width(), 1);
   return static_cast<int>(std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(set.height())));
 }
@@ -119,11 +122,12 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
       continue;
     }
     const Observations observations(band);
-    for (int k = 0; k < set.size(); ++k) {
+    // Each image's sums are its own: the images are relit in parallel.
+    tbb::parallel_for(0, set.size(), [&](int k) {
       const Eigen::VectorXf relit =
           RelightObservedPixels(maps.representation, observations, band.light(k));
       sums[static_cast<std::size_t>(k)].Add(observations.matrix().col(k).cast<double>(), relit);
-    }
+    });
     progress.Advance();
   }
   progress.Finish();
