@@ -128,9 +128,9 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
     std::vector<std::string> arguments{
         "export", exports.stacks ? kStacksFolder : input, "--method", maps.method, "--out", "maps"};
     Append(arguments, {"--normal-convention", maps.normal_convention, "--height", maps.height});
-    // From the capture: fitted in bands (export --stream) unless the height is the whole-image
-    // FFT, which needs the whole map.
-    if (!exports.stacks && maps.height != "fc") arguments.push_back("--stream");
+    // From the capture: fitted in bands (export --stream); the whole-image FFT height then loads
+    // the fitted stack, not the set.
+    if (!exports.stacks) arguments.push_back("--stream");
     if (!maps.gltf) arguments.push_back("--no-gltf");
     steps.push_back({"maps", arguments});
   }

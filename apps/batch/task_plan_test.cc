@@ -87,11 +87,11 @@ TEST_F(TaskPlanTest, WithoutStacksTheExportsReadTheCapture) {
                        "--normal-convention", "opengl", "--height", "poisson", "--stream"}));
   EXPECT_EQ(plan.tasks[0].steps[1].arguments,
             (Arguments{"export", capture, "--viewer", "viewer", "--stream"}));
-  // The whole-image FFT height needs the whole map: that export holds the set.
+  // The whole-image FFT height needs the whole map: the stack fitted in bands, not the set.
   json["exports"]["maps"] = {{"height", "fc"}};
   const TaskPlan fc = PlanTasks(Parse(json));
-  EXPECT_EQ(fc.tasks[0].steps[0].arguments.back(), "fc");
-  EXPECT_TRUE(StepHoldsWholeSet(fc.tasks[0].steps[0]));
+  EXPECT_EQ(fc.tasks[0].steps[0].arguments.back(), "--stream");
+  EXPECT_FALSE(StepHoldsWholeSet(fc.tasks[0].steps[0]));
   EXPECT_FALSE(StepHoldsWholeSet(fc.tasks[0].steps[1]));
 }
 

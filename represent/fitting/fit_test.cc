@@ -18,6 +18,19 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
+// StackMapCount (represent/model/method.h), which memory and disk estimates use, is the maps a fit
+// makes.
+TEST(FitTest, StackMapCountIsTheMapsOfTheFit) {
+  const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 12);
+  for (const char* name :
+       {"3i", "gradient", "ptm", "ptm-lrgb", "hsh4", "hsh9", "eigen6", "rbf", "bilinear"}) {
+    const Method method = Method::Parse(name);
+    EXPECT_EQ(Fit(synthetic.set, method).maps().channels(),
+              StackMapCount(method, synthetic.set.size(), synthetic.set.channels()))
+        << name;
+  }
+}
+
 TEST(FitTest, GradientRecoversNormalsAndAlbedoOfALambertianSample) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBricks, 128);
   const Representation gradient = Fit(synthetic.set, Method::Parse("gradient"));

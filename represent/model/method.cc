@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 
 #include "core/error.h"
@@ -109,6 +110,35 @@ std::vector<Method> AllMethods() {
   using K = Method::Kind;
   return {{K::kThreeImage}, {K::kGradient}, {K::kPtm},
           {K::kPtmLrgb},    {K::kEigen, 3}, {K::kEigen, 6}};
+}
+
+int StackMapCount(const Method& method, int images, int channels) {
+  switch (method.kind) {
+    case Method::Kind::kThreeImage:
+      return 3 * channels;
+    case Method::Kind::kGradient:
+      return 3 + channels;
+    case Method::Kind::kPtm:
+      return 6 * channels;
+    case Method::Kind::kPtmLrgb:
+      return 6 + channels;
+    case Method::Kind::kHsh:
+      return method.hsh_terms * channels;
+    case Method::Kind::kEigen:
+      return method.eigen_k * channels;
+    case Method::Kind::kRbf:
+      return (method.profile.planes > 0 ? std::min(method.profile.planes, images) : images) *
+             channels;  // kChoosePlanes: at most images, as no PCA
+    case Method::Kind::kBilinear:
+      return (method.profile.planes > 0 ? std::min(method.profile.planes, images)
+                                        : method.profile.grid_size * method.profile.grid_size) *
+             channels;
+    case Method::Kind::kNeural:
+      return 9;  // NeuralRTI's default coefficients (the decoder travels in the description)
+    case Method::Kind::kPbr:
+      break;
+  }
+  return 8 + 2 * channels;
 }
 
 }  // namespace photomat

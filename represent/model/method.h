@@ -93,6 +93,10 @@ struct Method {
 // only the photomat-neural program loads (`photomat fit --method neural`, represent/neural).
 std::string NeuralIsTrainedApart();
 
+// The maps of `method`'s stack fitted to `images` images of `channels` channels (pbr: an upper
+// bound; neural: its default 9 coefficients): what memory and disk estimates count per pixel.
+int StackMapCount(const Method& method, int images, int channels);
+
 // "all" (AllMethods) or a comma-separated list of names.
 std::vector<Method> ParseMethodList(std::string_view list);
 // 3i, gradient, ptm, ptm-lrgb, eigen3, eigen6: the thesis's five and PTM's LRGB form (not pbr, a

@@ -24,35 +24,6 @@ using streaming_internal::IsLightProfile;
 using streaming_internal::NeedsGram;
 using streaming_internal::Streamer;
 
-// Maps of a method's stack (an upper bound for pbr): what a band's maps of it hold per pixel.
-int MapPlanes(const Method& method, int images, int channels) {
-  switch (method.kind) {
-    case Method::Kind::kThreeImage:
-      return 3 * channels;
-    case Method::Kind::kGradient:
-      return 3 + channels;
-    case Method::Kind::kPtm:
-      return 6 * channels;
-    case Method::Kind::kPtmLrgb:
-      return 6 + channels;
-    case Method::Kind::kHsh:
-      return method.hsh_terms * channels;
-    case Method::Kind::kEigen:
-      return method.eigen_k * channels;
-    case Method::Kind::kRbf:
-      return (method.profile.planes > 0 ? std::min(method.profile.planes, images) : images) *
-             channels;  // kChoosePlanes: at most images, as no PCA
-    case Method::Kind::kBilinear:
-      return (method.profile.planes > 0 ? std::min(method.profile.planes, images)
-                                        : method.profile.grid_size * method.profile.grid_size) *
-             channels;
-    case Method::Kind::kPbr:
-    case Method::Kind::kNeural:  // refused by FitStreamed
-      break;
-  }
-  return 8 + 2 * channels;
-}
-
 // The robust weights' summary over bands: counts add, means weigh by the observations.
 void AddSummary(const RobustFitSummary& band, RobustFitSummary& total, double& weight_sum,
                 double& inlier_sum) {
@@ -159,7 +130,7 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
   int planes = 0;
   bool imputed = false;
   for (const Method& method : methods) {
-    planes = std::max(planes, MapPlanes(method, set.size(), set.channels()));
+    planes = std::max(planes, StackMapCount(method, set.size(), set.channels()));
     imputed |= NeedsGram(method);
   }
   std::size_t per_band_pixel = n * channels * (robust ? 8 : 4);
@@ -314,8 +285,8 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
 std::size_t StreamedStackBytes(const StreamedSet& set, std::span<const Method> methods) {
   std::size_t bytes = 0;
   for (const Method& method : methods) {
-    bytes +=
-        ImageFileBytes(set.width(), set.height(), MapPlanes(method, set.size(), set.channels()), 4);
+    bytes += ImageFileBytes(set.width(), set.height(),
+                            StackMapCount(method, set.size(), set.channels()), 4);
   }
   return bytes;
 }
