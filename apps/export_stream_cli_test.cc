@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -98,28 +99,40 @@ void ExpectSameRti(const fs::path& streamed_path, const fs::path& whole_path) {
   EXPECT_LE(difference.fraction, 0.001);
 }
 
+// The 96 x 80 capture of bumps `dir`/capture exported in memory into `dir`/whole and streamed in
+// bands of a few rows (--stream --memory 1) into `dir`/streamed, the outputs those of `files`
+// for each folder.
+struct InMemoryAndStreamed {
+  RunResult whole;
+  RunResult streamed;
+};
+InMemoryAndStreamed ExportInMemoryAndStreamed(
+    const TempDir& dir, const std::function<std::string(const std::string&)>& files) {
+  const std::string capture = (dir / "capture").string();
+  const RunResult generated =
+      RunPhotomat("generate --out " + capture + " --size 96x80 --pattern bumps --seed 8");
+  EXPECT_EQ(generated.exit_code, 0) << generated.output;
+  fs::create_directories(dir / "whole");
+  fs::create_directories(dir / "streamed");
+  InMemoryAndStreamed runs{
+      RunPhotomat("export " + capture + files("whole")),
+      RunPhotomat("export " + capture + " --stream --memory 1" + files("streamed"))};
+  std::printf("%s", runs.streamed.output.c_str());
+  return runs;
+}
+
 // A set exported streamed, in bands of a few rows (--stream, --memory 1), writes what the
 // in-memory export writes: .ptm (LRGB) and .rti (HSH9) to within one code, the normal and albedo
 // maps to float rounding; and leaves no scratch folder.
 TEST(ExportStreamCliTest, ASetExportedStreamedEqualsTheInMemoryExport) {
   const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(
-      RunPhotomat("generate --out " + capture + " --size 96x80 --pattern bumps --seed 8").exit_code,
-      0);
-  fs::create_directories(dir / "whole");
-  fs::create_directories(dir / "streamed");
-  const auto files = [&](const std::string& folder) {
+  const auto [whole, streamed] = ExportInMemoryAndStreamed(dir, [&](const std::string& folder) {
     return " --ptm " + (dir / folder / "c.ptm").string() + " --rti " +
            (dir / folder / "c.rti").string() + " --out " + (dir / folder / "maps").string();
-  };
-  const RunResult whole = RunPhotomat("export " + capture + files("whole"));
+  });
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
   EXPECT_THAT(whole.output, Not(HasSubstr("streamed")));
-  const RunResult streamed =
-      RunPhotomat("export " + capture + " --stream --memory 1" + files("streamed"));
   ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-  std::printf("%s", streamed.output.c_str());
   // Two passes over the photographs, each in several bands: the encoded PTM and HSH fits, then
   // the linear Gradient fit.
   EXPECT_THAT(streamed.output, HasSubstr("fitted ptm-lrgb, hsh9 to the 36 photographs "
@@ -168,23 +181,13 @@ TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
 // large as the set: --stream refuses them, saying why.
 TEST(ExportStreamCliTest, WholeStackExportsOfASetComeFromItsScratchStack) {
   const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(
-      RunPhotomat("generate --out " + capture + " --size 96x80 --pattern bumps --seed 8").exit_code,
-      0);
-  fs::create_directories(dir / "whole");
-  fs::create_directories(dir / "streamed");
-  const auto files = [&](const std::string& folder) {
+  const auto [whole, streamed] = ExportInMemoryAndStreamed(dir, [&](const std::string& folder) {
     return " --relight-web " + (dir / folder / "web").string() + " --compact " +
            (dir / folder / "compact").string() + " --out " + (dir / folder / "maps").string() +
            " --height fc";
-  };
-  const RunResult whole = RunPhotomat("export " + capture + files("whole"));
+  });
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
-  const RunResult streamed =
-      RunPhotomat("export " + capture + " --stream --memory 1" + files("streamed"));
   ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-  std::printf("%s", streamed.output.c_str());
   EXPECT_THAT(streamed.output, HasSubstr("fitted ptm to the 36 photographs (sRGB-encoded) in "
                                          "bands of"));
   EXPECT_THAT(streamed.output, HasSubstr("fitted gradient to the 36 photographs (linear)"));
@@ -220,6 +223,7 @@ TEST(ExportStreamCliTest, WholeStackExportsOfASetComeFromItsScratchStack) {
             "fc");
   EXPECT_THAT(testing::EntriesOf(dir / "streamed"),
               ::testing::ElementsAre("compact", "maps", "web"));
+  const std::string capture = (dir / "capture").string();
   const RunResult rbf = RunPhotomat("export " + capture + " --stream --relight-basis rbf " +
                                     "--relight-web " + (dir / "rbf").string());
   EXPECT_EQ(rbf.exit_code, 1) << rbf.output;
