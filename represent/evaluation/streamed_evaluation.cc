@@ -174,6 +174,7 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
       fits);
   for (std::size_t i = 0; i < methods.size(); ++i) {
     MethodEvaluation& result = evaluations[i];
+    result.method = methods[i];
     result.prediction_images.clear();
     result.prediction_per_image.clear();
     result.psnr_prediction_per_image.clear();
