@@ -47,20 +47,28 @@ struct FoldBases {
   std::map<std::size_t, std::vector<LightProfileModel>> profiles;
 };
 
+// The fold bases are independent of each other (leave-one-out: one per image, each rbf or bilinear
+// model choosing its own kernel width or smoothness), so they are made in parallel.
 FoldBases MakeFoldBases(const StreamedSet& set, std::span<const Method> methods,
                         std::span<const PredictionFold> folds, const RowGram& gram) {
   FoldBases bases;
   for (std::size_t i = 0; i < methods.size(); ++i) {
     const Method& method = methods[i];
     if (!NeedsGram(method)) continue;
-    for (const PredictionFold& fold : folds) {
-      if (IsLightProfile(method)) {
-        bases.profiles[i].push_back(FitLightProfileModel(
-            gram.gram(), gram.column_sums(), set.lights(), fold.fitted, method, set.source()));
-      } else {
-        bases.eigen[i].push_back(EigenBasisFromGram(gram.gram(), gram.column_sums(), fold.fitted,
-                                                    method.eigen_k, set.source()));
-      }
+    if (IsLightProfile(method)) {
+      std::vector<LightProfileModel>& models = bases.profiles[i];
+      models.resize(folds.size());
+      tbb::parallel_for(std::size_t{0}, folds.size(), [&](std::size_t f) {
+        models[f] = FitLightProfileModel(gram.gram(), gram.column_sums(), set.lights(),
+                                         folds[f].fitted, method, set.source());
+      });
+    } else {
+      std::vector<EigenBasis>& eigen = bases.eigen[i];
+      eigen.resize(folds.size());
+      tbb::parallel_for(std::size_t{0}, folds.size(), [&](std::size_t f) {
+        eigen[f] = EigenBasisFromGram(gram.gram(), gram.column_sums(), folds[f].fitted,
+                                      method.eigen_k, set.source());
+      });
     }
   }
   return bases;
