@@ -25,6 +25,7 @@
 #include "represent/stack/map_stack.h"
 #include "represent/stack/stack_band_reader.h"
 #include "represent/streaming/streamed_fit.h"
+#include "represent/streaming/streamed_folds.h"
 
 namespace photomat::app {
 namespace {
@@ -62,6 +63,7 @@ std::optional<std::filesystem::path> TruthPath(const std::filesystem::path& give
 // its free space is checked first, and it is removed however the evaluation ends.
 std::vector<MethodEvaluation> EvaluateSetStreamed(
     StreamedSet& set, const std::vector<Method>& methods, StreamedEvaluationOptions options,
+    const std::optional<RobustFitOptions>& robust,
     const std::optional<StreamedPredictionOptions>& prediction, const std::filesystem::path& json) {
   const std::filesystem::path beside =
       json.empty() || json.parent_path().empty() ? std::filesystem::path(".") : json.parent_path();
@@ -78,6 +80,8 @@ std::vector<MethodEvaluation> EvaluateSetStreamed(
   StreamedFitOptions fit;
   fit.memory_bytes = options.memory_bytes;
   fit.progress = &bar;
+  fit.robust = robust.has_value();
+  if (robust) fit.robust_options = *robust;
   const std::vector<std::filesystem::path> stacks =
       FitIntoFolder(set, methods, scratch.path(), set.source().string(), fit, true);
   options.progress = &bar;
@@ -196,7 +200,8 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Fit the methods to INPUT in bands into scratch stacks beside --json (or in "
                     "the current folder) and evaluate those streamed, and fit the prediction's "
                     "folds band by band: the same numbers in memory for a band, whatever the "
-                    "set's size (least squares: not with --robust, pbr or --report)");
+                    "set's size (not with pbr or --report; --robust prediction not for "
+                    "eigenK, rbf or bilinear)");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -242,11 +247,15 @@ void AddEvaluateCommand(CLI::App& app) {
           "--compare ranks two or more methods by their prediction errors: it needs --methods "
           "with at least two methods and does not go with --no-prediction");
     }
-    const bool streamable = !options->robust && !pbr_asked && options->report.empty();
+    const bool robust_folds_stream =
+        !options->robust || options->no_prediction ||
+        std::all_of(methods.begin(), methods.end(), StreamsRobustFolds);
+    const bool streamable = !pbr_asked && options->report.empty() && robust_folds_stream;
     if (options->stream && !streamable) {
       throw Error(
-          "--stream evaluates least-squares fits in bands: it does not go with --robust, pbr "
-          "or --report (which draws whole images)");
+          "--stream evaluates in bands: it does not go with pbr, --report (which draws whole "
+          "images) or --robust prediction of eigenK, rbf or bilinear (each fold's fit imputes "
+          "over the whole set)");
     }
     if (streamable) {
       StreamedSet set = OpenStreamedSet(options->input, load);
@@ -260,15 +269,20 @@ void AddEvaluateCommand(CLI::App& app) {
         streamed.memory_bytes = options->memory_mb << 20;
         streamed.literal_thesis_rms = options->literal_rms;
         streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
+        // The measured masks are found per band (StreamedFitOptions, FoldFitOptions).
+        const std::vector<Mask> found_per_band;
+        std::optional<RobustFitOptions> robust;
+        if (options->robust) robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
         std::optional<StreamedPredictionOptions> prediction;
         if (!options->no_prediction) {
           prediction.emplace();
           prediction->memory_bytes = streamed.memory_bytes;
           prediction->hold_out_every = options->hold_out_every;
           prediction->literal_thesis_rms = options->literal_rms;
+          prediction->robust = robust;
         }
         const std::vector<MethodEvaluation> results =
-            EvaluateSetStreamed(set, methods, streamed, prediction, options->json);
+            EvaluateSetStreamed(set, methods, streamed, robust, prediction, options->json);
         PrintAndSaveEvaluations(
             fmt::format(
                 "{} images (streamed){}", set.size(),

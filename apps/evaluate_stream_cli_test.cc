@@ -52,31 +52,87 @@ void ExpectSamePrediction(const nlohmann::json& a, const nlohmann::json& b,
   }
 }
 
+// The 48 x 40 capture with shadows that the tests evaluate, in `dir`/capture.
+std::string WriteShadowedCapture(const TempDir& dir) {
+  const std::string capture = (dir / "capture").string();
+  const RunResult generated =
+      RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4");
+  EXPECT_EQ(generated.exit_code, 0) << generated.output;
+  return capture;
+}
+
+// `photomat evaluate CAPTURE ARGUMENTS --json FILE` in memory and streamed in bands of a few rows
+// (--stream --memory 1, its JSON alone in `dir`/out: the scratch stacks are gone): both JSONs.
+struct InMemoryAndStreamed {
+  nlohmann::json whole;
+  nlohmann::json streamed;
+};
+InMemoryAndStreamed EvaluateInMemoryAndStreamed(const TempDir& dir, const std::string& capture,
+                                                const std::string& arguments) {
+  const RunResult whole =
+      RunPhotomat("evaluate " + capture + arguments + " --json " + (dir / "whole.json").string());
+  EXPECT_EQ(whole.exit_code, 0) << whole.output;
+  fs::create_directories(dir / "out");
+  const RunResult streamed =
+      RunPhotomat("evaluate " + capture + arguments + " --stream --memory 1 --json " +
+                  (dir / "out" / "streamed.json").string());
+  EXPECT_EQ(streamed.exit_code, 0) << streamed.output;
+  EXPECT_THAT(streamed.output, HasSubstr("(streamed)"));
+  EXPECT_THAT(testing::EntriesOf(dir / "out"), ElementsAre("streamed.json"));
+  if (whole.exit_code != 0 || streamed.exit_code != 0) return {};
+  return {ReadJsonFile(dir / "whole.json"), ReadJsonFile(dir / "out" / "streamed.json")};
+}
+
+// The eta of reconstruction of `methods` in two evaluations' JSON: the fits equal to float
+// rounding (StreamedFitTest), bound 1e-6 relative.
+void ExpectSameReconstruction(const nlohmann::json& a, const nlohmann::json& b,
+                              const std::vector<std::string>& methods) {
+  for (const std::string& method : methods) {
+    const double eta = b[method]["eta_reconstruction"].get<double>();
+    std::printf("%s: eta %.9g streamed, %.9g in memory\n", method.c_str(),
+                a[method]["eta_reconstruction"].get<double>(), eta);
+    EXPECT_NEAR(a[method]["eta_reconstruction"].get<double>(), eta, 1e-6 * eta) << method;
+  }
+}
+
+// `photomat evaluate INPUT --stream` fits the methods in bands into scratch stacks and evaluates
+// those streamed: the eta of reconstruction of the in-memory evaluation to float rounding and its
+// normal errors; the scratch is gone afterwards.
+TEST(EvaluateStreamCliTest, ReconstructionStreamedGivesTheInMemoryEtaAndNormalErrors) {
+  const TempDir dir;
+  const auto [b, a] = EvaluateInMemoryAndStreamed(dir, WriteShadowedCapture(dir),
+                                                  " --methods gradient,ptm,eigen6 --no-prediction");
+  ASSERT_FALSE(a.is_null());
+  ExpectSameReconstruction(a, b, {"gradient", "ptm", "eigen6"});
+  for (const char* method : {"gradient", "ptm", "eigen6"}) {
+    EXPECT_EQ(a[method].contains("normals"), b[method].contains("normals")) << method;
+  }
+  EXPECT_FALSE(a["eigen6"].contains("normals"));
+  for (const char* method : {"gradient", "ptm"}) {
+    const nlohmann::json& n = a[method]["normals"];
+    EXPECT_EQ(n["pixels"], b[method]["normals"]["pixels"]) << method;
+    EXPECT_NEAR(n["mean_angular_error_deg"].get<double>(),
+                b[method]["normals"]["mean_angular_error_deg"].get<double>(), 1e-6)
+        << method;
+    EXPECT_NEAR(n["median_angular_error_deg"].get<double>(),
+                b[method]["normals"]["median_angular_error_deg"].get<double>(), 1e-6)
+        << method;
+  }
+}
+
 // Leave-one-out and held-out prediction streamed in bands (--memory 1: bands of a few rows) give
 // the in-memory evaluation's figures, and --compare ranks the methods from them as in memory.
 // The fold fits are the in-memory ones (StreamedEvaluationTest.BandsGiveTheInMemoryPrediction,
 // 1e-14); measured here: the same printed digits. Bounds 1e-9 relative and 1e-8 dB.
 TEST(EvaluateStreamCliTest, PredictionStreamedGivesTheInMemoryFiguresAndRanking) {
   const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4").exit_code,
-            0);
+  const std::string capture = WriteShadowedCapture(dir);
   const std::vector<std::string> methods = {"gradient", "ptm", "eigen6", "rbf"};
-  const std::string common = " --methods gradient,ptm,eigen6,rbf --compare --json ";
   for (const std::string held_out : {"", " --hold-out-every 4"}) {
     SCOPED_TRACE(held_out.empty() ? "leave-one-out" : held_out);
-    const RunResult whole =
-        RunPhotomat("evaluate " + capture + held_out + common + (dir / "whole.json").string());
-    ASSERT_EQ(whole.exit_code, 0) << whole.output;
-    fs::create_directories(dir / "out");
-    const RunResult streamed =
-        RunPhotomat("evaluate " + capture + held_out + " --stream --memory 1" + common +
-                    (dir / "out" / "streamed.json").string());
-    ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-    EXPECT_THAT(streamed.output, HasSubstr("(streamed)"));
-    EXPECT_THAT(streamed.output, HasSubstr("Friedman"));
-    const nlohmann::json a = ReadJsonFile(dir / "out" / "streamed.json");
-    const nlohmann::json b = ReadJsonFile(dir / "whole.json");
+    const auto [b, a] = EvaluateInMemoryAndStreamed(
+        dir, capture, held_out + " --methods gradient,ptm,eigen6,rbf --compare");
+    ASSERT_FALSE(a.is_null());
     ExpectSamePrediction(a, b, methods, 1e-9, 1e-8);
     // The same ranking: methods in the same order with the same mean ranks, the same statistic.
     const auto& ranked = a["comparison"]["methods"];
@@ -86,18 +142,32 @@ TEST(EvaluateStreamCliTest, PredictionStreamedGivesTheInMemoryFiguresAndRanking)
       EXPECT_EQ(ranked[m]["mean_rank"], b["comparison"]["methods"][m]["mean_rank"]);
     }
     EXPECT_EQ(a["comparison"]["friedman"]["chi_square"], b["comparison"]["friedman"]["chi_square"]);
-    // The scratch stacks of the reconstruction are gone.
-    EXPECT_THAT(testing::EntriesOf(dir / "out"), ElementsAre("streamed.json"));
   }
 }
 
-TEST(EvaluateStreamCliTest, StreamingRefusesRobustFitsAndReportsAndTooSmallFolds) {
+// Robust fits stream too, prediction included for the methods fitted per pixel from the robust
+// weights: the in-memory robust figures (the fold fits are the same, StreamedEvaluationTest).
+TEST(EvaluateStreamCliTest, RobustPredictionStreamedGivesTheInMemoryFigures) {
+  const TempDir dir;
+  const auto [b, a] = EvaluateInMemoryAndStreamed(
+      dir, WriteShadowedCapture(dir),
+      " --robust --loss tukey --methods gradient,ptm --hold-out-every 4");
+  ASSERT_FALSE(a.is_null());
+  ExpectSamePrediction(a, b, {"gradient", "ptm"}, 1e-9, 1e-8);
+  ExpectSameReconstruction(a, b, {"gradient", "ptm"});
+}
+
+TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsPbrAndReportsAndTooSmallFolds) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
   ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 24x20 --seed 4").exit_code, 0);
+  // "all" holds eigen3 and eigen6, whose robust fold fits impute over the whole set.
   const RunResult robust = RunPhotomat("evaluate " + capture + " --stream --robust");
   EXPECT_EQ(robust.exit_code, 1) << robust.output;
-  EXPECT_THAT(robust.output, HasSubstr("--stream evaluates least-squares fits in bands"));
+  EXPECT_THAT(robust.output, HasSubstr("--robust prediction of eigenK, rbf or bilinear"));
+  const RunResult pbr = RunPhotomat("evaluate " + capture + " --stream --methods pbr");
+  EXPECT_EQ(pbr.exit_code, 1) << pbr.output;
+  EXPECT_THAT(pbr.output, HasSubstr("--stream evaluates in bands: it does not go with pbr"));
   const RunResult report =
       RunPhotomat("evaluate " + capture + " --stream --report " + (dir / "r").string());
   EXPECT_EQ(report.exit_code, 1) << report.output;

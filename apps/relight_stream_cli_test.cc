@@ -103,46 +103,6 @@ TEST(RelightStreamCliTest, EvaluateAStackStreamedGivesTheInMemoryEta) {
   EXPECT_NEAR(a, b, 1e-9 * b);
 }
 
-// `photomat evaluate INPUT --stream` fits the methods in bands into scratch stacks and evaluates
-// those streamed: the eta of reconstruction of the in-memory evaluation to float rounding and its
-// normal errors; the scratch is gone afterwards (prediction streamed: evaluate_stream_cli_test).
-TEST(RelightStreamCliTest, EvaluateASetStreamedGivesTheInMemoryEtaAndNormalErrors) {
-  const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4").exit_code,
-            0);
-  const std::string methods = " --methods gradient,ptm,eigen6 --no-prediction --json ";
-  const RunResult whole =
-      RunPhotomat("evaluate " + capture + methods + (dir / "whole.json").string());
-  ASSERT_EQ(whole.exit_code, 0) << whole.output;
-  fs::create_directories(dir / "out");
-  const RunResult streamed = RunPhotomat("evaluate " + capture + " --stream --memory 1" + methods +
-                                         (dir / "out" / "streamed.json").string());
-  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-  EXPECT_THAT(streamed.output, HasSubstr("(streamed), ground truth"));
-  const nlohmann::json a = ReadJsonFile(dir / "out" / "streamed.json");
-  const nlohmann::json b = ReadJsonFile(dir / "whole.json");
-  for (const char* method : {"gradient", "ptm", "eigen6"}) {
-    const double eta = b[method]["eta_reconstruction"].get<double>();
-    std::printf("%s: eta %.9g streamed, %.9g in memory\n", method,
-                a[method]["eta_reconstruction"].get<double>(), eta);
-    // The fits equal to float rounding (StreamedFitTest): bound 1e-6 relative.
-    EXPECT_NEAR(a[method]["eta_reconstruction"].get<double>(), eta, 1e-6 * eta) << method;
-    EXPECT_EQ(a[method].contains("normals"), b[method].contains("normals")) << method;
-  }
-  for (const char* method : {"gradient", "ptm"}) {
-    const nlohmann::json& n = a[method]["normals"];
-    EXPECT_EQ(n["pixels"], b[method]["normals"]["pixels"]) << method;
-    EXPECT_NEAR(n["mean_angular_error_deg"].get<double>(),
-                b[method]["normals"]["mean_angular_error_deg"].get<double>(), 1e-6)
-        << method;
-    EXPECT_NEAR(n["median_angular_error_deg"].get<double>(),
-                b[method]["normals"]["median_angular_error_deg"].get<double>(), 1e-6)
-        << method;
-  }
-  EXPECT_THAT(testing::EntriesOf(dir / "out"), ::testing::ElementsAre("streamed.json"));
-}
-
 // Below the size threshold a viewer is made in memory, unless that would not fit the memory
 // budget: a 512 x 512 PTM stack's viewer in memory takes about 57 MB (InMemoryViewerBytes: 18
 // maps), so under --memory 30 it is tiled from the stack in bands (whose pyramid buffers need 19

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
+#include "represent/model/method.h"
 
 namespace photomat::batch {
 namespace {
@@ -41,14 +42,15 @@ void AppendRobust(std::vector<std::string>& arguments, const RecipeFit& fit) {
 }
 
 // Whether a --method list ("gradient,pbr") names pbr, which is always fitted robustly.
-bool NamesPbr(const std::string& methods) {
-  std::size_t start = 0;
-  while (start <= methods.size()) {
-    const std::size_t comma = std::min(methods.find(',', start), methods.size());
-    if (methods.compare(start, comma - start, "pbr") == 0) return true;
-    start = comma + 1;
+// Whether `evaluate --stream` evaluates these methods (ParseMethodList's list): not pbr, and with
+// robust prediction none whose robust fit imputes over the whole set (README "Streamed
+// relighting and export").
+bool EvaluationStreams(const std::string& methods, bool robust, bool prediction) {
+  for (const Method& method : ParseMethodList(methods)) {
+    if (method.kind == Method::Kind::kPbr) return false;
+    if (robust && prediction && RobustFitImputesOverTheSet(method)) return false;
   }
-  return false;
+  return true;
 }
 
 struct CaptureSize {
@@ -166,9 +168,10 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
              {"--report-images", fmt::format("{}", fmt::join(evaluation.report_images, ","))});
     }
     AppendRobust(arguments, recipe.fit);
-    // Least-squares fits are evaluated streamed, prediction too (evaluate --stream); the report
-    // draws whole images.
-    if (!evaluation.report && !recipe.fit.robust && !NamesPbr(recipe.fit.methods)) {
+    // Evaluated streamed, prediction too (evaluate --stream), but for pbr, robust prediction of
+    // methods that impute over the set, and the report, which draws whole images.
+    if (!evaluation.report &&
+        EvaluationStreams(recipe.fit.methods, recipe.fit.robust, evaluation.prediction)) {
       arguments.push_back("--stream");
     }
     steps.push_back({"evaluate", arguments});

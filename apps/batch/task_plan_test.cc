@@ -171,8 +171,8 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   // Without stacks, maps and viewer are made from the capture, streamed too.
   json["exports"]["stacks"] = false;
   EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
-  // The evaluation of least-squares fits without a report streams too, with or without
-  // prediction (evaluate --stream); a robust one, pbr or a report hold the set.
+  // The evaluation without a report streams too, with or without prediction (evaluate
+  // --stream); pbr, a report or robust prediction of Eigen-k, rbf or bilinear hold the set.
   json = Full();
   json["fit"] = {{"methods", {"gradient", "ptm"}}};
   for (const bool prediction : {false, true}) {
@@ -183,6 +183,15 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   }
   json["exports"]["evaluation"] = {{"prediction", true}, {"report", true}};
   EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
+  // Robust fits stream, but robust prediction of Eigen-k (imputed over the whole set) does not.
+  json["exports"]["evaluation"] = {{"prediction", true}, {"report", false}};
+  json["fit"]["robust"] = true;
+  EXPECT_THAT(whole_set_steps(json), ElementsAre());
+  json["fit"]["methods"] = {"ptm", "eigen6"};
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
+  json["exports"]["evaluation"] = {{"prediction", false}, {"report", false}};
+  EXPECT_THAT(whole_set_steps(json), ElementsAre());
+  json["fit"] = {{"methods", {"gradient", "ptm"}}};
   json["exports"]["evaluation"] = {{"prediction", false}, {"report", false}};
   json["fit"]["methods"] = {"ptm", "pbr"};
   EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));

@@ -158,6 +158,7 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
   FoldFitOptions fits;
   fits.memory_bytes = options.memory_bytes;
   fits.band_rows = options.band_rows;
+  fits.robust = options.robust;
   fits.progress = options.progress;
   VisitFoldFits(
       set, methods, folds,

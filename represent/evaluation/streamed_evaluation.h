@@ -45,7 +45,8 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
 // fold of the leave-one-out (or held-out) evaluation fitted band by band, its predicted images
 // relit in the band and the per-image sums of e_k, sigma_k and the PSNR (its peak the largest
 // captured value) accumulated over the bands: the same eta and PSNR of prediction as
-// EvaluateMethod, to float rounding, in memory for a band. Least squares only.
+// EvaluateMethod, to float rounding, in memory for a band. Least squares, or robust for the
+// methods VisitFoldFits streams robust.
 struct StreamedPredictionOptions {
   // Bytes the bands may hold; 0: the fit's default (DefaultStreamedBudget).
   std::size_t memory_bytes = 0;
@@ -53,14 +54,16 @@ struct StreamedPredictionOptions {
   // As EvaluationOptions::hold_out_every: 0 leave-one-out, K every K-th image held out.
   int hold_out_every = 0;
   bool literal_thesis_rms = false;
+  // As EvaluationOptions::robust (`measured` ignored: found per band).
+  std::optional<RobustFitOptions> robust;
   Progress* progress = nullptr;
 };
 
 // Sets the method and prediction of `evaluations[i]` (prediction_images, eta_prediction,
 // psnr_prediction and their per-image values) for `methods[i]` fitted to `set`. Throws Error naming
-// the set's source when the sizes differ, for a method that cannot be streamed (robust, pbr,
-// neural) or a fold too small for a method, and naming the image at fault for a truncated or
-// corrupt one.
+// the set's source when the sizes differ, for a method that cannot be streamed (pbr, neural,
+// robust Eigen-k, rbf and bilinear) or a fold too small for a method, and naming the image at
+// fault for a truncated or corrupt one.
 void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
                      std::span<MethodEvaluation> evaluations,
                      const StreamedPredictionOptions& options = {});

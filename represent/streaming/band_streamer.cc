@@ -37,8 +37,11 @@ bool NeedsGram(const Method& method) {
 }
 
 Streamer::Streamer(StreamedSet& set, std::span<const Method> methods,
-                   const StreamedFitOptions& options)
-    : set_(set), options_(options), all_(AllImages(set.size())) {
+                   const StreamedFitOptions& options, bool robust_fit_of_every_image)
+    : set_(set),
+      options_(options),
+      robust_fit_of_every_image_(robust_fit_of_every_image),
+      all_(AllImages(set.size())) {
   band_rows_ = options.band_rows > 0
                    ? std::min(options.band_rows, set.height())
                    : StreamedBandRows(options.memory_bytes > 0 ? options.memory_bytes
@@ -65,6 +68,7 @@ void Streamer::Read(Band& band) {
   if (set_.apply_intensities()) raw.ApplyIntensities();
   band.set.emplace(std::move(raw));
   band.observations.emplace(*band.set);
+  if (!robust_fit_of_every_image_) return;
   RobustFitOptions robust = options_.robust_options;
   robust.measured = band.measured;
   robust.progress = nullptr;

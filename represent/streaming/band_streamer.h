@@ -59,10 +59,13 @@ struct Band {
 };
 
 // Reads `set` in bands of `options`' rows (options.band_rows, else StreamedBandRows of the
-// budget for `methods`) and hands them to a visitor pass by pass.
+// budget for `methods`) and hands them to a visitor pass by pass. Robust bands (options.robust)
+// carry their measured masks and, with `robust_fit_of_every_image`, the robust fit of all images
+// (Band::robust); prediction folds make their own robust fits, of their images.
 class Streamer {
  public:
-  Streamer(StreamedSet& set, std::span<const Method> methods, const StreamedFitOptions& options);
+  Streamer(StreamedSet& set, std::span<const Method> methods, const StreamedFitOptions& options,
+           bool robust_fit_of_every_image = true);
 
   int band_rows() const { return band_rows_; }
   int passes() const { return passes_; }
@@ -115,6 +118,7 @@ class Streamer {
 
   StreamedSet& set_;
   const StreamedFitOptions& options_;
+  bool robust_fit_of_every_image_;
   std::vector<int> all_;
   int band_rows_ = 1;
   int bands_ = 1;

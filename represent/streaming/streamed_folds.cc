@@ -22,13 +22,19 @@ using streaming_internal::NeedsGram;
 using streaming_internal::Streamer;
 
 void CheckStreamable(const StreamedSet& set, std::span<const Method> methods,
-                     std::span<const PredictionFold> folds) {
+                     std::span<const PredictionFold> folds, bool robust) {
   for (const Method& method : methods) {
     if (method.kind == Method::Kind::kNeural) throw Error(set.source(), NeuralIsTrainedApart());
     if (method.kind == Method::Kind::kPbr) {
       throw Error(set.source(),
-                  "pbr is a robust fit: its prediction folds are not streamed (evaluate it "
-                  "in memory)");
+                  "pbr's prediction folds are not streamed (a nonlinear fit per pixel and fold: "
+                  "evaluate it in memory)");
+    }
+    if (robust && !StreamsRobustFolds(method)) {
+      throw Error(set.source(),
+                  fmt::format("robust {}'s prediction folds are not streamed (each fold's fit "
+                              "imputes over the whole set: evaluate it in memory)",
+                              method.Name()));
     }
     for (const PredictionFold& fold : folds) {
       if (static_cast<int>(fold.fitted.size()) < method.MinimumImages()) {
@@ -76,12 +82,18 @@ FoldBases MakeFoldBases(const StreamedSet& set, std::span<const Method> methods,
 
 }  // namespace
 
+bool StreamsRobustFolds(const Method& method) {
+  return !RobustFitImputesOverTheSet(method) && method.kind != Method::Kind::kPbr &&
+         method.kind != Method::Kind::kNeural;
+}
+
 int VisitFoldFits(StreamedSet& set, std::span<const Method> methods,
                   std::span<const PredictionFold> folds,
                   const std::function<void(const FoldFit&)>& visit, const FoldFitOptions& options) {
-  CheckStreamable(set, methods, folds);
+  CheckStreamable(set, methods, folds, options.robust.has_value());
   StreamedFitOptions streamed;
   streamed.progress = options.progress;
+  streamed.robust = options.robust.has_value();
   // IMPLEMENTER CHOICE: a band holds as many folds' maps as there are threads fitting them.
   const int concurrent =
       std::min(static_cast<int>(folds.size()), tbb::this_task_arena::max_concurrency());
@@ -89,8 +101,9 @@ int VisitFoldFits(StreamedSet& set, std::span<const Method> methods,
                            ? options.band_rows
                            : StreamedBandRows(options.memory_bytes > 0 ? options.memory_bytes
                                                                        : DefaultStreamedBudget(set),
-                                              set, methods, false, concurrent);
-  Streamer streamer(set, methods, streamed);
+                                              set, methods, streamed.robust, concurrent);
+  // Robust bands carry their measured masks; each fold makes its own robust fit.
+  Streamer streamer(set, methods, streamed, /*robust_fit_of_every_image=*/false);
   RowGram gram(set.size());
   if (std::any_of(methods.begin(), methods.end(), NeedsGram)) {
     streamer.Pass("predict: gram", [&](Band& band) {
@@ -114,6 +127,12 @@ int VisitFoldFits(StreamedSet& set, std::span<const Method> methods,
           }
           if (method.kind == Method::Kind::kEigen) {
             return FitEigenWithBasis(observations, set.lights(), fitted, bases.eigen.at(i)[f]);
+          }
+          if (options.robust) {
+            RobustFitOptions robust = *options.robust;
+            robust.measured = band.measured;
+            robust.progress = nullptr;
+            return RobustFit(observations, set.lights(), fitted, robust, set.source()).Fit(method);
           }
           return FitObservations(observations, set.lights(), method, fitted, set.source());
         }();

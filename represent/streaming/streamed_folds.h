@@ -2,12 +2,14 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <span>
 
 #include "capture/io/streamed_set.h"
 #include "core/progress.h"
 #include "represent/fitting/observations.h"
 #include "represent/fitting/prediction_folds.h"
+#include "represent/fitting/robust_fit.h"
 #include "represent/model/method.h"
 #include "represent/model/representation.h"
 
@@ -19,14 +21,19 @@ namespace photomat {
 // per pixel once its light basis is known, and the bases of Eigen-k, rbf and bilinear follow from
 // the Gram matrix of every image (RowGram, one streamed pass first): a fold's basis takes the
 // rows and columns of its fitted images, as the in-memory fit of that fold does. So a band's fold
-// fit is the rows of the in-memory fold fit, to float rounding. Least squares only: robust and
-// pbr fits, and the neural basis, are refused.
+// fit is the rows of the in-memory fold fit, to float rounding. Robust folds too, for the methods
+// fitted per pixel from the robust weights (3I, Gradient, PTM, PTM-LRGB, HSH): each fold's robust
+// fit of the band, its measured masks found on the band as captured. Robust Eigen-k, rbf and
+// bilinear (EM imputation over the whole set per fit), pbr and the neural basis are refused.
 
 struct FoldFitOptions {
   // Bytes the bands may hold; 0: DefaultStreamedBudget(set). Sets the band height.
   std::size_t memory_bytes = 0;
   // > 0: exactly this many rows per band (tests of band independence).
   int band_rows = 0;
+  // Set: every fold is the robust fit with these options (`measured` and `progress` ignored: the
+  // measured masks are found per band, MeasuredPixelMasks).
+  std::optional<RobustFitOptions> robust;
   Progress* progress = nullptr;  // one phase per streamed pass, one step per band
 };
 
@@ -39,6 +46,9 @@ struct FoldFit {
   const Representation& fit;
   const Observations& observations;
 };
+
+// Whether VisitFoldFits streams `method`'s robust folds (its robust fit is per pixel).
+bool StreamsRobustFolds(const Method& method);
 
 // Calls `visit` for every band of `set` (in row order) that the mask does not leave empty, for
 // every method and every fold. The folds of one band and method are fitted in parallel, so
