@@ -20,25 +20,34 @@ double Mean(const std::vector<double>& values) {
 
 }  // namespace
 
+double NormalisedErrorFromSums(double squared_difference, double count, double sigma,
+                               bool literal_thesis_rms) {
+  const double error = literal_thesis_rms ? std::sqrt(squared_difference) / count
+                                          : std::sqrt(squared_difference / count);
+  if (sigma == 0.0) return error == 0.0 ? 0.0 : INFINITY;
+  return error / sigma;
+}
+
+double PsnrDecibels(double peak, double mean_squared_error) {
+  if (mean_squared_error == 0.0) return INFINITY;
+  return 10.0 * std::log10(peak * peak / mean_squared_error);
+}
+
 double NormalisedRmsError(const Observations& observations, int image, const Eigen::VectorXf& relit,
                           bool literal_thesis_rms) {
   const auto captured = observations.matrix().col(image).cast<double>();
   const auto count = static_cast<double>(captured.size());
   const double mean = captured.mean();
   const double sigma = std::sqrt((captured.array() - mean).square().sum() / count);
-  const double squared = (relit.cast<double>() - captured).squaredNorm();
-  const double error = literal_thesis_rms ? std::sqrt(squared) / count : std::sqrt(squared / count);
-  if (sigma == 0.0) return error == 0.0 ? 0.0 : INFINITY;
-  return error / sigma;
+  return NormalisedErrorFromSums((relit.cast<double>() - captured).squaredNorm(), count, sigma,
+                                 literal_thesis_rms);
 }
 
 double PeakSignalToNoiseRatio(const Observations& observations, int image,
                               const Eigen::VectorXf& relit) {
   const auto captured = observations.matrix().col(image).cast<double>();
-  const double peak = captured.maxCoeff();
-  const double mse = (relit.cast<double>() - captured).squaredNorm() / captured.size();
-  if (mse == 0.0) return INFINITY;
-  return 10.0 * std::log10(peak * peak / mse);
+  return PsnrDecibels(captured.maxCoeff(),
+                      (relit.cast<double>() - captured).squaredNorm() / captured.size());
 }
 
 double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, double peak) {
@@ -63,8 +72,7 @@ double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, 
     }
   }
   if (count == 0) throw Error("PSNR: the mask selects no pixel");
-  if (sum == 0.0) return INFINITY;
-  return 10.0 * std::log10(peak * peak * static_cast<double>(count) / sum);
+  return PsnrDecibels(peak, sum / static_cast<double>(count));
 }
 
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,
@@ -121,13 +129,7 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
   // Each fold's fit predicts its images: leave-one-out one fit per image, run in parallel; held
   // out, one fit for all the predicted images.
   const std::vector<PredictionFold> folds = PredictionFolds(n, options.hold_out_every);
-  if (options.hold_out_every > 0 &&
-      static_cast<int>(folds.front().fitted.size()) < method.MinimumImages()) {
-    throw Error(set.source(), fmt::format("holding out every {} image(s) leaves {} for {}, which "
-                                          "needs {}",
-                                          options.hold_out_every, folds.front().fitted.size(),
-                                          method.Name(), method.MinimumImages()));
-  }
+  CheckFoldsFit(folds, method, set.source());
   std::vector<std::size_t> offsets;  // per fold, its first entry of prediction_images
   for (const PredictionFold& fold : folds) {
     offsets.push_back(result.prediction_images.size());

@@ -53,6 +53,17 @@ struct MethodEvaluation {
   nlohmann::json ToJson() const;
 };
 
+// Dong's e_k / sigma_k from the sum of squared differences of `count` values and sigma, the
+// standard deviation of the captured ones: e_k is their RMS, sqrt(sum / count), or with
+// `literal_thesis_rms` eq. 4.5.1 as printed, sqrt(sum) / count. 0 for an exact relighting of a
+// constant image, infinite for an inexact one. The one formula of the in-memory and streamed
+// evaluations.
+double NormalisedErrorFromSums(double squared_difference, double count, double sigma,
+                               bool literal_thesis_rms);
+
+// 10 log10(peak^2 / mse) in dB; infinite for an MSE of 0. The one formula of every PSNR here.
+double PsnrDecibels(double peak, double mean_squared_error);
+
 // The per-image error e_k / sigma_k of `relit` values against column `image` of `observations`
 // (the rows of the selected pixels).
 double NormalisedRmsError(const Observations& observations, int image, const Eigen::VectorXf& relit,

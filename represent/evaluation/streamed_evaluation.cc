@@ -38,18 +38,12 @@ struct ImageSums {
   }
 
   // As PeakSignalToNoiseRatio (evaluation.h).
-  double Psnr() const {
-    if (difference_squared == 0.0) return INFINITY;
-    return 10.0 * std::log10(peak * peak / (difference_squared / count));
-  }
+  double Psnr() const { return PsnrDecibels(peak, difference_squared / count); }
 
   double NormalisedError(bool literal_thesis_rms) const {
     const double mean = captured / count;
     const double sigma = std::sqrt(std::max(0.0, captured_squared / count - mean * mean));
-    const double error = literal_thesis_rms ? std::sqrt(difference_squared) / count
-                                            : std::sqrt(difference_squared / count);
-    if (sigma == 0.0) return error == 0.0 ? 0.0 : INFINITY;
-    return error / sigma;
+    return NormalisedErrorFromSums(difference_squared, count, sigma, literal_thesis_rms);
   }
 };
 

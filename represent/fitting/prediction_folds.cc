@@ -1,5 +1,9 @@
 #include "represent/fitting/prediction_folds.h"
 
+#include <fmt/format.h>
+
+#include "core/error.h"
+
 namespace photomat {
 
 std::vector<PredictionFold> PredictionFolds(int images, int hold_out_every) {
@@ -19,6 +23,16 @@ std::vector<PredictionFold> PredictionFolds(int images, int hold_out_every) {
     }
   }
   return folds;
+}
+
+void CheckFoldsFit(std::span<const PredictionFold> folds, const Method& method,
+                   const std::filesystem::path& source) {
+  for (const PredictionFold& fold : folds) {
+    if (static_cast<int>(fold.fitted.size()) < method.MinimumImages()) {
+      throw Error(source, fmt::format("a prediction fold fits {} images; {} needs {}",
+                                      fold.fitted.size(), method.Name(), method.MinimumImages()));
+    }
+  }
 }
 
 }  // namespace photomat

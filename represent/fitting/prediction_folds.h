@@ -1,6 +1,10 @@
 #pragma once
 
+#include <filesystem>
+#include <span>
 #include <vector>
+
+#include "represent/model/method.h"
 
 namespace photomat {
 
@@ -16,5 +20,10 @@ struct PredictionFold {
 // K-th light from the first) and fitted from the rest. The one place both the in-memory and the
 // streamed evaluations (and the neural one) take their folds from.
 std::vector<PredictionFold> PredictionFolds(int images, int hold_out_every);
+
+// Throws Error naming `source` when a fold fits fewer images than `method` needs, before any fit
+// ("a prediction fold fits N images; M needs K"): the in-memory and streamed evaluations' check.
+void CheckFoldsFit(std::span<const PredictionFold> folds, const Method& method,
+                   const std::filesystem::path& source);
 
 }  // namespace photomat

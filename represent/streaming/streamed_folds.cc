@@ -36,13 +36,7 @@ void CheckStreamable(const StreamedSet& set, std::span<const Method> methods,
                               "imputes over the whole set: evaluate it in memory)",
                               method.Name()));
     }
-    for (const PredictionFold& fold : folds) {
-      if (static_cast<int>(fold.fitted.size()) < method.MinimumImages()) {
-        throw Error(set.source(),
-                    fmt::format("a prediction fold fits {} images; {} needs {}", fold.fitted.size(),
-                                method.Name(), method.MinimumImages()));
-      }
-    }
+    CheckFoldsFit(folds, method, set.source());
   }
 }
 
