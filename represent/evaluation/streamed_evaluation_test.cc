@@ -106,6 +106,49 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryNormalErrors) {
   EXPECT_GE(compared, 2);  // Gradient and PTM give normals
 }
 
+// `methods` predicted on the capture at `input` streamed, in bands of 5 rows, and in memory with
+// `in_memory`'s folds and robust options: the same predicted images, and eta and PSNR within
+// 1e-12 relative and 1e-11 dB (mean and per image). Returns the in-memory evaluations.
+std::vector<MethodEvaluation> ExpectStreamedPredictionMatches(const fs::path& input,
+                                                              const std::vector<Method>& methods,
+                                                              const EvaluationOptions& in_memory) {
+  const LoadedSet loaded = LoadPhotometricSet(input);
+  const Observations observations(loaded.set);
+  std::vector<MethodEvaluation> streamed(methods.size());
+  StreamedSet set = OpenStreamedSet(input);
+  StreamedPredictionOptions options;
+  options.band_rows = 5;
+  options.hold_out_every = in_memory.hold_out_every;
+  options.robust = in_memory.robust;
+  PredictStreamed(set, methods, streamed, options);
+  std::vector<MethodEvaluation> wholes;
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    const std::string label =
+        fmt::format("{}{}, hold out every {}", in_memory.robust ? "robust " : "", methods[i].Name(),
+                    in_memory.hold_out_every);
+    const MethodEvaluation& whole = wholes.emplace_back(
+        EvaluateMethod(loaded.set, observations, methods[i], nullptr, in_memory));
+    EXPECT_EQ(streamed[i].prediction_images, whole.prediction_images) << label;
+    if (!streamed[i].eta_prediction || !streamed[i].psnr_prediction ||
+        streamed[i].prediction_images != whole.prediction_images) {
+      ADD_FAILURE() << label << ": no streamed prediction of the same images";
+      continue;
+    }
+    EXPECT_NEAR(*streamed[i].eta_prediction, *whole.eta_prediction, 1e-12 * *whole.eta_prediction)
+        << label;
+    EXPECT_NEAR(*streamed[i].psnr_prediction, *whole.psnr_prediction, 1e-11) << label;
+    for (std::size_t j = 0; j < whole.prediction_images.size(); ++j) {
+      EXPECT_NEAR(streamed[i].prediction_per_image[j], whole.prediction_per_image[j],
+                  1e-12 * whole.prediction_per_image[j])
+          << label << ", image " << whole.prediction_images[j];
+      EXPECT_NEAR(streamed[i].psnr_prediction_per_image[j], whole.psnr_prediction_per_image[j],
+                  1e-11)
+          << label << ", image " << whole.prediction_images[j];
+    }
+  }
+  return wholes;
+}
+
 // The streamed prediction fits every fold band by band (the Gram-based methods' fold bases from
 // the whole set's Gram matrix) and sums each predicted image's errors over the bands: the
 // in-memory leave-one-out and held-out eta and PSNR of prediction, to double rounding (the fold
@@ -114,8 +157,6 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryNormalErrors) {
 TEST(StreamedEvaluationTest, BandsGiveTheInMemoryPrediction) {
   testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
-  const LoadedSet loaded = LoadPhotometricSet(input);
-  const Observations observations(loaded.set);
   std::vector<Method> methods;
   for (const char* name :
        {"3i", "gradient", "ptm", "ptm-lrgb", "hsh9", "eigen6", "rbf", "bilinear"}) {
@@ -124,76 +165,33 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryPrediction) {
   for (int hold_out_every : {0, 3}) {
     EvaluationOptions in_memory;
     in_memory.hold_out_every = hold_out_every;
-    std::vector<MethodEvaluation> streamed(methods.size());
-    StreamedSet set = OpenStreamedSet(input);
-    StreamedPredictionOptions options;
-    options.band_rows = 5;
-    options.hold_out_every = hold_out_every;
-    PredictStreamed(set, methods, streamed, options);
-    for (std::size_t i = 0; i < methods.size(); ++i) {
-      const std::string label =
-          fmt::format("{}, hold out every {}", methods[i].Name(), hold_out_every);
-      const MethodEvaluation whole =
-          EvaluateMethod(loaded.set, observations, methods[i], nullptr, in_memory);
-      ASSERT_EQ(streamed[i].prediction_images, whole.prediction_images) << label;
-      ASSERT_TRUE(streamed[i].eta_prediction && streamed[i].psnr_prediction) << label;
-      EXPECT_NEAR(*streamed[i].eta_prediction, *whole.eta_prediction, 1e-12 * *whole.eta_prediction)
-          << label;
-      EXPECT_NEAR(*streamed[i].psnr_prediction, *whole.psnr_prediction, 1e-11) << label;
-      for (std::size_t j = 0; j < whole.prediction_images.size(); ++j) {
-        EXPECT_NEAR(streamed[i].prediction_per_image[j], whole.prediction_per_image[j],
-                    1e-12 * whole.prediction_per_image[j])
-            << label << ", image " << whole.prediction_images[j];
-        EXPECT_NEAR(streamed[i].psnr_prediction_per_image[j], whole.psnr_prediction_per_image[j],
-                    1e-11)
-            << label << ", image " << whole.prediction_images[j];
-      }
+    const std::vector<MethodEvaluation> wholes =
+        ExpectStreamedPredictionMatches(input, methods, in_memory);
+    for (const MethodEvaluation& whole : wholes) {
       // Prediction is harder than reconstruction: a real error, not a copy of the fit's.
-      EXPECT_GT(*whole.eta_prediction, whole.eta_reconstruction) << label;
+      EXPECT_GT(*whole.eta_prediction, whole.eta_reconstruction)
+          << whole.method.Name() << ", hold out every " << hold_out_every;
     }
   }
 }
 
 // Robust folds (the methods fitted per pixel from the robust weights): each fold's robust fit of
-// the band, its measured masks found on the band, gives the in-memory robust prediction. Measured:
-// at most 1.24e-14 relative in eta (Tukey, leave-one-out and every 4th held out); bound 1e-12 as
-// above.
+// the band, its measured masks found on the band, gives the in-memory robust prediction, whose
+// measured masks are the whole set's. Measured: at most 1.24e-14 relative in eta (Tukey,
+// leave-one-out and every 4th held out); bounds as above.
 TEST(StreamedEvaluationTest, BandsGiveTheInMemoryRobustPrediction) {
   testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
-  const LoadedSet loaded = LoadPhotometricSet(input);
-  const Observations observations(loaded.set);
-  const std::vector<Mask> measured = MeasuredPixelMasks(loaded.set);
+  const std::vector<Mask> measured = MeasuredPixelMasks(LoadPhotometricSet(input).set);
   std::vector<Method> methods;
   for (const char* name : {"gradient", "ptm", "hsh9"}) methods.push_back(Method::Parse(name));
   for (int hold_out_every : {0, 4}) {
-    RobustFitOptions robust;
-    robust.loss = RobustLoss::kTukey;
     EvaluationOptions in_memory;
     in_memory.hold_out_every = hold_out_every;
-    in_memory.robust = robust;
+    in_memory.robust.emplace();
+    in_memory.robust->loss = RobustLoss::kTukey;
     in_memory.robust->measured = measured;
-    std::vector<MethodEvaluation> streamed(methods.size());
-    StreamedSet set = OpenStreamedSet(input);
-    StreamedPredictionOptions options;
-    options.band_rows = 5;
-    options.hold_out_every = hold_out_every;
-    options.robust = robust;
-    PredictStreamed(set, methods, streamed, options);
-    for (std::size_t i = 0; i < methods.size(); ++i) {
-      const std::string label =
-          fmt::format("robust {}, hold out every {}", methods[i].Name(), hold_out_every);
-      const MethodEvaluation whole =
-          EvaluateMethod(loaded.set, observations, methods[i], nullptr, in_memory);
-      ASSERT_EQ(streamed[i].prediction_images, whole.prediction_images) << label;
-      EXPECT_NEAR(*streamed[i].eta_prediction, *whole.eta_prediction, 1e-12 * *whole.eta_prediction)
-          << label;
-      for (std::size_t j = 0; j < whole.prediction_images.size(); ++j) {
-        EXPECT_NEAR(streamed[i].prediction_per_image[j], whole.prediction_per_image[j],
-                    1e-12 * whole.prediction_per_image[j])
-            << label << ", image " << whole.prediction_images[j];
-      }
-    }
+    ExpectStreamedPredictionMatches(input, methods, in_memory);
   }
 }
 
