@@ -54,11 +54,7 @@ void ExpectSamePrediction(const nlohmann::json& a, const nlohmann::json& b,
 
 // The 48 x 40 capture with shadows that the tests evaluate, in `dir`/capture.
 std::string WriteShadowedCapture(const TempDir& dir) {
-  const std::string capture = (dir / "capture").string();
-  const RunResult generated =
-      RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4");
-  EXPECT_EQ(generated.exit_code, 0) << generated.output;
-  return capture;
+  return testing::GenerateCapture(dir / "capture", "--size 48x40 --shadows --seed 4");
 }
 
 // `photomat evaluate CAPTURE ARGUMENTS --json FILE` in memory and streamed in bands of a few rows

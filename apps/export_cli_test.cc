@@ -29,11 +29,7 @@ using ::testing::HasSubstr;
 using testing::TempDir;
 
 std::string Generate(const TempDir& dir) {
-  const std::string capture = (dir / "capture").string();
-  const RunResult generate =
-      RunPhotomat("generate --out " + capture + " --size 32x24 --pattern bumps --seed 3");
-  EXPECT_EQ(generate.exit_code, 0) << generate.output;
-  return capture;
+  return testing::GenerateCapture(dir / "capture", "--size 32x24 --pattern bumps --seed 3");
 }
 
 TEST(ExportCliTest, SavedStacksRelightAsInMemoryAndExportMaps) {

@@ -108,10 +108,8 @@ struct InMemoryAndStreamed {
 };
 InMemoryAndStreamed ExportInMemoryAndStreamed(
     const TempDir& dir, const std::function<std::string(const std::string&)>& files) {
-  const std::string capture = (dir / "capture").string();
-  const RunResult generated =
-      RunPhotomat("generate --out " + capture + " --size 96x80 --pattern bumps --seed 8");
-  EXPECT_EQ(generated.exit_code, 0) << generated.output;
+  const std::string capture =
+      testing::GenerateCapture(dir / "capture", "--size 96x80 --pattern bumps --seed 8");
   fs::create_directories(dir / "whole");
   fs::create_directories(dir / "streamed");
   InMemoryAndStreamed runs{

@@ -86,6 +86,12 @@ std::filesystem::path PhotomatExecutable() {
   return std::filesystem::path(dir ? dir : ".") / "bin" / "photomat";
 }
 
+std::string GenerateCapture(const std::filesystem::path& folder, const std::string& options) {
+  const RunResult generated = RunPhotomat("generate --out " + folder.string() + " " + options);
+  EXPECT_EQ(generated.exit_code, 0) << generated.output;
+  return folder.string();
+}
+
 RunResult RunPhotomat(const std::string& arguments) { return RunPhotomat(arguments, {}); }
 
 RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits) {

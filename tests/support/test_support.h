@@ -85,4 +85,8 @@ struct RunLimits {
 };
 RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits);
 
+// `photomat generate --out FOLDER OPTIONS` (a synthetic capture), expected to succeed (a failure
+// is a test failure with photomat's output). Returns FOLDER as a string for command lines.
+std::string GenerateCapture(const std::filesystem::path& folder, const std::string& options);
+
 }  // namespace photomat::testing
