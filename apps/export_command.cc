@@ -98,11 +98,33 @@ RelightWebOptions RelightWebOptionsFor(const ExportCommandOptions& options,
   return web;
 }
 
-void PrintRelightWeb(const ExportCommandOptions& options, const RelightWebStack& web) {
+// Whether --relight-web asks relight's rbf or bilinear basis (a PCA of every pixel's profile at
+// the nodes, made in bands) rather than its ptm or hsh one (a refit of the whole stack).
+bool IsMrgbRelightWeb(const ExportCommandOptions& options, const std::string& input_method) {
+  const RelightWebBasis basis = RelightWebOptionsFor(options, input_method).basis;
+  return basis == RelightWebBasis::kRbf || basis == RelightWebBasis::kBilinear;
+}
+
+using MakeRelightWeb =
+    std::function<RelightWebStack(const RelightWebBands&, RelightWebBandsReport*)>;
+
+// Makes relight's planes with `make` (rbf and bilinear in bands of the --memory budget, with a
+// progress bar), writes them to --relight-web and says what it wrote and in what bands.
+void WriteRelightWebFolder(const ExportCommandOptions& options, const MakeRelightWeb& make) {
+  TerminalProgressBar bar;
+  RelightWebBands bands;
+  bands.memory_bytes = options.memory_mb << 20;
+  bands.progress = &bar;
+  RelightWebBandsReport made_in;
+  const RelightWebStack web = make(bands, &made_in);
   WriteRelightWeb(options.relight_web, web);
-  fmt::print("wrote {} (relight web format: {} {}, {} planes, {}x{})\n",
+  const std::string banding = made_in.passes > 0
+                                  ? fmt::format("; {} passes in bands of {} of {} rows",
+                                                made_in.passes, made_in.band_rows, web.height)
+                                  : "";
+  fmt::print("wrote {} (relight web format: {} {}, {} planes, {}x{}{})\n",
              options.relight_web.string(), ToString(web.basis), ToString(web.colour_space),
-             web.PlaneCount(), web.width, web.height);
+             web.PlaneCount(), web.width, web.height, banding);
 }
 
 void WriteCompact(const ExportCommandOptions& options, const LoadedStack& stack) {
@@ -169,21 +191,24 @@ std::size_t MemoryBudget(const ExportCommandOptions& options) {
 
 // IMPLEMENTER CHOICE: a stack is exported streamed (ExportMapsStreamed, ExportPtmStreamed,
 // ExportRtiStreamed) when asked (--stream) or when the in-memory export would not fit the memory
-// budget, and it can be: a map stack (.exr), and no relight web folder or compact stack form asked
-// (both are made from the whole stack: its ranges, and the compact form's PCA). The maps then need
-// the Poisson height (--height fc is in memory, or refused under --stream). Otherwise in memory,
-// whose Poisson height is the exact solve; the .ptm and .rti files are the same bytes either way.
+// budget, and it can be: a map stack (.exr), and no compact stack form or relight web folder of
+// relight's ptm or hsh basis asked (those are made from the whole stack: the compact form's PCA,
+// the ptm/hsh planes' refit and ranges; relight's rbf and bilinear planes are made in bands,
+// RelightWebBands). Streamed maps take the tiled Poisson height, or with --height fc the same
+// whole-map FFT as in memory (the gradient field alone held whole). Otherwise in memory, whose
+// Poisson height is the exact solve; the .ptm and .rti files are the same bytes either way.
 bool StreamsStack(const ExportCommandOptions& options, const std::filesystem::path& stack_path,
                   const StackBandReader& stack) {
-  if (!options.relight_web.empty() || !options.compact.empty() || !IsStreamableStack(stack_path)) {
+  const bool relight_web_mrgb = !options.relight_web.empty() &&
+                                IsMrgbRelightWeb(options, stack.header().representation.method());
+  if ((!options.relight_web.empty() && !relight_web_mrgb) || !options.compact.empty() ||
+      !IsStreamableStack(stack_path)) {
     return false;
   }
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty()) return false;
-  // Asked for: --height fc is then an error saying why.
+  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && !relight_web_mrgb) {
+    return false;
+  }
   if (options.stream) return true;
-  if (!options.out.empty() && ParseHeightIntegrator(options.height) != HeightIntegrator::kPoisson) {
-    return false;
-  }
   const Representation& r = stack.header().representation;
   return InMemoryExportBytes(stack.width(), stack.height(), r.maps().channels(),
                              r.output_channels()) > MemoryBudget(options);
@@ -208,11 +233,13 @@ void WriteMapsStreamed(const ExportCommandOptions& options, StackBandReader& sta
   streamed.progress = &bar;
   StreamedExportReport report;
   const nlohmann::json description = ExportMapsStreamed(stack, options.out, streamed, &report);
+  const bool poisson = streamed.maps.height == HeightIntegrator::kPoisson;
   fmt::print(
-      "wrote the {} maps of {} to {} (normals from {}; streamed in bands of {} rows, "
-      "height by tiled Poisson)\n",
+      "wrote the {} maps of {} to {} (normals from {}; streamed in bands of {} rows, height by "
+      "{})\n",
       stack.header().representation.method(), stack.header().provenance.source,
-      options.out.string(), description["normals"]["source"].get<std::string>(), report.band_rows);
+      options.out.string(), description["normals"]["source"].get<std::string>(), report.band_rows,
+      poisson ? "tiled Poisson" : "Frankot-Chellappa, a whole-map FFT");
 }
 
 std::filesystem::path FolderOf(const std::filesystem::path& file) {
@@ -412,24 +439,16 @@ void WriteViewerOfStacks(const ExportCommandOptions& options,
   WriteViewer(options, ViewerStacks(options.input, method));
 }
 
-// Whether --relight-web asks relight's ptm or hsh basis (from photographs: fitted to the encoded
-// values), rather than an mrgb one (rbf, bilinear: a PCA of every pixel's profile at the nodes).
-bool RelightWebIsPolynomial(const ExportCommandOptions& options) {
-  const RelightWebBasis basis = RelightWebOptionsFor(options, "").basis;
-  return basis == RelightWebBasis::kPtm || basis == RelightWebBasis::kHsh;
-}
-
 // IMPLEMENTER CHOICE: a photometric set's exports are made from scratch stacks fitted in bands
 // (ExportCaptureStreamed) when asked (--stream) or when holding the whole set
 // (kWholeSetBytesPerPixelImage per pixel and image) would not fit the memory budget. The .ptm,
-// .rti, Poisson-height maps and viewer then read the stacks in bands too; what is made from a
-// whole stack (the maps with --height fc, the compact form's PCA, relight's ptm and hsh planes
-// and their ranges) loads its scratch stack, a fraction of the set (Gradient: 6 floats per pixel
-// against 3 per pixel and image, twice). relight's rbf and bilinear planes are a PCA of every
-// pixel's profile at the nodes, as large as the set, so a --relight-web of those is made in
-// memory. CaptureCanStream is what the options alone decide (the set is opened only then).
+// .rti, maps and viewer then read the stacks in bands too (the maps' --height fc holds the
+// gradient field whole for its FFT); what is made from a whole stack (the compact form's PCA,
+// relight's ptm and hsh planes and their ranges) loads its scratch stack, a fraction of the set
+// (Gradient: 6 floats per pixel against 3 per pixel and image, twice). relight's rbf and bilinear
+// planes are made in bands (RelightWebBands): rbf from the photographs, bilinear from its scratch
+// stack. CaptureCanStream is what the options alone decide (the set is opened only then).
 bool CaptureCanStream(const ExportCommandOptions& options) {
-  if (!options.relight_web.empty() && !RelightWebIsPolynomial(options)) return false;
   return !options.out.empty() || !options.ptm.empty() || !options.rti.empty() ||
          !options.viewer.empty() || !options.relight_web.empty() || !options.compact.empty();
 }
@@ -445,17 +464,18 @@ bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set)
 // provenance "srgb", which the exports take as they are) in one pass over the photographs, the
 // linear fits the maps, the compact form and the viewer come from (--method, else Gradient for
 // the maps and the compact form and every method for the viewer, as in memory) in another. The
-// .ptm, .rti, Poisson-height maps and a tiled viewer read the stacks in bands; the maps with
-// --height fc, the compact form, relight's planes and a viewer below the tiling threshold load
-// their stack whole (CaptureCanStream). IMPLEMENTER CHOICE: scratch stacks rather than a fit per
-// pass of the exports: a .ptm takes two passes (the coefficients' ranges, then the bytes) and
+// .ptm, .rti, maps and a tiled viewer read the stacks in bands; the compact form, relight's ptm
+// and hsh planes and a viewer below the tiling threshold load their stack whole
+// (CaptureCanStream); relight's rbf planes read the photographs
+// in bands, its bilinear planes their stack. IMPLEMENTER CHOICE: scratch stacks rather than a fit
+// per pass of the exports: a .ptm takes two passes (the coefficients' ranges, then the bytes) and
 // decoding the photographs costs several times reading a float stack back. The scratch folder is
 // beside the first output (on its disk, whose free space is checked) and is removed at the end,
 // however the export ends. The files equal the in-memory export's to float rounding (a fit's
 // matrix product rounds by band, streamed_interchange.h), so a quantised coefficient may differ
 // by one code.
 void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set) {
-  // The encoded fits, each method once: .ptm, .rti, then relight's planes.
+  // The encoded fits, each method once: .ptm, .rti, then relight's planes (none for rbf).
   std::vector<Method> encoded;
   const auto encoded_index = [&](const Method& method) {
     for (std::size_t k = 0; k < encoded.size(); ++k) {
@@ -470,7 +490,9 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
   if (!options.rti.empty()) rti_fit = encoded_index(HshMethod(options, ""));
   if (!options.relight_web.empty()) {
     relight = RelightWebOptionsFor(options, "");
-    relight_fit = encoded_index(RelightWebPolynomialMethod(*relight));  // as RelightWebFromSet
+    if (const std::optional<Method> method = RelightWebFitMethod(*relight)) {
+      relight_fit = encoded_index(*method);  // as RelightWebFromSet
+    }
   }
   // The linear fits: the maps' and compact form's method first, then the viewer's others.
   const Method maps_method = Method::Parse(options.method.empty() ? "gradient" : options.method);
@@ -509,25 +531,26 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
       WriteRtiFileStreamed(options, stack, encoded[*rti_fit]);
     }
     if (relight_fit) {
-      PrintRelightWeb(options,
-                      RelightWebFromStack(LoadRepresentation(stacks[*relight_fit]), *relight));
+      StackBandReader stack(stacks[*relight_fit]);
+      WriteRelightWebFolder(options,
+                            [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+                              return RelightWebFromStack(stack, *relight, bands, made);
+                            });
     }
+  }
+  if (relight && !relight_fit) {  // rbf: the photographs are the node values
+    WriteRelightWebFolder(options, [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+      return RelightWebFromSet(set, *relight, bands, made);
+    });
   }
   if (linear.empty()) return;
   const std::vector<std::filesystem::path> stacks = FitIntoFolder(
       set, linear, scratch.path(), options.input.string(), fit, /*warn_clipped=*/encoded.empty());
-  if (!options.out.empty() || !options.compact.empty()) {
-    const bool poisson = ParseHeightIntegrator(options.height) == HeightIntegrator::kPoisson;
-    if (!options.out.empty() && poisson) {
-      StackBandReader stack(stacks.front());
-      WriteMapsStreamed(options, stack);
-    }
-    if (!options.compact.empty() || !poisson) {
-      const LoadedStack stack = LoadRepresentation(stacks.front());
-      WriteCompact(options, stack);
-      if (!poisson) WriteMaps(options, stack);  // --height fc: a whole-map FFT
-    }
+  if (!options.out.empty()) {
+    StackBandReader stack(stacks.front());
+    WriteMapsStreamed(options, stack);
   }
+  if (!options.compact.empty()) WriteCompact(options, LoadRepresentation(stacks.front()));
   if (options.viewer.empty()) return;
   // In photomat's method order, as a fit folder's viewer.
   std::vector<std::filesystem::path> viewer_stacks;
@@ -564,9 +587,16 @@ void RunExport(const ExportCommandOptions& options) {
     if (IsStreamableStack(stack_path)) {
       StackBandReader stack(stack_path);
       if (StreamsStack(options, stack_path, stack)) {
-        // The maps first: a refusal (--height fc) comes before anything is written.
         if (!options.out.empty()) WriteMapsStreamed(options, stack);
         WriteInterchangeFilesStreamed(options, stack);
+        if (!options.relight_web.empty()) {  // rbf or bilinear (StreamsStack)
+          const RelightWebOptions web =
+              RelightWebOptionsFor(options, stack.header().representation.method());
+          WriteRelightWebFolder(options,
+                                [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+                                  return RelightWebFromStack(stack, web, bands, made);
+                                });
+        }
         return;
       }
     }
@@ -578,8 +608,11 @@ void RunExport(const ExportCommandOptions& options) {
     WriteInterchangeFiles(options, r.method(), r.output_channels(),
                           [&](const Method& target) { return RefitEncodedByRows(stack, target); });
     if (!options.relight_web.empty()) {
-      PrintRelightWeb(options,
-                      RelightWebFromStack(stack, RelightWebOptionsFor(options, r.method())));
+      const RelightWebOptions web = RelightWebOptionsFor(options, r.method());
+      WriteRelightWebFolder(options,
+                            [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+                              return RelightWebFromStack(stack, web, bands, made);
+                            });
     }
     WriteCompact(options, stack);
     WriteMaps(options, stack);
@@ -592,11 +625,6 @@ void RunExport(const ExportCommandOptions& options) {
   if (!options.colour_space.empty()) {
     load.untagged_colour_space = ParseColourSpace(options.colour_space);
     if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
-  }
-  if (options.stream && !options.relight_web.empty() && !RelightWebIsPolynomial(options)) {
-    throw Error(
-        "--stream: relight's rbf and bilinear planes are a PCA of every pixel's profile at the "
-        "nodes, made with the whole set in memory: export them without --stream");
   }
   if (CaptureCanStream(options)) {
     StreamedSet set = OpenStreamedSet(options.input, load);
@@ -619,7 +647,10 @@ void RunExport(const ExportCommandOptions& options) {
   WriteInterchangeFiles(options, "", loaded.set.channels(),
                         [&](const Method& target) { return FitEncoded(loaded.set, target); });
   if (!options.relight_web.empty()) {
-    PrintRelightWeb(options, RelightWebFromSet(loaded.set, RelightWebOptionsFor(options, "")));
+    const RelightWebOptions web = RelightWebOptionsFor(options, "");
+    WriteRelightWebFolder(options, [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+      return RelightWebFromSet(loaded.set, web, bands, made);
+    });
   }
   if (options.out.empty() && options.compact.empty()) return;
   const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),

@@ -175,8 +175,7 @@ TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
 // What is made from a whole stack (relight's ptm planes and their ranges, the compact form's PCA,
 // the maps with --height fc, a whole-map FFT) is made, streamed, from the one scratch stack
 // fitted in bands, loaded whole: the in-memory export's files to within one code (measured: the
-// same bytes), and no scratch left. relight's rbf planes are a PCA of every pixel's profile, as
-// large as the set: --stream refuses them, saying why.
+// same bytes), and no scratch left.
 TEST(ExportStreamCliTest, WholeStackExportsOfASetComeFromItsScratchStack) {
   const TempDir dir;
   const auto [whole, streamed] = ExportInMemoryAndStreamed(dir, [&](const std::string& folder) {
@@ -221,12 +220,50 @@ TEST(ExportStreamCliTest, WholeStackExportsOfASetComeFromItsScratchStack) {
             "fc");
   EXPECT_THAT(testing::EntriesOf(dir / "streamed"),
               ::testing::ElementsAre("compact", "maps", "web"));
-  const std::string capture = (dir / "capture").string();
-  const RunResult rbf = RunPhotomat("export " + capture + " --stream --relight-basis rbf " +
-                                    "--relight-web " + (dir / "rbf").string());
-  EXPECT_EQ(rbf.exit_code, 1) << rbf.output;
-  EXPECT_THAT(rbf.output, HasSubstr("export them without --stream"));
-  EXPECT_FALSE(fs::exists(dir / "rbf"));
+}
+
+// relight's rbf and bilinear planes (a PCA of every pixel's profile at the nodes) are made in
+// bands, three passes (relight_web_format.h, RelightWebBands): rbf from the photographs
+// themselves, bilinear from the scratch stack of its encoded fit. Against the in-memory export:
+// rbf the same folder (the same photographs' values, summed in the same order whatever the
+// bands); bilinear to within one code (its fit rounds by band; measured: the same bytes).
+TEST(ExportStreamCliTest, RelightsRbfAndBilinearPlanesAreMadeInBands) {
+  for (const std::string basis : {"rbf", "bilinear"}) {
+    const TempDir dir;
+    const auto [whole, streamed] = ExportInMemoryAndStreamed(dir, [&](const std::string& folder) {
+      return " --relight-basis " + basis + " --relight-web " + (dir / folder / "web").string();
+    });
+    ASSERT_EQ(whole.exit_code, 0) << whole.output;
+    ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+    EXPECT_THAT(whole.output, HasSubstr("3 passes in bands of 80 of 80 rows"));
+    EXPECT_THAT(streamed.output, HasSubstr("; 3 passes in bands of"));
+    EXPECT_THAT(streamed.output, Not(HasSubstr("bands of 80 of 80 rows")));
+    if (basis == "bilinear") {
+      EXPECT_THAT(streamed.output, HasSubstr("fitted bilinear to the 36 photographs "
+                                             "(sRGB-encoded) in bands of"));
+    } else {
+      EXPECT_THAT(streamed.output, Not(HasSubstr("fitted")));  // the photographs themselves
+    }
+    const RelightWebStack a = ReadRelightWeb(dir / "streamed" / "web");
+    const RelightWebStack b = ReadRelightWeb(dir / "whole" / "web");
+    EXPECT_EQ(a.basis_values, b.basis_values) << basis;
+    ASSERT_EQ(a.scale.size(), b.scale.size()) << basis;
+    for (std::size_t p = 0; p < b.scale.size(); ++p) {
+      EXPECT_NEAR(a.scale[p], b.scale[p], 1e-4 * std::abs(b.scale[p])) << basis << p;
+      EXPECT_NEAR(a.bias[p], b.bias[p], 1e-4) << basis << p;
+    }
+    const PlaneDifference planes = ComparePlanes(a.planes, b.planes);
+    std::printf("%s planes vs in memory: largest byte difference %d, %.3g%% differ\n",
+                basis.c_str(), planes.largest, 100 * planes.fraction);
+    if (basis == "rbf") {
+      EXPECT_EQ(planes.largest, 0);
+      EXPECT_EQ(a.scale, b.scale);
+      EXPECT_EQ(a.bias, b.bias);
+    }
+    EXPECT_LE(planes.largest, 1);  // as ExpectSamePtm
+    EXPECT_LE(planes.fraction, 0.001);
+    EXPECT_THAT(testing::EntriesOf(dir / "streamed"), ::testing::ElementsAre("web"));
+  }
 }
 
 // Every file under `folder` (relative paths, sorted).
@@ -302,7 +339,9 @@ TEST(ExportStreamCliTest, ASetsViewerExportedStreamedEqualsTheInMemoryViewer) {
 // (1536 x 1536 x 36 lights x RGB: 3.4 GB at kWholeSetBytesPerPixelImage, 2.04 GB for the images
 // as float and their copy alone), `export --ptm --rti` streams by itself (the whole set does not
 // fit the default budget) and writes what the in-memory export writes without the limit; the
-// in-memory export (a budget it cannot have, --memory 100000) fails under the limit.
+// in-memory export (a budget it cannot have, --memory 100000) fails under the limit. relight's
+// rbf planes (a PCA of every pixel's profile at the 36 nodes, 1 GB as one matrix) come from the
+// photographs in bands: the same folder as in memory.
 TEST(ExportStreamCliTest, UnderAnAddressSpaceLimitASetStreamsByItselfAndMatches) {
   const TempDir dir;
   const std::string lights =
@@ -311,7 +350,8 @@ TEST(ExportStreamCliTest, UnderAnAddressSpaceLimitASetStreamsByItselfAndMatches)
   const auto files = [&](const std::string& folder) {
     fs::create_directories(dir / folder);
     return " --ptm " + (dir / folder / "c.ptm").string() + " --rti " +
-           (dir / folder / "c.rti").string();
+           (dir / folder / "c.rti").string() + " --relight-basis rbf --relight-web " +
+           (dir / folder / "web").string();
   };
   const RunResult limited = RunPhotomat("export " + lights + files("limited"), {limit});
   ASSERT_EQ(limited.exit_code, 0) << limited.output;
@@ -327,7 +367,13 @@ TEST(ExportStreamCliTest, UnderAnAddressSpaceLimitASetStreamsByItselfAndMatches)
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
   ExpectSamePtm(dir / "limited" / "c.ptm", dir / "whole" / "c.ptm");
   ExpectSameRti(dir / "limited" / "c.rti", dir / "whole" / "c.rti");
-  EXPECT_THAT(testing::EntriesOf(dir / "limited"), ::testing::ElementsAre("c.ptm", "c.rti"));
+  const RelightWebStack web = ReadRelightWeb(dir / "limited" / "web");
+  const RelightWebStack web_whole = ReadRelightWeb(dir / "whole" / "web");
+  EXPECT_EQ(web.basis_values, web_whole.basis_values);
+  EXPECT_EQ(web.scale, web_whole.scale);
+  EXPECT_EQ(web.bias, web_whole.bias);
+  EXPECT_EQ(ComparePlanes(web.planes, web_whole.planes).largest, 0);
+  EXPECT_THAT(testing::EntriesOf(dir / "limited"), ::testing::ElementsAre("c.ptm", "c.rti", "web"));
 }
 
 }  // namespace

@@ -15,7 +15,6 @@
 #include "core/error.h"
 #include "core/json_file.h"
 #include "relight/web/viewer_pyramid.h"
-#include "represent/model/method.h"
 
 namespace photomat::batch {
 namespace {
@@ -42,19 +41,20 @@ namespace fs = std::filesystem;
 //   whatever the limit: kInMemoryViewerBytesPerPixel x pixels (measured at 2048 x 2048: 226
 //   bytes per pixel for one PTM stack, 505 for Gradient, PTM and HSH9 together (54 maps); at
 //   4096 x 3072 for PTM, 217; 600 covers about 65 maps).
-// - except the maps with `--height fc` (a whole-map FFT, from the stacks or from the capture's
-//   stack fitted in bands): the stack loaded whole and the in-memory export, kFcMapsBytesPerPixel +
-//   8 per map (the stack read and written) + 12 per capture image for a method whose normals are
-//   not among its maps (the stack relit at the capture lights for the Lambertian albedo,
-//   relight/export/material_maps.cc). Measured at 4096 x 3072 x 50 (`export CAPTURE --stream --out
-//   maps --height fc`, 2026-12-06): Gradient 1317 MiB peak RSS, 97 bytes per pixel beyond
-//   kBaseBytes (estimate 112); PTM 8566 MiB, 701 (estimate 808).
+// - except the maps with `--height fc` (from the stacks, or from the capture's stack fitted in
+//   bands): streamed too, but the whole-map FFT holds the gradient field and its spectra
+//   (ExportMapsStreamed: about 41 bytes per pixel), so kFcMapsFixedBytes for the bands and
+//   buffers plus kFcMapsBytesPerPixel x pixels. Measured at 4096 x 3072 x 50 (`export CAPTURE
+//   --stream --out maps --height fc`, 2026-12-06, after the FFT height streamed): Gradient 742
+//   MiB, PTM 754 MiB peak RSS (before, with the stack loaded whole and the in-memory export: 1317
+//   and 8566 MiB); the estimate is 854 MiB.
 // The request adds --mem-margin on top.
 constexpr std::int64_t kBaseBytes = 150LL << 20;
 constexpr std::int64_t kStreamedStepBytes = 256LL << 20;
 constexpr double kStreamedBytesPerPixel = 32.0;
 constexpr double kInMemoryViewerBytesPerPixel = 600.0;
-constexpr double kFcMapsBytesPerPixel = 64.0;
+constexpr std::int64_t kFcMapsFixedBytes = 128LL << 20;
+constexpr double kFcMapsBytesPerPixel = 48.0;
 constexpr std::size_t kMaxArrayIndices = 1000;
 
 // The value after `option` in the step's arguments, or `otherwise`.
@@ -69,14 +69,7 @@ double StepNeedBytes(const TaskStep& step, const Task& task) {
   if (StepHoldsWholeSet(step))
     return kWholeSetBytesPerPixelImage * static_cast<double>(task.pixel_images);
   if (step.name == "maps" && OptionValue(step, "--height", "poisson") == "fc") {
-    const Method method = Method::Parse(OptionValue(step, "--method", "gradient"));
-    const double images =
-        task.pixels > 0 ? static_cast<double>(task.pixel_images) / static_cast<double>(task.pixels)
-                        : 0.0;
-    const bool relit = method.kind != Method::Kind::kGradient && method.kind != Method::Kind::kPbr;
-    return pixels *
-           (kFcMapsBytesPerPixel + 8.0 * StackMapCount(method, static_cast<int>(images), 3) +
-            (relit ? 12.0 * images : 0.0));
+    return static_cast<double>(kFcMapsFixedBytes) + kFcMapsBytesPerPixel * pixels;
   }
   if (step.name == "viewer" &&
       task.pixels <= static_cast<std::uint64_t>(kViewerTilingThresholdPixels)) {

@@ -355,6 +355,108 @@ std::vector<std::string> SurfaceChannels(int albedo_channels) {
   return names;
 }
 
+// Scratch files are written once and read back: no compression, for speed.
+ImageWriteOptions ScratchFileOptions() {
+  ImageWriteOptions options;
+  options.exr_compression = ExrCompression::kNone;
+  return options;
+}
+
+// The height a streamed export integrated (pass 2): what pass 3 subtracts and the range over the
+// mask after that.
+struct HeightSummary {
+  double mean = 0.0;
+  Range range;
+};
+
+// The gradients and mask of the surface scratch file, `count` rows from where `surface` is.
+Image ReadGradientRows(ImageBandReader& surface, const std::vector<int>& channels, int width,
+                       int count) {
+  Image stored(width, count, surface.channels());
+  surface.ReadNext(stored.View());
+  return Channels(stored, channels, {"p", "q", "mask"});
+}
+
+// Pass 2 by tiled Poisson (two reads of the gradients): the height zero-mean over the mask, as the
+// in-memory Poisson.
+HeightSummary TiledPoissonHeight(const fs::path& surface_path, const fs::path& height_path,
+                                 int width, int height, const StreamedExportOptions& options,
+                                 Progress& progress) {
+  double sum = 0.0, covered = 0.0;
+  Range raw{INFINITY, -INFINITY};
+  ImageBandReader surface(surface_path, {});
+  const std::vector<int> gradient_channels = ChannelsOf(surface, {"p", "q", "mask"});
+  GradientRows rows;
+  rows.rewind = [&] { surface = ImageBandReader(surface_path, {}); };
+  rows.next = [&](int count) {
+    return ReadGradientRows(surface, gradient_channels, width,
+                            std::min(count, height - surface.next_row()));
+  };
+  ImageBandWriter height_file(height_path, width, height, {"height"}, ScratchFileOptions());
+  const int tile_rows = (height + options.poisson.tile - 1) / options.poisson.tile;
+  progress.Start("export: height (tiled Poisson)", static_cast<std::size_t>(tile_rows));
+  IntegrateTiledPoisson(
+      width, height, rows,
+      [&](ConstImageView band) {
+        for (int y = 0; y < band.height(); ++y) {
+          const auto h = band.row(0, y);
+          const auto m = band.row(1, y);
+          for (int x = 0; x < width; ++x) {
+            if (m[x] < 0.5f) continue;
+            sum += h[x];
+            covered += 1.0;
+            raw.low = std::min(raw.low, double{h[x]});
+            raw.high = std::max(raw.high, double{h[x]});
+          }
+        }
+        height_file.WriteNext(band.ChannelRange(0, 1));
+        progress.Advance();
+      },
+      options.poisson);
+  progress.Finish();
+  height_file.Commit();
+  const double mean = sum / covered;
+  return {mean, {raw.low - mean, raw.high - mean}};
+}
+
+// Pass 2 by Frankot-Chellappa: a whole-map FFT, so the gradient field is read whole (8 bytes per
+// pixel, and the transforms' spectra: about 50 bytes per pixel in all, 2.4 GB at 48 MP, against
+// the stack relit at every capture light that the in-memory export's normals and albedo may need).
+// The same gradients as in memory (GradientsFromNormals is per pixel, stored as float), so the
+// same height: zero-mean over the whole map (the transform's), 0 outside the mask (pass 3), its
+// range over the mask.
+HeightSummary FrankotChellappaHeight(const fs::path& surface_path, const fs::path& height_path,
+                                     int width, int height, Progress& progress) {
+  // The field read in bands of the scratch file (whose rows hold every surface channel).
+  constexpr int kReadRows = 64;
+  const int bands = (height + kReadRows - 1) / kReadRows;
+  progress.Start("export: height (Frankot-Chellappa)", static_cast<std::size_t>(bands) + 1);
+  ImageBandReader surface(surface_path, {});
+  const std::vector<int> channels = ChannelsOf(surface, {"p", "q", "mask"});
+  Image field(width, height, std::vector<std::string>{"p", "q"});
+  Mask mask(width, height, false);
+  for (int first = 0; first < height; first += kReadRows) {
+    const Image rows =
+        ReadGradientRows(surface, channels, width, std::min(kReadRows, height - first));
+    const std::size_t offset = static_cast<std::size_t>(first) * width;
+    for (int c = 0; c < 2; ++c) {
+      const auto in = rows.plane(c);
+      std::copy(in.begin(), in.end(), field.plane(c).begin() + static_cast<std::ptrdiff_t>(offset));
+    }
+    const auto in_mask = rows.plane(2);
+    for (std::size_t p = 0; p < in_mask.size(); ++p) mask.Set(offset + p, in_mask[p] >= 0.5f);
+    progress.Advance();
+  }
+  const Image integrated = IntegrateFrankotChellappa(field);
+  field = Image();
+  ImageBandWriter height_file(height_path, width, height, {"height"}, ScratchFileOptions());
+  height_file.WriteNext(integrated);
+  height_file.Commit();
+  progress.Advance();
+  progress.Finish();
+  return {0.0, HeightRange(integrated, mask)};
+}
+
 int StreamedBandRows(const StackBandReader& stack, const StreamedExportOptions& options) {
   if (options.band_rows > 0) return std::min(options.band_rows, stack.height());
   const std::size_t memory =
@@ -418,11 +520,6 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
                                   StreamedExportReport* report) {
   const LoadedStack& header = stack.header();
   const Representation& r = header.representation;
-  if (options.maps.height != HeightIntegrator::kPoisson) {
-    throw Error(stack.path(),
-                "a streamed export integrates the height by tiled Poisson only "
-                "(--height fc needs the whole map in memory)");
-  }
   const int width = stack.width(), height = stack.height();
   const int channels = r.output_channels();
   const int band_rows = StreamedBandRows(stack, options);
@@ -440,8 +537,6 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
   ImageWriteOptions srgb8;
   srgb8.sample_type = SampleType::kUint8;
   srgb8.encoding = ColourSpace::kSrgb;
-  ImageWriteOptions scratch_options;
-  scratch_options.exr_compression = ExrCompression::kNone;  // written once, read back: speed
   const std::vector<std::string> rgb = {"R", "G", "B"};
   const std::vector<std::string> surface_names = SurfaceChannels(channels);
 
@@ -460,7 +555,7 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
   const bool pbr = IsMicrofacet(r.shading());
   double largest_f0 = kGltfDielectricF0;
   {
-    ImageBandWriter surface(surface_path, width, height, surface_names, scratch_options);
+    ImageBandWriter surface(surface_path, width, height, surface_names, ScratchFileOptions());
     std::size_t covered = 0;
     if (stack.next_row() != 0) stack.Rewind();
     progress.Start("export: normals and albedo", static_cast<std::size_t>(bands));
@@ -490,47 +585,13 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
     surface.Commit();
   }
 
-  // Pass 2 (two reads of the gradients): the tiled Poisson height, its mean and range over the
-  // mask.
-  double sum = 0.0, covered = 0.0;
-  Range raw{INFINITY, -INFINITY};
-  {
-    ImageBandReader surface(surface_path, {});
-    const std::vector<int> gradient_channels = ChannelsOf(surface, {"p", "q", "mask"});
-    GradientRows rows;
-    rows.rewind = [&] { surface = ImageBandReader(surface_path, {}); };
-    rows.next = [&](int count) {
-      Image stored(width, std::min(count, height - surface.next_row()), surface.channels());
-      surface.ReadNext(stored.View());
-      return Channels(stored, gradient_channels, {"p", "q", "mask"});
-    };
-    ImageBandWriter height_file(height_path, width, height, {"height"}, scratch_options);
-    const int tile_rows = (height + options.poisson.tile - 1) / options.poisson.tile;
-    progress.Start("export: height (tiled Poisson)", static_cast<std::size_t>(tile_rows));
-    IntegrateTiledPoisson(
-        width, height, rows,
-        [&](ConstImageView band) {
-          for (int y = 0; y < band.height(); ++y) {
-            const auto h = band.row(0, y);
-            const auto m = band.row(1, y);
-            for (int x = 0; x < width; ++x) {
-              if (m[x] < 0.5f) continue;
-              sum += h[x];
-              covered += 1.0;
-              raw.low = std::min(raw.low, double{h[x]});
-              raw.high = std::max(raw.high, double{h[x]});
-            }
-          }
-          height_file.WriteNext(band.ChannelRange(0, 1));
-          progress.Advance();
-        },
-        options.poisson);
-    progress.Finish();
-    height_file.Commit();
-  }
-  // Zero mean over the mask, as the in-memory Poisson.
-  const double mean = sum / covered;
-  const Range range{raw.low - mean, raw.high - mean};
+  // Pass 2: the height into its scratch file, its mean and range over the mask.
+  const HeightSummary summary =
+      options.maps.height == HeightIntegrator::kPoisson
+          ? TiledPoissonHeight(surface_path, height_path, width, height, options, progress)
+          : FrankotChellappaHeight(surface_path, height_path, width, height, progress);
+  const double mean = summary.mean;
+  const Range range = summary.range;
 
   // Pass 3 over the stack: the height files and stack.exr with its extra layers.
   ImageBandWriter height_exr(folder / "height.exr", width, height, {"height"});
@@ -609,10 +670,12 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
 
   nlohmann::json description =
       ExportDescription(header, width, height, normals_source, range, options.maps);
-  description["streamed"] = {{"band_rows", band_rows},
-                             {"tile", options.poisson.tile},
-                             {"overlap", options.poisson.overlap},
-                             {"coarse_factor", CoarseFactor(width, height, options.poisson)}};
+  description["streamed"] = {{"band_rows", band_rows}};
+  if (options.maps.height == HeightIntegrator::kPoisson) {
+    description["streamed"]["tile"] = options.poisson.tile;
+    description["streamed"]["overlap"] = options.poisson.overlap;
+    description["streamed"]["coarse_factor"] = CoarseFactor(width, height, options.poisson);
+  }
   normal_png.Commit();
   if (gltf_normal_png) gltf_normal_png->Commit();
   albedo_png.Commit();

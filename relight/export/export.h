@@ -37,12 +37,13 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const std::filesystem::path&
 // albedo per band (ExtractSurfaceMaps: every pixel's from its own maps, as in memory), written to
 // normal.png and albedo.png and, with the gradients and the mask, to a scratch file beside the
 // outputs; (2) the height by tiled Poisson (represent/surface/tiled_poisson.h) from the scratch
-// file, to a second scratch file, with its mean and range over the mask; (3) height.exr,
-// height.png and stack.exr (the stack's bands with the derived layers). Everything is written to
-// temporary names and renamed at the end; the scratch files are removed however it ends.
-// Normals and albedo equal the in-memory export's; the height differs from the in-memory Poisson
-// solve by the tiling (tiled_poisson_test.cc). Only the Poisson height (kPoisson) and linear
-// methods: a pbr stack or --height fc is an Error (they need the whole map).
+// file, to a second scratch file, with its mean and range over the mask, or with --height fc by
+// Frankot-Chellappa, a whole-map FFT of the gradients read whole from the scratch file (about 50
+// bytes per pixel beyond the bands: the field and its spectra); (3) height.exr, height.png and
+// stack.exr (the stack's bands with the derived layers). Everything is written to temporary names
+// and renamed at the end; the scratch files are removed however it ends. Normals and albedo equal
+// the in-memory export's, and so does the fc height (the same gradients, the same transform); the
+// Poisson height differs from the in-memory solve by the tiling (tiled_poisson_test.cc).
 struct StreamedExportOptions {
   ExportOptions maps;
   TiledPoissonOptions poisson;

@@ -8,14 +8,19 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
+#include <numeric>
+#include <span>
 
 #include "core/atomic_file.h"
 #include "core/colour.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/memory_limits.h"
 #include "relight/formats/interchange.h"
 #include "relight/formats/stack_file.h"
 #include "relight/render/output_folder.h"
+#include "represent/fitting/observations.h"
 #include "represent/model/hsh.h"
 #include "represent/model/method.h"
 
@@ -561,36 +566,218 @@ std::vector<LightDirection> MrgbNodes(const RelightWebOptions& options,
   return nodes;
 }
 
-// relight's mrgb construction from the sRGB-encoded images at the nodes (`image(i)`, values in
-// [0, 1]).
-RelightWebStack MrgbFromImages(int width, int height, const std::vector<LightDirection>& nodes,
-                               const std::function<Image(int)>& image, RelightWebStack stack,
-                               const RelightWebOptions& options) {
-  const int n = static_cast<int>(nodes.size());
-  const int dimension = 3 * n;
+// The nodes' values of an mrgb construction, sRGB-encoded, band by band (RelightWebBands).
+class MrgbNodeSource {
+ public:
+  virtual ~MrgbNodeSource() = default;
+  virtual int width() const = 0;
+  virtual int height() const = 0;
+  // Bytes per pixel a band of the source holds while it is read (not counting the profiles).
+  virtual std::size_t BandBytesPerPixel() const = 0;
+  // Back to row 0, for the next pass.
+  virtual void Rewind() = 0;
+  // The next `rows` rows: `put(node, encoded)` for every node, from parallel threads, with the
+  // band's sRGB-encoded values in [0, 1] at that node (3 channels, `rows` rows).
+  virtual void ReadBand(int rows, const std::function<void(int, ConstImageView)>& put) = 0;
+};
+
+// Node values of a band of photographs: their values sRGB-encoded (the photographs are linear).
+void PutEncodedPhotographs(std::span<const Image> band, int first, int rows,
+                           const std::function<void(int, ConstImageView)>& put) {
+  tbb::parallel_for(0, static_cast<int>(band.size()), [&](int i) {
+    Image encoded(band[static_cast<std::size_t>(i)].Rows(first, rows));
+    for (float& v : encoded.values()) v = static_cast<float>(LinearToSrgb(v));
+    put(i, encoded);
+  });
+}
+
+// Node values of a band of a representation: relit at every node, sRGB-encoded when linear.
+void PutRelitNodes(const Representation& band, const std::vector<LightDirection>& nodes,
+                   bool linear, const std::function<void(int, ConstImageView)>& put) {
+  tbb::parallel_for(0, static_cast<int>(nodes.size()), [&](int i) {
+    Image relit = band.Relight(nodes[static_cast<std::size_t>(i)]);
+    if (linear) {
+      for (float& v : relit.values()) v = static_cast<float>(LinearToSrgb(v));
+    }
+    put(i, relit);
+  });
+}
+
+// A photometric set in memory (rbf from photographs: the photographs are the node values).
+class SetNodes final : public MrgbNodeSource {
+ public:
+  explicit SetNodes(const PhotometricSet& set) : set_(set) {}
+  int width() const override { return set_.width(); }
+  int height() const override { return set_.height(); }
+  std::size_t BandBytesPerPixel() const override { return 0; }
+  void Rewind() override { next_ = 0; }
+  void ReadBand(int rows, const std::function<void(int, ConstImageView)>& put) override {
+    PutEncodedPhotographs(set_.images(), next_, rows, put);
+    next_ += rows;
+  }
+
+ private:
+  const PhotometricSet& set_;
+  int next_ = 0;
+};
+
+// A photometric set read band by band (its photographs decoded a band at a time).
+class StreamedSetNodes final : public MrgbNodeSource {
+ public:
+  explicit StreamedSetNodes(StreamedSet& set) : set_(set) {}
+  int width() const override { return set_.width(); }
+  int height() const override { return set_.height(); }
+  // The band's images as floats (ReadBand).
+  std::size_t BandBytesPerPixel() const override {
+    return sizeof(float) * static_cast<std::size_t>(set_.size()) * set_.channels();
+  }
+  void Rewind() override {
+    if (set_.next_row() != 0) set_.Rewind();
+  }
+  void ReadBand(int rows, const std::function<void(int, ConstImageView)>& put) override {
+    const PhotometricSet band = set_.ReadBand(rows);
+    PutEncodedPhotographs(band.images(), 0, rows, put);
+  }
+
+ private:
+  StreamedSet& set_;
+};
+
+// A representation in memory relit at the nodes, a band of its maps at a time.
+class RepresentationNodes final : public MrgbNodeSource {
+ public:
+  RepresentationNodes(const Representation& source, std::vector<LightDirection> nodes, bool linear)
+      : source_(source), nodes_(std::move(nodes)), linear_(linear) {}
+  int width() const override { return source_.width(); }
+  int height() const override { return source_.height(); }
+  // The band's copy of the maps.
+  std::size_t BandBytesPerPixel() const override {
+    return sizeof(float) * static_cast<std::size_t>(source_.maps().channels());
+  }
+  void Rewind() override { next_ = 0; }
+  void ReadBand(int rows, const std::function<void(int, ConstImageView)>& put) override {
+    Image maps(source_.maps().Rows(next_, rows));
+    maps.set_channel_names(source_.maps().channel_names());
+    PutRelitNodes(source_.WithMaps(std::move(maps)), nodes_, linear_, put);
+    next_ += rows;
+  }
+
+ private:
+  const Representation& source_;
+  std::vector<LightDirection> nodes_;
+  bool linear_;
+  int next_ = 0;
+};
+
+// A map stack read band by band, relit at the nodes.
+class StackNodes final : public MrgbNodeSource {
+ public:
+  StackNodes(StackBandReader& stack, std::vector<LightDirection> nodes, bool linear)
+      : stack_(stack), nodes_(std::move(nodes)), linear_(linear) {}
+  int width() const override { return stack_.width(); }
+  int height() const override { return stack_.height(); }
+  // The band of the file's channels.
+  std::size_t BandBytesPerPixel() const override {
+    return sizeof(float) * static_cast<std::size_t>(stack_.stored_channels());
+  }
+  void Rewind() override {
+    if (stack_.next_row() != 0) stack_.Rewind();
+  }
+  void ReadBand(int rows, const std::function<void(int, ConstImageView)>& put) override {
+    PutRelitNodes(stack_.ReadNext(rows).representation, nodes_, linear_, put);
+  }
+
+ private:
+  StackBandReader& stack_;
+  std::vector<LightDirection> nodes_;
+  bool linear_;
+};
+
+// The band height of an mrgb construction: the band's profiles (a float per node and channel),
+// their pixel indices (RowGram) and what the source holds, within the budget.
+int MrgbBandRows(const MrgbNodeSource& source, int dimension, const RelightWebBands& bands) {
+  if (bands.band_rows > 0) return std::min(bands.band_rows, source.height());
+  const std::size_t memory =
+      bands.memory_bytes > 0 ? bands.memory_bytes : DefaultBandBudget(kMinimumRelightWebMemory);
+  const std::size_t pixel =
+      sizeof(float) * dimension + sizeof(std::size_t) + source.BandBytesPerPixel();
+  const std::size_t row = static_cast<std::size_t>(source.width()) * pixel;
+  return static_cast<int>(
+      std::clamp<std::size_t>(memory / row, 1, static_cast<std::size_t>(source.height())));
+}
+
+// One pass over `source`: each band's profiles in codes, one row per pixel (y * width + x
+// within the band), node i's R, G, B in columns 3 i + k (relight's layout), handed to
+// `visit(first, profiles)`.
+void ForEachProfileBand(MrgbNodeSource& source, int dimension, int band_rows, Progress& progress,
+                        const std::string& phase,
+                        const std::function<void(int, Eigen::MatrixXf&)>& visit) {
+  source.Rewind();
+  const int width = source.width();
+  const int bands = (source.height() + band_rows - 1) / band_rows;
+  progress.Start(phase, static_cast<std::size_t>(bands));
+  Eigen::MatrixXf profiles;
+  for (int first = 0; first < source.height(); first += band_rows) {
+    const int rows = std::min(band_rows, source.height() - first);
+    profiles.resize(static_cast<Eigen::Index>(rows) * width, dimension);
+    source.ReadBand(rows, [&](int node, ConstImageView encoded) {
+      for (int k = 0; k < 3; ++k) {
+        for (int y = 0; y < rows; ++y) {
+          const auto in = encoded.row(k, y);
+          const Eigen::Index row0 = static_cast<Eigen::Index>(y) * width;
+          for (int x = 0; x < width; ++x) profiles(row0 + x, 3 * node + k) = 255.0f * in[x];
+        }
+      }
+    });
+    visit(first, profiles);
+    progress.Advance();
+  }
+  progress.Finish();
+}
+
+// relight's mrgb construction over `nodes` node values read from `source` in bands.
+RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStack stack,
+                               const RelightWebOptions& options, const RelightWebBands& bands,
+                               RelightWebBandsReport* report) {
+  const int dimension = 3 * nodes;
   const int planes = std::min(options.planes, dimension);
   if (planes < 1 || planes > 255) throw Error(fmt::format("{} planes: expected 1..255", planes));
-  const std::size_t pixels = static_cast<std::size_t>(width) * height;
-  // Profiles in codes, one row per pixel: node i's R, G, B at 3 i + k (relight's layout).
-  Eigen::MatrixXf profiles(static_cast<Eigen::Index>(pixels), dimension);
-  tbb::parallel_for(0, n, [&](int i) {
-    const Image encoded = image(i);
-    for (int k = 0; k < 3; ++k) {
-      const auto in = encoded.plane(k);
-      for (std::size_t p = 0; p < pixels; ++p) {
-        profiles(static_cast<Eigen::Index>(p), 3 * i + k) = static_cast<float>(255.0 * in[p]);
-      }
-    }
-  });
-  const Eigen::VectorXd mean = profiles.cast<double>().colwise().mean().transpose();
-  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(dimension, dimension);
-  constexpr Eigen::Index kBlock = 4096;
-  for (Eigen::Index first = 0; first < profiles.rows(); first += kBlock) {
-    const Eigen::Index rows = std::min(kBlock, profiles.rows() - first);
-    const Eigen::MatrixXd centred =
-        profiles.middleRows(first, rows).cast<double>().rowwise() - mean.transpose();
-    covariance.noalias() += centred.transpose() * centred;
-  }
+  const int width = source.width();
+  const std::size_t pixels = static_cast<std::size_t>(width) * source.height();
+  const int band_rows = MrgbBandRows(source, dimension, bands);
+  if (report) *report = {band_rows, 3};
+  NullProgress none;
+  Progress& progress = OrNull(bands.progress, none);
+  // (1) The mean profile: per image row a sum in double, in pixel order, the rows' sums added in
+  // row order (the same bits for any band height).
+  Eigen::VectorXd sums = Eigen::VectorXd::Zero(dimension);
+  ForEachProfileBand(source, dimension, band_rows, progress, "relight planes: mean",
+                     [&](int, Eigen::MatrixXf& profiles) {
+                       for (Eigen::Index row0 = 0; row0 < profiles.rows(); row0 += width) {
+                         for (int d = 0; d < dimension; ++d) {
+                           double sum = 0;
+                           for (int x = 0; x < width; ++x) sum += profiles(row0 + x, d);
+                           sums[d] += sum;
+                         }
+                       }
+                     });
+  const Eigen::VectorXd mean = sums / static_cast<double>(pixels);
+  // (2) The covariance about it: the Gram matrix of the centred profiles (RowGram: float
+  // products per image row, summed in double in row order), less the centred sums' outer
+  // product (what centring at the float mean left).
+  RowGram gram(dimension);
+  const Eigen::RowVectorXf mean_f = mean.transpose().cast<float>();
+  std::vector<std::size_t> indices;
+  ForEachProfileBand(source, dimension, band_rows, progress, "relight planes: covariance",
+                     [&](int, Eigen::MatrixXf& profiles) {
+                       profiles.rowwise() -= mean_f;
+                       indices.resize(static_cast<std::size_t>(profiles.rows()));
+                       std::iota(indices.begin(), indices.end(), std::size_t{0});
+                       gram.Add(profiles, indices, width, 1);
+                     });
+  const Eigen::MatrixXd covariance = gram.gram() - gram.column_sums() *
+                                                       gram.column_sums().transpose() /
+                                                       static_cast<double>(pixels);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(covariance);
   // Largest eigenvalues last; the sign is fixed so that each axis's largest entry is positive
   // (a deterministic choice, the PCA itself does not fix it).
@@ -624,20 +811,28 @@ RelightWebStack MrgbFromImages(int width, int height, const std::vector<LightDir
       stored_axes(d, p) = (code - 127.0) / stack.range[p];
     }
   }
-  // Least-squares coefficients against the stored axes: (A^T A)^-1 A^T (profile - mean).
+  // (3) Least-squares coefficients against the stored axes: (A^T A)^-1 A^T (profile - mean),
+  // pixel by pixel (the same bits in any band).
   const Eigen::MatrixXd projection =
       (stored_axes.transpose() * stored_axes).ldlt().solve(stored_axes.transpose());
   std::vector<std::vector<float>> values(planes, std::vector<float>(pixels));
   const Eigen::MatrixXf projection_f = projection.cast<float>();
-  const Eigen::RowVectorXf mean_f = stored_mean.transpose().cast<float>();
-  tbb::parallel_for(std::size_t{0}, pixels, std::size_t{1024}, [&](std::size_t first) {
-    const std::size_t last = std::min(pixels, first + 1024);
-    for (std::size_t p = first; p < last; ++p) {
-      const Eigen::VectorXf c =
-          projection_f * (profiles.row(static_cast<Eigen::Index>(p)) - mean_f).transpose();
-      for (int k = 0; k < planes; ++k) values[k][p] = c[k];
-    }
-  });
+  const Eigen::RowVectorXf stored_mean_f = stored_mean.transpose().cast<float>();
+  ForEachProfileBand(
+      source, dimension, band_rows, progress, "relight planes: coefficients",
+      [&](int first, Eigen::MatrixXf& profiles) {
+        const std::size_t offset = static_cast<std::size_t>(first) * width;
+        const auto count = static_cast<std::size_t>(profiles.rows());
+        tbb::parallel_for(std::size_t{0}, count, std::size_t{1024}, [&](std::size_t begin) {
+          const std::size_t end = std::min(count, begin + 1024);
+          for (std::size_t p = begin; p < end; ++p) {
+            const Eigen::VectorXf c =
+                projection_f *
+                (profiles.row(static_cast<Eigen::Index>(p)) - stored_mean_f).transpose();
+            for (int k = 0; k < planes; ++k) values[k][offset + p] = c[k];
+          }
+        });
+      });
   QuantisePlanes(values, options.range_quantile, stack);
   return stack;
 }
@@ -654,27 +849,26 @@ RelightWebStack EmptyStack(int width, int height, const RelightWebOptions& optio
   return stack;
 }
 
-RelightWebStack MrgbFromStack(const LoadedStack& loaded, const RelightWebOptions& options) {
-  const Representation& source = loaded.representation;
-  if (source.output_channels() != 3) {
+// relight's mrgb planes of a stack, whose description `header` gives (the whole stack's, or a
+// band reader's): the nodes, and whether its values are linear (then sRGB-encoded at the nodes).
+// `make_source(nodes, linear)` reads its node values.
+RelightWebStack MrgbFromStack(
+    const LoadedStack& header, int width, int height, const RelightWebOptions& options,
+    const RelightWebBands& bands, RelightWebBandsReport* report,
+    const std::function<std::unique_ptr<MrgbNodeSource>(std::vector<LightDirection>, bool)>&
+        make_source) {
+  if (header.representation.output_channels() != 3) {
     throw Error(fmt::format("relight's mrgb planes need an RGB stack, not {} channel(s)",
-                            source.output_channels()));
+                            header.representation.output_channels()));
   }
-  RelightWebStack stack = EmptyStack(source.width(), source.height(), options);
-  const auto& captured = loaded.provenance.capture_lights;
-  const std::vector<LightDirection> nodes =
+  RelightWebStack stack = EmptyStack(width, height, options);
+  const auto& captured = header.provenance.capture_lights;
+  std::vector<LightDirection> nodes =
       MrgbNodes(options, captured.empty() ? RefitLights() : captured, stack);
-  const bool linear = StackValueEncoding(loaded.provenance) == ColourSpace::kLinear;
-  return MrgbFromImages(
-      source.width(), source.height(), nodes,
-      [&](int i) {
-        Image relit = source.Relight(nodes[i]);
-        if (linear) {
-          for (float& v : relit.values()) v = static_cast<float>(LinearToSrgb(v));
-        }
-        return relit;
-      },
-      std::move(stack), options);
+  const int count = static_cast<int>(nodes.size());
+  const bool linear = StackValueEncoding(header.provenance) == ColourSpace::kLinear;
+  const std::unique_ptr<MrgbNodeSource> source = make_source(std::move(nodes), linear);
+  return MrgbFromSource(*source, count, std::move(stack), options, bands, report);
 }
 
 void CheckOptions(const RelightWebOptions& options) {
@@ -686,69 +880,106 @@ void CheckOptions(const RelightWebOptions& options) {
   }
 }
 
-}  // namespace
-
-Method RelightWebPolynomialMethod(const RelightWebOptions& options) {
-  CheckOptions(options);
-  if (options.basis == RelightWebBasis::kPtm) return Method::Parse("ptm");
-  if (options.basis != RelightWebBasis::kHsh) {
-    throw Error(fmt::format("relight's {} basis is not a polynomial", ToString(options.basis)));
-  }
-  if (options.hsh_terms != 4 && options.hsh_terms != 9) {
-    throw Error(
-        fmt::format("relight's web format holds HSH of 4 or 9 terms, not {}", options.hsh_terms));
-  }
-  return Method::Parse(fmt::format("hsh{}", options.hsh_terms));
-}
-
-RelightWebStack RelightWebFromSet(const PhotometricSet& set, const RelightWebOptions& options) {
-  CheckOptions(options);
-  if (options.basis == RelightWebBasis::kPtm || options.basis == RelightWebBasis::kHsh) {
-    const LoadedStack fit{FitEncoded(set, RelightWebPolynomialMethod(options)),
-                          StackProvenance(set.lights(), "srgb", set.source())};
-    return PolynomialFromStack(fit, options);
-  }
-  if (set.channels() != 3) {
-    throw Error(fmt::format("relight's mrgb planes need RGB photographs, not {} channel(s)",
-                            set.channels()));
-  }
-  RelightWebStack stack = EmptyStack(set.width(), set.height(), options);
-  if (options.basis == RelightWebBasis::kRbf) {
-    // The photographs are the node values themselves.
-    const std::vector<LightDirection> nodes = MrgbNodes(options, set.lights(), stack);
-    return MrgbFromImages(
-        set.width(), set.height(), nodes,
-        [&](int i) {
-          Image encoded = set.images()[i];
-          for (float& v : encoded.values()) v = static_cast<float>(LinearToSrgb(v));
-          return encoded;
-        },
-        std::move(stack), options);
-  }
-  // bilinear: the grid's values from photomat's bilinear fit of the encoded photographs.
-  const LoadedStack fit{FitEncoded(set, Method::Parse("bilinear")),
-                        StackProvenance(set.lights(), "srgb", set.source())};
-  return MrgbFromStack(fit, options);
-}
-
-RelightWebStack RelightWebFromStack(const LoadedStack& stack, const RelightWebOptions& options) {
-  const Representation& r = stack.representation;
+// A pbr stack's shading is nonlinear: relight's bases cannot hold it.
+void CheckLinearShading(const Representation& r) {
   if (r.shading()) {
     throw Error(fmt::format(
         "a {} representation is a nonlinear {} shading that relight's bases cannot hold: export "
         "its maps with `photomat export` instead",
         r.method(), r.shading()->kind()));
   }
+}
+
+bool IsMrgb(RelightWebBasis basis) {
+  return basis == RelightWebBasis::kRbf || basis == RelightWebBasis::kBilinear;
+}
+
+// rbf from photographs: their encoded values are the node values, their lights the nodes.
+RelightWebStack RbfFromPhotographs(MrgbNodeSource& source, int channels,
+                                   const std::vector<LightDirection>& lights,
+                                   const RelightWebOptions& options, const RelightWebBands& bands,
+                                   RelightWebBandsReport* report) {
+  if (channels != 3) {
+    throw Error(
+        fmt::format("relight's mrgb planes need RGB photographs, not {} channel(s)", channels));
+  }
+  RelightWebStack stack = EmptyStack(source.width(), source.height(), options);
+  MrgbNodes(options, lights, stack);  // records the lights in the stack
+  return MrgbFromSource(source, static_cast<int>(lights.size()), std::move(stack), options, bands,
+                        report);
+}
+
+}  // namespace
+
+std::optional<Method> RelightWebFitMethod(const RelightWebOptions& options) {
   CheckOptions(options);
   switch (options.basis) {
     case RelightWebBasis::kPtm:
+      return Method::Parse("ptm");
     case RelightWebBasis::kHsh:
-      return PolynomialFromStack(stack, options);
-    case RelightWebBasis::kRbf:
+      if (options.hsh_terms != 4 && options.hsh_terms != 9) {
+        throw Error(fmt::format("relight's web format holds HSH of 4 or 9 terms, not {}",
+                                options.hsh_terms));
+      }
+      return Method::Parse(fmt::format("hsh{}", options.hsh_terms));
     case RelightWebBasis::kBilinear:
-      return MrgbFromStack(stack, options);
+      return Method::Parse("bilinear");
+    case RelightWebBasis::kRbf:
+      return std::nullopt;
   }
   throw Error("unknown relight basis");
+}
+
+RelightWebStack RelightWebFromSet(const PhotometricSet& set, const RelightWebOptions& options,
+                                  const RelightWebBands& bands, RelightWebBandsReport* report) {
+  if (report) *report = {};
+  const std::optional<Method> fit_method = RelightWebFitMethod(options);
+  if (fit_method) {
+    // ptm, hsh and bilinear: from the fit of the encoded photographs (bilinear: its grid's
+    // values are the node values).
+    const LoadedStack fit{FitEncoded(set, *fit_method),
+                          StackProvenance(set.lights(), "srgb", set.source())};
+    return RelightWebFromStack(fit, options, bands, report);
+  }
+  SetNodes source(set);
+  return RbfFromPhotographs(source, set.channels(), set.lights(), options, bands, report);
+}
+
+RelightWebStack RelightWebFromSet(StreamedSet& set, const RelightWebOptions& options,
+                                  const RelightWebBands& bands, RelightWebBandsReport* report) {
+  if (const std::optional<Method> fit_method = RelightWebFitMethod(options)) {
+    throw Error(fmt::format(
+        "relight's {} planes from photographs are made from a {} fit of their encoded values: "
+        "fit it into a stack first and make the planes from that",
+        ToString(options.basis), fit_method->Name()));
+  }
+  StreamedSetNodes source(set);
+  return RbfFromPhotographs(source, set.channels(), set.lights(), options, bands, report);
+}
+
+RelightWebStack RelightWebFromStack(const LoadedStack& stack, const RelightWebOptions& options,
+                                    const RelightWebBands& bands, RelightWebBandsReport* report) {
+  if (report) *report = {};
+  const Representation& r = stack.representation;
+  CheckLinearShading(r);
+  CheckOptions(options);
+  if (!IsMrgb(options.basis)) return PolynomialFromStack(stack, options);
+  return MrgbFromStack(stack, r.width(), r.height(), options, bands, report,
+                       [&](std::vector<LightDirection> nodes, bool linear) {
+                         return std::make_unique<RepresentationNodes>(r, std::move(nodes), linear);
+                       });
+}
+
+RelightWebStack RelightWebFromStack(StackBandReader& stack, const RelightWebOptions& options,
+                                    const RelightWebBands& bands, RelightWebBandsReport* report) {
+  if (report) *report = {};
+  CheckLinearShading(stack.header().representation);
+  CheckOptions(options);
+  if (!IsMrgb(options.basis)) return PolynomialFromStack(LoadRepresentation(stack.path()), options);
+  return MrgbFromStack(stack.header(), stack.width(), stack.height(), options, bands, report,
+                       [&](std::vector<LightDirection> nodes, bool linear) {
+                         return std::make_unique<StackNodes>(stack, std::move(nodes), linear);
+                       });
 }
 
 }  // namespace photomat

@@ -1,17 +1,22 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "capture/io/streamed_set.h"
 #include "core/photometric_set.h"
+#include "core/progress.h"
 #include "represent/model/light_basis.h"
 #include "represent/model/method.h"
 #include "represent/model/representation.h"
 #include "represent/stack/map_stack.h"
+#include "represent/stack/stack_band_reader.h"
 
 namespace photomat {
 
@@ -133,25 +138,70 @@ struct RelightWebOptions {
   double range_quantile = 1.0;
 };
 
+// How relight's rbf and bilinear planes are made band by band (below). A PCA of every pixel's
+// RGB profile at the nodes would hold the profiles of the whole image (3 floats per pixel and
+// node: a 48 MP capture of 50 lights, 29 GB); instead the nodes' values are made a band of rows
+// at a time, three times: (1) the profiles' mean, (2) their covariance about it (RowGram,
+// represent/fitting/observations.h), (3) each pixel's coefficients on the PCA axes. Only the
+// coefficient planes are held whole (4 bytes per pixel and plane, then their bytes), because a
+// plane's quantisation range is over all its pixels. Every sum is made in a fixed order (per
+// image row, the rows in order), so the planes do not depend on the band height.
+struct RelightWebBands {
+  // Bytes the bands may hold (beyond the whole planes); 0: DefaultBandBudget(
+  // kMinimumRelightWebMemory).
+  std::size_t memory_bytes = 0;
+  // > 0: exactly this many rows per band (tests).
+  int band_rows = 0;
+  // One phase per pass.
+  Progress* progress = nullptr;
+};
+inline constexpr std::size_t kMinimumRelightWebMemory = std::size_t{16} << 20;
+
+// How rbf or bilinear planes were made: rows per band, and passes over the bands (3); both 0 for
+// ptm and hsh.
+struct RelightWebBandsReport {
+  int band_rows = 0;
+  int passes = 0;
+};
+
 // The stack in relight's web format. ptm/hsh: ConvertToEncoded (relight/formats/interchange.h;
 // the stack itself when it already is such a fit of encoded values). rbf/bilinear: the stack
 // relit at the nodes (rbf: its capture lights, or RefitLights() when it records none; bilinear:
 // the grid's directions), sRGB-encoded when linear, and, as relight's builder does, a PCA of
-// the pixels' RGB profiles (mean + `planes` axes); the node values are what relight interpolates.
-// Planes are quantised over their whole range (min to max: no value is clipped) and the
-// coefficients are projected onto the basis as stored (after its integer rounding). Throws Error
-// for pbr (a nonlinear shading) and for option values relight does not read.
-RelightWebStack RelightWebFromStack(const LoadedStack& stack, const RelightWebOptions& options);
+// the pixels' RGB profiles (mean + `planes` axes), made in `bands`; the node values are what
+// relight interpolates. Planes are quantised over their whole range (min to max: no value is
+// clipped) and the coefficients are projected onto the basis as stored (after its integer
+// rounding). Throws Error for pbr (a nonlinear shading) and for option values relight does not
+// read.
+RelightWebStack RelightWebFromStack(const LoadedStack& stack, const RelightWebOptions& options,
+                                    const RelightWebBands& bands = {},
+                                    RelightWebBandsReport* report = nullptr);
+// The same from a map stack read band by band: rbf and bilinear never hold the stack whole (the
+// same planes as from the loaded stack, byte for byte); ptm and hsh load it (their planes are
+// the stack's own maps, refitted).
+RelightWebStack RelightWebFromStack(StackBandReader& stack, const RelightWebOptions& options,
+                                    const RelightWebBands& bands = {},
+                                    RelightWebBandsReport* report = nullptr);
 
-// The method relight's ptm or hsh planes are fitted as from photographs, to their encoded values
-// (ptm, hsh4 or hsh9): what RelightWebFromSet fits, and what a streamed export fits in bands
-// before RelightWebFromStack. Throws Error for the rbf and bilinear bases and for options relight
-// does not read (JPEG quality, range quantile, HSH other than 4 or 9 terms).
-Method RelightWebPolynomialMethod(const RelightWebOptions& options);
+// The method relight's ptm, hsh or bilinear planes are made from when built from photographs,
+// fitted to their encoded values (ptm, hsh4, hsh9 or bilinear): what RelightWebFromSet fits, and
+// what a streamed export fits in bands before RelightWebFromStack. None for rbf, whose node
+// values are the photographs themselves. Throws Error for options relight does not read (JPEG
+// quality, range quantile, HSH other than 4 or 9 terms).
+std::optional<Method> RelightWebFitMethod(const RelightWebOptions& options);
 
 // The same from photographs, as relight-cli builds from them: ptm/hsh fitted to the sRGB-encoded
 // values (FitEncoded), rbf with the encoded photographs themselves as the node values, bilinear
 // from photomat's bilinear fit of the encoded values read at the octahedral grid's directions.
-RelightWebStack RelightWebFromSet(const PhotometricSet& set, const RelightWebOptions& options);
+RelightWebStack RelightWebFromSet(const PhotometricSet& set, const RelightWebOptions& options,
+                                  const RelightWebBands& bands = {},
+                                  RelightWebBandsReport* report = nullptr);
+// rbf from photographs read band by band (the same planes as from the loaded set, byte for
+// byte). The other bases are made from a fit of the encoded photographs (RelightWebFitMethod):
+// fit it in bands (FitStreamed with encoded_values) and give its stack to RelightWebFromStack;
+// this throws Error for them, saying so.
+RelightWebStack RelightWebFromSet(StreamedSet& set, const RelightWebOptions& options,
+                                  const RelightWebBands& bands = {},
+                                  RelightWebBandsReport* report = nullptr);
 
 }  // namespace photomat
