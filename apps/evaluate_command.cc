@@ -4,6 +4,11 @@
 
 #include <algorithm>
 #include <charconv>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <span>
+#include <vector>
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
@@ -58,15 +63,20 @@ std::optional<std::filesystem::path> TruthPath(const std::filesystem::path& give
 // in bands (FitStreamed) into scratch stacks, each then evaluated against the set streamed
 // (EvaluateStackStreamed): the same eta of reconstruction as the in-memory evaluation to float
 // rounding, and the same normal errors. With `prediction`, the folds are fitted band by band
-// first (PredictStreamed): the same eta and PSNR of prediction. IMPLEMENTER CHOICE: the scratch
-// folder is beside `json` (the output the user chose a place for), else in the current folder;
-// its free space is checked first, and it is removed however the evaluation ends.
-std::vector<MethodEvaluation> EvaluateSetStreamed(
-    StreamedSet& set, const std::vector<Method>& methods, StreamedEvaluationOptions options,
-    const std::optional<RobustFitOptions>& robust,
-    const std::optional<StreamedPredictionOptions>& prediction, const std::filesystem::path& json) {
-  const std::filesystem::path beside =
-      json.empty() || json.parent_path().empty() ? std::filesystem::path(".") : json.parent_path();
+// first (PredictStreamed): the same eta and PSNR of prediction. `use(results, stacks)` then gets
+// the evaluations and the scratch stacks (a report is drawn from them). IMPLEMENTER CHOICE: the
+// scratch folder is beside `output` (the JSON or report the user chose a place for), else in the
+// current folder; its free space is checked first, and it is removed however the evaluation ends.
+using UseStreamedEvaluations = std::function<void(const std::vector<MethodEvaluation>&,
+                                                  std::span<const std::filesystem::path>)>;
+void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
+                         StreamedEvaluationOptions options,
+                         const std::optional<RobustFitOptions>& robust,
+                         const std::optional<StreamedPredictionOptions>& prediction,
+                         const std::filesystem::path& output, const UseStreamedEvaluations& use) {
+  const std::filesystem::path beside = output.empty() || output.parent_path().empty()
+                                           ? std::filesystem::path(".")
+                                           : output.parent_path();
   CreateFolder(beside);
   TerminalProgressBar bar;
   std::vector<MethodEvaluation> results(methods.size());
@@ -93,7 +103,31 @@ std::vector<MethodEvaluation> EvaluateSetStreamed(
     results[i].reconstruction_per_image = std::move(reconstruction.reconstruction_per_image);
     results[i].normals = reconstruction.normals;
   }
-  return results;
+  use(results, stacks);
+}
+
+// --report-images checked against the set before the evaluation, which can take minutes.
+void CheckReportImages(const std::vector<int>& images, int set_size) {
+  for (int index : images) {
+    if (index >= set_size) {
+      throw Error(fmt::format("--report-images: image {} is not in the set (0 to {})", index,
+                              set_size - 1));
+    }
+  }
+}
+
+EvaluationReportOptions ReportOptions(const std::filesystem::path& input,
+                                      const std::vector<int>& images,
+                                      const std::optional<RobustFitOptions>& robust,
+                                      const std::optional<MethodComparison>& comparison,
+                                      Progress& progress) {
+  EvaluationReportOptions report;
+  report.title = fmt::format("photomat evaluation of {}", PublishedName(input));
+  report.images = images;
+  report.robust = robust;
+  report.comparison = comparison;
+  report.progress = &progress;
+  return report;
 }
 
 // Prints `heading` and the table of `results` (and, with `compare`, the ranking of the methods
@@ -197,11 +231,11 @@ void AddEvaluateCommand(CLI::App& app) {
                       "evaluated streamed when it can be)",
                       kMinimumEvaluationMemory);
   command->add_flag("--stream", options->stream,
-                    "Fit the methods to INPUT in bands into scratch stacks beside --json (or in "
-                    "the current folder) and evaluate those streamed, and fit the prediction's "
-                    "folds band by band: the same numbers in memory for a band, whatever the "
-                    "set's size (not with pbr or --report; --robust prediction not for "
-                    "eigenK, rbf or bilinear)");
+                    "Fit the methods to INPUT in bands into scratch stacks beside --json or "
+                    "--report (or in the current folder) and evaluate those streamed, and fit "
+                    "the prediction's folds band by band: the same numbers in memory for a "
+                    "band, whatever the set's size; a --report's pictures are drawn band by band "
+                    "(not with pbr; --robust prediction not for eigenK, rbf or bilinear)");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -250,15 +284,16 @@ void AddEvaluateCommand(CLI::App& app) {
     const bool robust_folds_stream =
         !options->robust || options->no_prediction ||
         std::all_of(methods.begin(), methods.end(), StreamsRobustFolds);
-    const bool streamable = !pbr_asked && options->report.empty() && robust_folds_stream;
+    const bool streamable = !pbr_asked && robust_folds_stream;
     if (options->stream && !streamable) {
       throw Error(
-          "--stream evaluates in bands: it does not go with pbr, --report (which draws whole "
-          "images) or --robust prediction of eigenK, rbf or bilinear (each fold's fit imputes "
-          "over the whole set)");
+          "--stream evaluates in bands: it does not go with pbr or --robust prediction of "
+          "eigenK, rbf or bilinear (each fold's fit imputes over the whole set)");
     }
+    const std::vector<int> report_images = ParseIndexList(options->report_images);
     if (streamable) {
       StreamedSet set = OpenStreamedSet(options->input, load);
+      CheckReportImages(report_images, set.size());
       const std::size_t budget = options->memory_mb > 0
                                      ? options->memory_mb << 20
                                      : DefaultMemoryBudget(kMinimumEvaluationMemory);
@@ -281,15 +316,27 @@ void AddEvaluateCommand(CLI::App& app) {
           prediction->literal_thesis_rms = options->literal_rms;
           prediction->robust = robust;
         }
-        const std::vector<MethodEvaluation> results =
-            EvaluateSetStreamed(set, methods, streamed, robust, prediction, options->json);
-        PrintAndSaveEvaluations(
-            fmt::format(
-                "{} images (streamed){}", set.size(),
-                streamed.ground_truth_normals
-                    ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
-                    : ""),
-            results, options->compare, options->json);
+        const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
+                                          std::span<const std::filesystem::path> stacks) {
+          const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
+              fmt::format(
+                  "{} images (streamed){}", set.size(),
+                  streamed.ground_truth_normals
+                      ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
+                      : ""),
+              results, options->compare, options->json);
+          if (options->report.empty()) return;
+          TerminalProgressBar bar;
+          StreamedReportOptions bands;
+          bands.memory_bytes = streamed.memory_bytes;
+          WriteEvaluationReportStreamed(
+              options->report, set, stacks, results, streamed.ground_truth_normals,
+              ReportOptions(options->input, report_images, robust, comparison, bar), bands);
+          fmt::print("report: {}\n", (options->report / "index.html").string());
+        };
+        EvaluateSetStreamed(set, methods, streamed, robust, prediction,
+                            options->json.empty() ? options->report : options->json,
+                            print_and_report);
         return;
       }
     }
@@ -307,13 +354,7 @@ void AddEvaluateCommand(CLI::App& app) {
                   fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
                               truth->height(), loaded.set.width(), loaded.set.height()));
     }
-    const std::vector<int> report_images = ParseIndexList(options->report_images);
-    for (int index : report_images) {
-      if (index >= loaded.set.size()) {
-        throw Error(fmt::format("--report-images: image {} is not in the set (0 to {})", index,
-                                loaded.set.size() - 1));
-      }
-    }
+    CheckReportImages(report_images, loaded.set.size());
     const Observations observations(loaded.set);
     TerminalProgressBar bar;
     EvaluationOptions evaluation;
@@ -339,14 +380,9 @@ void AddEvaluateCommand(CLI::App& app) {
                     truth ? fmt::format(", ground truth {}", truth_path->string()) : ""),
         results, options->compare, options->json);
     if (!options->report.empty()) {
-      EvaluationReportOptions report;
-      report.title = fmt::format("photomat evaluation of {}", PublishedName(options->input));
-      report.images = report_images;
-      report.robust = evaluation.robust;
-      report.comparison = comparison;
-      report.progress = &bar;
-      WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
-                            report);
+      WriteEvaluationReport(
+          options->report, loaded.set, results, truth ? &*truth : nullptr,
+          ReportOptions(options->input, report_images, evaluation.robust, comparison, bar));
       fmt::print("report: {}\n", (options->report / "index.html").string());
     }
   });

@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
+#include "core/atomic_file.h"
 #include "core/json_file.h"
 #include "tests/support/layouts.h"
 #include "tests/support/test_support.h"
@@ -153,7 +155,7 @@ TEST(EvaluateStreamCliTest, RobustPredictionStreamedGivesTheInMemoryFigures) {
   ExpectSameReconstruction(a, b, {"gradient", "ptm"});
 }
 
-TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsPbrAndReportsAndTooSmallFolds) {
+TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsPbrAndTooSmallFolds) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
   ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 24x20 --seed 4").exit_code, 0);
@@ -164,10 +166,6 @@ TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsPbrAndReportsAndTooS
   const RunResult pbr = RunPhotomat("evaluate " + capture + " --stream --methods pbr");
   EXPECT_EQ(pbr.exit_code, 1) << pbr.output;
   EXPECT_THAT(pbr.output, HasSubstr("--stream evaluates in bands: it does not go with pbr"));
-  const RunResult report =
-      RunPhotomat("evaluate " + capture + " --stream --report " + (dir / "r").string());
-  EXPECT_EQ(report.exit_code, 1) << report.output;
-  EXPECT_THAT(report.output, HasSubstr("which draws whole images"));
   // Holding out every image leaves none to fit: refused before anything is fitted or written.
   fs::create_directories(dir / "out");
   const RunResult small =
@@ -206,6 +204,45 @@ TEST(EvaluateStreamCliTest, UnderAnAddressSpaceLimitPredictionStreamsByItselfAnd
   EXPECT_THAT(whole.output, Not(HasSubstr("(streamed)")));
   ExpectSamePrediction(ReadJsonFile(dir / "limited.json"), ReadJsonFile(dir / "whole.json"),
                        {"gradient", "ptm"}, 1e-9, 1e-8);
+}
+
+// `evaluate --stream --report`: the report's pictures drawn band by band from the scratch stacks,
+// the photographs and the shown images' prediction folds
+// (relight/web/evaluation_report.h, WriteEvaluationReportStreamed): the in-memory report's
+// pictures byte for byte (measured), the same images shown, the same eta to float rounding.
+TEST(EvaluateStreamCliTest, AReportStreamsAndShowsTheInMemoryPictures) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x36 --seed 5").exit_code, 0);
+  const std::string evaluate = "evaluate " + capture + " --methods gradient,ptm,eigen6 --report ";
+  const RunResult whole = RunPhotomat(evaluate + (dir / "whole").string());
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  const RunResult streamed =
+      RunPhotomat(evaluate + (dir / "streamed").string() + " --stream --memory 1");
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  EXPECT_THAT(streamed.output, HasSubstr("(streamed)"));
+  const nlohmann::json a = ReadJsonFile(dir / "streamed" / "report.json");
+  const nlohmann::json b = ReadJsonFile(dir / "whole" / "report.json");
+  EXPECT_EQ(a["images_shown"], b["images_shown"]);
+  ASSERT_EQ(a["evaluation"].size(), 3u);
+  for (const char* method : {"gradient", "ptm", "eigen6"}) {
+    for (const char* eta : {"eta_reconstruction", "eta_prediction"}) {
+      const double x = a["evaluation"][method][eta], y = b["evaluation"][method][eta];
+      EXPECT_NEAR(x, y, 1e-9 * y) << method << " " << eta;
+    }
+  }
+  const std::vector<std::string> files = testing::EntriesOf(dir / "whole" / "images");
+  ASSERT_EQ(testing::EntriesOf(dir / "streamed" / "images"), files);
+  // Captured, relit and predicted; the heat maps of Gradient and PTM (Eigen-k gives no normals).
+  EXPECT_EQ(files.size(), 3u * (1 + 2 * 3) + 2);
+  for (const std::string& file : files) {
+    EXPECT_EQ(ReadTextFile(dir / "streamed" / "images" / file),
+              ReadTextFile(dir / "whole" / "images" / file))
+        << file;
+  }
+  // Nothing beside the report: the scratch stacks are gone.
+  EXPECT_THAT(testing::EntriesOf(dir.path()),
+              ::testing::ElementsAre("capture", "streamed", "whole"));
 }
 
 }  // namespace

@@ -168,10 +168,9 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
              {"--report-images", fmt::format("{}", fmt::join(evaluation.report_images, ","))});
     }
     AppendRobust(arguments, recipe.fit);
-    // Evaluated streamed, prediction too (evaluate --stream), but for pbr, robust prediction of
-    // methods that impute over the set, and the report, which draws whole images.
-    if (!evaluation.report &&
-        EvaluationStreams(recipe.fit.methods, recipe.fit.robust, evaluation.prediction)) {
+    // Evaluated streamed, prediction and report too (evaluate --stream), but for pbr and robust
+    // prediction of methods that impute over the set.
+    if (EvaluationStreams(recipe.fit.methods, recipe.fit.robust, evaluation.prediction)) {
       arguments.push_back("--stream");
     }
     steps.push_back({"evaluate", arguments});

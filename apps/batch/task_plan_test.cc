@@ -71,7 +71,7 @@ TEST_F(TaskPlanTest, StepsAreThePhotomatCommandLinesOfTheRecipe) {
   EXPECT_EQ(task.steps[5].arguments,
             (Arguments{"evaluate", "calibrated", "--methods", "gradient,ptm", "--json",
                        "evaluation.json", "--no-prediction", "--report", "report",
-                       "--report-images", "1,2", "--robust", "--loss", "tukey"}));
+                       "--report-images", "1,2", "--robust", "--loss", "tukey", "--stream"}));
 }
 
 TEST_F(TaskPlanTest, WithoutStacksTheExportsReadTheCapture) {
@@ -87,7 +87,7 @@ TEST_F(TaskPlanTest, WithoutStacksTheExportsReadTheCapture) {
                        "--normal-convention", "opengl", "--height", "poisson", "--stream"}));
   EXPECT_EQ(plan.tasks[0].steps[1].arguments,
             (Arguments{"export", capture, "--viewer", "viewer", "--stream"}));
-  // The whole-image FFT height needs the whole map: the stack fitted in bands, not the set.
+  // The whole-image FFT height streams too (only the gradient field is held whole).
   json["exports"]["maps"] = {{"height", "fc"}};
   const TaskPlan fc = PlanTasks(Parse(json));
   EXPECT_EQ(fc.tasks[0].steps[0].arguments.back(), "--stream");
@@ -135,6 +135,9 @@ TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
   WriteSyntheticCapture(dir_ / "captures/c1", synthetic.material, synthetic.set, {});
   nlohmann::json json = Full();
   json.erase("calibration");
+  // Robust prediction of Eigen-k (imputed over the whole set) holds the set.
+  json["fit"]["methods"] = {"ptm", "eigen6"};
+  json["exports"]["evaluation"]["prediction"] = true;
   PlanOptions options;
   options.large_capture_pixel_images = 20 * 20 * 36 - 1;
   const TaskPlan plan = PlanTasks(Parse(json), options);
@@ -165,14 +168,15 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
     return names;
   };
   // calibrate apply streams (a target's flat-field and semi-calibrated intensities too), and the
-  // interchange files are fitted to the photographs in bands (export --stream).
+  // interchange files are fitted to the photographs in bands (export --stream), and so is the
+  // evaluation with its report.
   nlohmann::json json = Full();
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
+  EXPECT_THAT(whole_set_steps(json), ElementsAre());
   // Without stacks, maps and viewer are made from the capture, streamed too.
   json["exports"]["stacks"] = false;
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
-  // The evaluation without a report streams too, with or without prediction (evaluate
-  // --stream); pbr, a report or robust prediction of Eigen-k, rbf or bilinear hold the set.
+  EXPECT_THAT(whole_set_steps(json), ElementsAre());
+  // The evaluation streams too, with or without prediction and report (evaluate --stream); pbr
+  // or robust prediction of Eigen-k, rbf or bilinear hold the set.
   json = Full();
   json["fit"] = {{"methods", {"gradient", "ptm"}}};
   for (const bool prediction : {false, true}) {
@@ -182,7 +186,7 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
     EXPECT_THAT(whole_set_steps(json), ElementsAre());
   }
   json["exports"]["evaluation"] = {{"prediction", true}, {"report", true}};
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
+  EXPECT_THAT(whole_set_steps(json), ElementsAre());
   // Robust fits stream, but robust prediction of Eigen-k (imputed over the whole set) does not.
   json["exports"]["evaluation"] = {{"prediction", true}, {"report", false}};
   json["fit"]["robust"] = true;

@@ -7,16 +7,22 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
+#include <span>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/markup.h"
+#include "core/memory_limits.h"
 #include "relight/render/display_image.h"
 #include "relight/render/output_folder.h"
 #include "relight/web/published_name.h"
+#include "relight/web/report_pictures.h"
 #include "represent/fitting/fit.h"
+#include "represent/stack/stack_band_reader.h"
+#include "represent/streaming/streamed_folds.h"
 
 namespace photomat {
 namespace {
@@ -411,92 +417,179 @@ int PredictionPosition(const MethodEvaluation& e, int index) {
                                             : static_cast<int>(found - e.prediction_images.begin());
 }
 
-}  // namespace
+// What the report shows, decided from the evaluations alone (in memory and streamed alike).
+struct ReportPlan {
+  bool prediction = false;
+  // Held-out evaluation (EvaluationOptions::hold_out_every): one fit without the predicted images
+  // predicts each of them, instead of one fit per image. Empty for leave-one-out.
+  std::vector<int> held_out;
+  std::vector<int> kept_images;  // the images of the held-out fit
+  std::vector<int> shown;        // the captured images shown beside their relighting
+  bool any_normals = false;
+};
 
-void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
-                           const std::vector<MethodEvaluation>& evaluations, const Image* truth,
-                           const EvaluationReportOptions& options) {
+ReportPlan PlanReport(const fs::path& folder, int images, const std::vector<LightDirection>& lights,
+                      const std::vector<MethodEvaluation>& evaluations,
+                      const EvaluationReportOptions& options) {
   if (evaluations.empty()) throw Error(folder, "no evaluation to report");
   for (const MethodEvaluation& e : evaluations) {
-    if (static_cast<int>(e.reconstruction_per_image.size()) != set.size()) {
-      throw Error(folder,
-                  fmt::format("the {} evaluation has {} images, the set {}", e.method.Name(),
-                              e.reconstruction_per_image.size(), set.size()));
+    if (static_cast<int>(e.reconstruction_per_image.size()) != images) {
+      throw Error(folder, fmt::format("the {} evaluation has {} images, the set {}",
+                                      e.method.Name(), e.reconstruction_per_image.size(), images));
     }
   }
-  const bool prediction = std::all_of(evaluations.begin(), evaluations.end(),
-                                      [](const auto& e) { return e.eta_prediction.has_value(); });
-  // Held-out evaluation (EvaluationOptions::hold_out_every): one fit without the predicted images
-  // predicts each of them, instead of one fit per image.
-  const std::vector<int> held_out =
-      prediction && static_cast<int>(evaluations.front().prediction_images.size()) < set.size()
-          ? evaluations.front().prediction_images
-          : std::vector<int>{};
+  ReportPlan plan;
+  plan.prediction = std::all_of(evaluations.begin(), evaluations.end(),
+                                [](const auto& e) { return e.eta_prediction.has_value(); });
+  if (plan.prediction && static_cast<int>(evaluations.front().prediction_images.size()) < images) {
+    plan.held_out = evaluations.front().prediction_images;
+  }
   for (const MethodEvaluation& e : evaluations) {
-    if (prediction && !held_out.empty() && e.prediction_images != held_out) {
+    if (plan.prediction && !plan.held_out.empty() && e.prediction_images != plan.held_out) {
       throw Error(folder, fmt::format("{} and {} predicted different images",
                                       evaluations.front().method.Name(), e.method.Name()));
     }
   }
-  std::vector<int> chosen = options.images;
-  if (chosen.empty() && held_out.empty()) chosen = ChooseReportImages(set.lights());
-  if (chosen.empty()) {
+  for (int i = 0; i < images; ++i) {
+    if (std::find(plan.held_out.begin(), plan.held_out.end(), i) == plan.held_out.end()) {
+      plan.kept_images.push_back(i);
+    }
+  }
+  plan.shown = options.images;
+  if (plan.shown.empty() && plan.held_out.empty()) plan.shown = ChooseReportImages(lights);
+  if (plan.shown.empty()) {
     // By default the report shows held-out images, whose predictions it can show.
     std::vector<LightDirection> held_out_lights;
-    for (int i : held_out) held_out_lights.push_back(set.light(i));
-    for (int i : ChooseReportImages(held_out_lights)) chosen.push_back(held_out[i]);
+    for (int i : plan.held_out) held_out_lights.push_back(lights[i]);
+    for (int i : ChooseReportImages(held_out_lights)) plan.shown.push_back(plan.held_out[i]);
   }
-  for (int i : chosen) {
-    if (i < 0 || i >= set.size()) {
-      throw Error(fmt::format("image {} is not in the set (0 to {})", i, set.size() - 1));
+  for (int i : plan.shown) {
+    if (i < 0 || i >= images) {
+      throw Error(fmt::format("image {} is not in the set (0 to {})", i, images - 1));
     }
   }
-  const bool any_normals = std::any_of(evaluations.begin(), evaluations.end(),
-                                       [](const auto& e) { return e.normals.has_value(); });
-  NullProgress no_progress;
-  Progress& progress = OrNull(options.progress, no_progress);
-  const Mask mask = set.MaskOrAll();
+  plan.any_normals = std::any_of(evaluations.begin(), evaluations.end(),
+                                 [](const auto& e) { return e.normals.has_value(); });
+  return plan;
+}
 
-  const Observations observations(set);
-  // The fits as the evaluation made them: least squares, or robust with its options.
-  const auto fit = [&](const Method& method, std::span<const int> selected) {
-    if (!options.robust) {
-      return FitObservations(observations, set.lights(), method, selected, set.source());
-    }
-    RobustFitOptions robust = *options.robust;
-    robust.progress = nullptr;
-    return RobustFit(observations, set.lights(), selected, robust, set.source()).Fit(method);
-  };
-  std::vector<int> every_image(set.size());
-  std::iota(every_image.begin(), every_image.end(), 0);
-  std::vector<int> kept_images;  // with held-out images: the fit's images
-  for (int i : every_image) {
-    if (std::find(held_out.begin(), held_out.end(), i) == held_out.end()) kept_images.push_back(i);
-  }
+// The set as the page states it.
+struct ReportSet {
+  fs::path source;
+  int images = 0, width = 0, height = 0, channels = 0;
+  std::size_t pixels = 0;  // evaluated (the mask's)
+  std::vector<LightDirection> lights;
+  std::vector<std::string> names;
+};
 
-  WriteFolderAtomically(folder, kReportManifest, kReportFormat, [&](const fs::path& temp) {
-    fs::create_directories(temp / "images");
-    progress.Start("report", evaluations.size());
-    std::vector<Representation> fits;
-    std::vector<std::optional<Image>> errors(evaluations.size());
+// The report's pictures at display size (report_pictures.h), gathered band by band (each picture
+// in row order): the mask, the captured images shown, every method's relighting of their lights
+// and, where they were predicted, their prediction; and the normal error maps. Pictures of
+// different methods or shown images may be added from different threads at once.
+class ReportPictures {
+ public:
+  ReportPictures(int width, int height, int channels, const ReportPlan& plan,
+                 const std::vector<MethodEvaluation>& evaluations, bool truth)
+      : factor_(ReportDisplayFactor(width, height)),
+        mask_(width, height, 1, factor_),
+        relit_(evaluations.size()),
+        predicted_(evaluations.size()),
+        errors_(evaluations.size()) {
+    const auto reduction = [&] { return DisplayReduction(width, height, channels, factor_); };
+    for (std::size_t s = 0; s < plan.shown.size(); ++s) captured_.push_back(reduction());
     for (std::size_t m = 0; m < evaluations.size(); ++m) {
-      fits.push_back(fit(evaluations[m].method, every_image));
-      if (truth && evaluations[m].normals) {
-        if (const auto normals = EstimateNormals(fits.back())) {
-          errors[m] = AngularErrorMap(*normals, *truth, mask);
+      for (int index : plan.shown) {
+        relit_[m].push_back(reduction());
+        predicted_[m].emplace_back();
+        if (plan.prediction && PredictionPosition(evaluations[m], index) >= 0) {
+          predicted_[m].back().emplace(reduction());
         }
       }
-      progress.Advance();
+      if (truth && evaluations[m].normals) {
+        errors_[m].emplace(width, height, 1, factor_, /*skip_negative=*/true);
+      }
     }
-    progress.Finish();
+  }
 
+  int factor() const { return factor_; }
+  void AddMask(int first, const Mask& band) {
+    Image values(band.width(), band.height(), 1);
+    for (std::size_t p = 0; p < band.pixel_count(); ++p) values.values()[p] = band[p] ? 1.0f : 0.0f;
+    mask_.Add(first, values.View());
+  }
+  void AddCaptured(std::size_t shown, int first, ConstImageView band) {
+    captured_[shown].Add(first, band);
+  }
+  void AddRelit(std::size_t method, std::size_t shown, int first, ConstImageView band) {
+    relit_[method][shown].Add(first, band);
+  }
+  void AddPredicted(std::size_t method, std::size_t shown, int first, ConstImageView band) {
+    predicted_[method][shown]->Add(first, band);
+  }
+  bool WantsErrors(std::size_t method) const { return errors_[method].has_value(); }
+  void AddErrors(std::size_t method, int first, ConstImageView band) {
+    errors_[method]->Add(first, band);
+  }
+
+  // The reduced mask: a display pixel is set when any pixel of its block is.
+  Mask DisplayMask() const {
+    const Image mean = mask_.Result();
+    Mask mask(mean.width(), mean.height(), false);
+    for (std::size_t p = 0; p < mean.pixel_count(); ++p) mask.Set(p, mean.values()[p] > 0.0f);
+    return mask;
+  }
+  Image Captured(std::size_t shown) const { return captured_[shown].Result(); }
+  Image Relit(std::size_t method, std::size_t shown) const {
+    return relit_[method][shown].Result();
+  }
+  // None where the image was not predicted. Rows a prediction never reached (bands the mask left
+  // empty, which a streamed fold skips) count as 0, the fit's value outside the mask.
+  std::optional<Image> Predicted(std::size_t method, std::size_t shown) {
+    std::optional<DisplayReduction>& predicted = predicted_[method][shown];
+    if (!predicted) return std::nullopt;
+    predicted->CountMissingRowsAsZero();
+    return predicted->Result();
+  }
+  // None without truth or when the method gives no normals (EstimateNormals).
+  std::optional<Image> Errors(std::size_t method) const {
+    const std::optional<DisplayReduction>& errors = errors_[method];
+    return errors && errors->has_rows() ? std::optional(errors->Result()) : std::nullopt;
+  }
+
+ private:
+  int factor_;
+  DisplayReduction mask_;
+  std::vector<DisplayReduction> captured_;
+  std::vector<std::vector<DisplayReduction>> relit_;
+  std::vector<std::vector<std::optional<DisplayReduction>>> predicted_;
+  std::vector<std::optional<DisplayReduction>> errors_;
+};
+
+// The error map of a band's fit against its truth, when the method gives normals.
+void AddNormalErrors(ReportPictures& pictures, std::size_t method, int first,
+                     const Representation& fit, const Image& truth, const Mask& mask) {
+  if (!pictures.WantsErrors(method)) return;
+  if (const auto normals = EstimateNormals(fit)) {
+    pictures.AddErrors(method, first, AngularErrorMap(*normals, truth, mask).View());
+  }
+}
+
+// Writes the page, its pictures and report.json into `folder`, whole or not at all.
+void WriteReportFolder(const fs::path& folder, const ReportSet& info,
+                       const std::vector<MethodEvaluation>& evaluations, const ReportPlan& plan,
+                       ReportPictures& pictures, const EvaluationReportOptions& options) {
+  const Mask mask = pictures.DisplayMask();
+  std::vector<std::optional<Image>> errors;
+  for (std::size_t m = 0; m < evaluations.size(); ++m) errors.push_back(pictures.Errors(m));
+  WriteFolderAtomically(folder, kReportManifest, kReportFormat, [&](const fs::path& temp) {
+    fs::create_directories(temp / "images");
     std::string html = fmt::format(
         "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
         "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
         "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
         "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
-        EscapeMarkup(options.title), kStyle, EscapeMarkup(PublishedName(set.source())), set.size(),
-        set.width(), set.height(), set.channels(), mask.CountSet(),
+        EscapeMarkup(options.title), kStyle, EscapeMarkup(PublishedName(info.source)), info.images,
+        info.width, info.height, info.channels, info.pixels,
         options.robust ? "robust" : "least-squares");
 
     // The table.
@@ -505,15 +598,16 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
         "(thesis eq. 4.5.1): the mean over images of the RMS of relit minus captured, over "
         "the standard deviation of the captured image. Reconstruction: the fit of all images "
         "relit at each; prediction: " +
-        (held_out.empty() ? std::string("each image relit by a fit that left it out")
-                          : fmt::format("each of the {} held-out images relit by the fit of the "
-                                        "other {}",
-                                        held_out.size(), kept_images.size())) +
+        (plan.held_out.empty()
+             ? std::string("each image relit by a fit that left it out")
+             : fmt::format("each of the {} held-out images relit by the fit of the "
+                           "other {}",
+                           plan.held_out.size(), plan.kept_images.size())) +
         ".</p>\n";
     html +=
         "<table class=\"eta\">\n<thead><tr><th>method</th><th>eta reconstruction</th>"
         "<th>eta prediction</th>";
-    if (any_normals) {
+    if (plan.any_normals) {
       html +=
           "<th>normal mean (&#176;)</th><th>median (&#176;)</th><th>&lt; 5&#176;</th>"
           "<th>&lt; 10&#176;</th>";
@@ -523,7 +617,7 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
       html += fmt::format("<tr><td>{}</td><td>{:.5f}</td><td>{}</td>",
                           EscapeMarkup(e.method.Name()), e.eta_reconstruction,
                           e.eta_prediction ? fmt::format("{:.5f}", *e.eta_prediction) : "–");
-      if (any_normals) {
+      if (plan.any_normals) {
         if (e.normals) {
           html += fmt::format("<td>{:.2f}</td><td>{:.2f}</td><td>{:.1f} %</td><td>{:.1f} %</td>",
                               e.normals->mean_degrees, e.normals->median_degrees,
@@ -541,14 +635,14 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
     // The charts.
     BarChart summary{"eta per method",      "eta", {}, {{"reconstruction", {}}},
                      "chart summary-chart", ""};
-    if (prediction) summary.series.push_back({"prediction", {}});
+    if (plan.prediction) summary.series.push_back({"prediction", {}});
     for (const MethodEvaluation& e : evaluations) {
       summary.categories.push_back(e.method.Name());
       summary.series[0].values.push_back(e.eta_reconstruction);
-      if (prediction) summary.series[1].values.push_back(*e.eta_prediction);
+      if (plan.prediction) summary.series[1].values.push_back(*e.eta_prediction);
     }
     html += "<h2>Charts</h2>\n" + BarChartSvg(summary) + "\n";
-    if (any_normals) {
+    if (plan.any_normals) {
       BarChart normal_chart{"normal angular error", "degrees", {}, {{"mean", {}}, {"median", {}}},
                             "chart normal-chart",   ""};
       for (const MethodEvaluation& e : evaluations) {
@@ -566,13 +660,13 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
           {{"reconstruction", e.reconstruction_per_image}},  "chart method-chart", e.method.Name()};
       if (!e.prediction_per_image.empty()) {
         // By image index: images that were not predicted draw no bar.
-        std::vector<double> predicted(set.size(), std::numeric_limits<double>::quiet_NaN());
+        std::vector<double> predicted(info.images, std::numeric_limits<double>::quiet_NaN());
         for (std::size_t i = 0; i < e.prediction_images.size(); ++i) {
           predicted[e.prediction_images[i]] = e.prediction_per_image[i];
         }
         chart.series.push_back({"prediction", predicted});
       }
-      for (int i = 0; i < set.size(); ++i) chart.categories.push_back(std::to_string(i));
+      for (int i = 0; i < info.images; ++i) chart.categories.push_back(std::to_string(i));
       html += BarChartSvg(chart) + "\n";
     }
 
@@ -611,71 +705,64 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
     html +=
         "<h2>Captured and relit</h2>\n<p class=\"note\">Each row: a captured image and every "
         "method's relighting of its light by the fit of all images" +
-        std::string(!prediction        ? ""
-                    : held_out.empty() ? ", and below it the prediction by a fit without that image"
-                                       : ", and below it, for a held-out image, its prediction by "
-                                         "the fit without the held-out images") +
+        std::string(!plan.prediction ? ""
+                    : plan.held_out.empty()
+                        ? ", and below it the prediction by a fit without that image"
+                        : ", and below it, for a held-out image, its prediction by "
+                          "the fit without the held-out images") +
         ". Values shown through the sRGB curve; a dark row is brightened by the stated "
-        "factor, the same for every image in it.</p>\n<table class=\"compare\">\n<tr><th>"
-        "</th><th>captured</th>";
+        "factor, the same for every image in it." +
+        (pictures.factor() > 1
+             ? fmt::format(" Pictures are shown at 1/{} of the images' size, each pixel the mean "
+                           "of a {}&#215;{} block.",
+                           pictures.factor(), pictures.factor(), pictures.factor())
+             : std::string()) +
+        "</p>\n<table class=\"compare\">\n<tr><th></th><th>captured</th>";
     for (const MethodEvaluation& e : evaluations)
       html += "<th>" + EscapeMarkup(e.method.Name()) + "</th>";
     html += "</tr>\n";
-    // The one fit per method without the held-out images, made when a row first needs it.
-    std::vector<std::optional<Representation>> held_out_fits(evaluations.size());
-    progress.Start("report images", chosen.size());
-    for (int index : chosen) {
-      const LightDirection& light = set.light(index);
-      const double gain = DisplayGain(set.image(index), mask);
+    for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+      const int index = plan.shown[s];
+      const LightDirection& light = info.lights[index];
+      const Image captured_image = pictures.Captured(s);
+      const double gain = DisplayGain(captured_image, mask);
       const std::string captured = fmt::format("images/captured-{}.png", index);
-      WriteDisplayImage(temp / captured, Scaled(set.image(index), gain));
+      WriteDisplayImage(temp / captured, Scaled(captured_image, gain));
       html += fmt::format(
           "<tr class=\"relit-row\"><th>image {}<br>{}<br>{}{}</th><td><img "
           "class=\"pixels\" src=\"{}\" alt=\"captured image {}\"></td>",
-          index, EscapeMarkup(fs::path(set.image_name(index)).filename().string()),
-          LightText(light), gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured,
-          index);
+          index, EscapeMarkup(fs::path(info.names[index]).filename().string()), LightText(light),
+          gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured, index);
       std::vector<std::string> predicted_cells;
       for (std::size_t m = 0; m < evaluations.size(); ++m) {
         const std::string name = evaluations[m].method.Name();
         const std::string relit = fmt::format("images/relit-{}-{}.png", name, index);
-        WriteDisplayImage(temp / relit, Scaled(fits[m].Relight(light), gain));
+        WriteDisplayImage(temp / relit, Scaled(pictures.Relit(m, s), gain));
         html += fmt::format(
             "<td><img class=\"pixels\" src=\"{}\" alt=\"{} relit\"><br>"
             "e/&#963; {}</td>",
             relit, EscapeMarkup(name), Number(evaluations[m].reconstruction_per_image[index]));
-        if (!prediction) continue;
-        const int position = PredictionPosition(evaluations[m], index);
-        if (position < 0) {
+        if (!plan.prediction) continue;
+        const std::optional<Image> prediction = pictures.Predicted(m, s);
+        if (!prediction) {
           predicted_cells.push_back("<td class=\"note\">not held out</td>");
           continue;
         }
-        std::optional<Representation> leave_one_out;
-        if (held_out.empty()) {
-          std::vector<int> others;
-          for (int i = 0; i < set.size(); ++i) {
-            if (i != index) others.push_back(i);
-          }
-          leave_one_out = fit(evaluations[m].method, others);
-        } else if (!held_out_fits[m]) {
-          held_out_fits[m] = fit(evaluations[m].method, kept_images);
-        }
-        const Representation& fold = held_out.empty() ? *leave_one_out : *held_out_fits[m];
         const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
-        WriteDisplayImage(temp / predicted, Scaled(fold.Relight(light), gain));
+        WriteDisplayImage(temp / predicted, Scaled(*prediction, gain));
         predicted_cells.push_back(fmt::format(
             "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}</td>",
-            predicted, EscapeMarkup(name), Number(evaluations[m].prediction_per_image[position])));
+            predicted, EscapeMarkup(name),
+            Number(
+                evaluations[m].prediction_per_image[PredictionPosition(evaluations[m], index)])));
       }
       html += "</tr>\n";
-      if (prediction) {
+      if (plan.prediction) {
         html += "<tr class=\"predicted-row\"><th>predicted</th><td></td>";
         for (const std::string& cell : predicted_cells) html += cell;
         html += "</tr>\n";
       }
-      progress.Advance();
     }
-    progress.Finish();
     html +=
         "</table>\n<p class=\"note\">Written by photomat. report.json holds the numbers.</p>\n"
         "</body>\n</html>\n";
@@ -684,12 +771,201 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
                   {{"format", kReportFormat},
                    {"version", 1},
                    {"title", options.title},
-                   {"source", PublishedName(set.source())},
-                   {"images_shown", chosen},
+                   {"source", PublishedName(info.source)},
+                   {"images_shown", plan.shown},
+                   {"display_factor", pictures.factor()},
                    {"evaluation", EvaluationsToJson(evaluations)},
                    {"comparison",
                     options.comparison ? options.comparison->ToJson() : nlohmann::json(nullptr)}});
   });
+}
+
+// The prediction folds of the shown images: leave-one-out, one fold per shown image that was
+// predicted; held out, the one fold without the held-out images, predicting those shown.
+std::vector<PredictionFold> ShownFolds(const ReportPlan& plan, int images) {
+  if (!plan.prediction) return {};
+  if (!plan.held_out.empty()) {
+    PredictionFold fold{plan.kept_images, {}};
+    for (int index : plan.shown) {
+      if (std::find(plan.held_out.begin(), plan.held_out.end(), index) != plan.held_out.end()) {
+        fold.predicted.push_back(index);
+      }
+    }
+    return fold.predicted.empty() ? std::vector<PredictionFold>{} : std::vector{fold};
+  }
+  std::vector<PredictionFold> folds;
+  for (int index : plan.shown) {
+    PredictionFold fold{{}, {index}};
+    for (int i = 0; i < images; ++i) {
+      if (i != index) fold.fitted.push_back(i);
+    }
+    folds.push_back(std::move(fold));
+  }
+  return folds;
+}
+
+}  // namespace
+
+void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
+                           const std::vector<MethodEvaluation>& evaluations, const Image* truth,
+                           const EvaluationReportOptions& options) {
+  const ReportPlan plan = PlanReport(folder, set.size(), set.lights(), evaluations, options);
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  const Mask mask = set.MaskOrAll();
+  const Observations observations(set);
+  // The fits as the evaluation made them: least squares, or robust with its options.
+  const auto fit = [&](const Method& method, std::span<const int> selected) {
+    if (!options.robust) {
+      return FitObservations(observations, set.lights(), method, selected, set.source());
+    }
+    RobustFitOptions robust = *options.robust;
+    robust.progress = nullptr;
+    return RobustFit(observations, set.lights(), selected, robust, set.source()).Fit(method);
+  };
+  // The pictures in one band each.
+  ReportPictures pictures(set.width(), set.height(), set.channels(), plan, evaluations,
+                          truth != nullptr);
+  pictures.AddMask(0, mask);
+  for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+    pictures.AddCaptured(s, 0, set.image(plan.shown[s]).View());
+  }
+  std::vector<int> every_image(set.size());
+  std::iota(every_image.begin(), every_image.end(), 0);
+  const std::vector<PredictionFold> folds = ShownFolds(plan, set.size());
+  progress.Start("report", evaluations.size());
+  for (std::size_t m = 0; m < evaluations.size(); ++m) {
+    const Method& method = evaluations[m].method;
+    const Representation all = fit(method, every_image);
+    for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+      pictures.AddRelit(m, s, 0, all.Relight(set.light(plan.shown[s])).View());
+    }
+    if (truth) AddNormalErrors(pictures, m, 0, all, *truth, mask);
+    for (const PredictionFold& fold : folds) {
+      std::optional<Representation> fold_fit;
+      for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+        const int index = plan.shown[s];
+        if (std::find(fold.predicted.begin(), fold.predicted.end(), index) ==
+                fold.predicted.end() ||
+            PredictionPosition(evaluations[m], index) < 0) {
+          continue;
+        }
+        if (!fold_fit) fold_fit = fit(method, fold.fitted);
+        pictures.AddPredicted(m, s, 0, fold_fit->Relight(set.light(index)).View());
+      }
+    }
+    progress.Advance();
+  }
+  progress.Finish();
+  const ReportSet info{set.source(),   set.size(),      set.width(),  set.height(),
+                       set.channels(), mask.CountSet(), set.lights(), set.image_names()};
+  WriteReportFolder(folder, info, evaluations, plan, pictures, options);
+}
+
+void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
+                                   std::span<const fs::path> stacks,
+                                   const std::vector<MethodEvaluation>& evaluations,
+                                   const std::optional<fs::path>& truth,
+                                   const EvaluationReportOptions& options,
+                                   const StreamedReportOptions& bands) {
+  const ReportPlan plan = PlanReport(folder, set.size(), set.lights(), evaluations, options);
+  if (stacks.size() != evaluations.size()) {
+    throw Error(folder,
+                fmt::format("{} stacks for {} evaluations", stacks.size(), evaluations.size()));
+  }
+  const int width = set.width(), height = set.height();
+  const auto check_size = [&](const fs::path& path, int w, int h) {
+    if (w != width || h != height) {
+      throw Error(path, fmt::format("{}x{}, but the images are {}x{}", w, h, width, height));
+    }
+  };
+  std::vector<StackBandReader> fits;
+  std::size_t stored_channels = 0;
+  for (const fs::path& path : stacks) {
+    const StackBandReader& fit = fits.emplace_back(path);
+    check_size(path, fit.width(), fit.height());
+    stored_channels += static_cast<std::size_t>(fit.stored_channels());
+  }
+  std::optional<ImageBandReader> truth_rows;
+  if (truth) {
+    truth_rows.emplace(*truth);
+    check_size(*truth, truth_rows->width(), truth_rows->height());
+  }
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  // A band holds the photographs' band, every fit's band and the truth's (floats), and a relit
+  // image, normals and errors at a time.
+  const std::size_t pixel_bytes =
+      4 * (static_cast<std::size_t>(set.size()) * set.channels() + stored_channels + 3 + 8);
+  const int band_rows =
+      bands.band_rows > 0 ? std::min(bands.band_rows, height)
+                          : static_cast<int>(std::clamp<std::size_t>(
+                                (bands.memory_bytes > 0 ? bands.memory_bytes
+                                                        : DefaultBandBudget(kMinimumReportMemory)) /
+                                    (static_cast<std::size_t>(width) * pixel_bytes),
+                                1, static_cast<std::size_t>(height)));
+  ReportPictures pictures(width, height, set.channels(), plan, evaluations, truth.has_value());
+
+  // Pass 1: the photographs shown, every fit's relighting of them and its normal errors.
+  if (set.next_row() != 0) set.Rewind();
+  std::size_t pixels = 0;
+  progress.Start("report: pictures",
+                 static_cast<std::size_t>((height + band_rows - 1) / band_rows));
+  for (int first = 0; first < height; first += band_rows) {
+    const int rows = std::min(band_rows, height - first);
+    const PhotometricSet band = set.ReadBand(rows);
+    const Mask mask = set.MaskRows(first, rows);
+    pixels += mask.CountSet();
+    pictures.AddMask(first, mask);
+    for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+      pictures.AddCaptured(s, first, band.image(plan.shown[s]).View());
+    }
+    std::optional<Image> truth_band;
+    if (truth_rows) {
+      truth_band.emplace(width, rows, truth_rows->channels());
+      truth_rows->ReadNext(truth_band->View());
+    }
+    for (std::size_t m = 0; m < fits.size(); ++m) {
+      const LoadedStack fit = fits[m].ReadNext(rows);
+      tbb::parallel_for(std::size_t{0}, plan.shown.size(), [&](std::size_t s) {
+        pictures.AddRelit(m, s, first,
+                          fit.representation.Relight(set.lights()[plan.shown[s]]).View());
+      });
+      if (truth_band) AddNormalErrors(pictures, m, first, fit.representation, *truth_band, mask);
+    }
+    progress.Advance();
+  }
+  progress.Finish();
+
+  // Pass 2: the shown images' predictions, by their folds fitted band by band.
+  const std::vector<PredictionFold> folds = ShownFolds(plan, set.size());
+  if (!folds.empty()) {
+    std::vector<Method> methods;
+    for (const MethodEvaluation& e : evaluations) methods.push_back(e.method);
+    FoldFitOptions fold_options;
+    fold_options.memory_bytes = bands.memory_bytes;
+    fold_options.band_rows = bands.band_rows;
+    fold_options.robust = options.robust;
+    fold_options.progress = options.progress;
+    VisitFoldFits(
+        set, methods, folds,
+        [&](const FoldFit& fold) {
+          const std::vector<int>& predicted = folds[fold.fold].predicted;
+          for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+            const int index = plan.shown[s];
+            if (std::find(predicted.begin(), predicted.end(), index) == predicted.end() ||
+                PredictionPosition(evaluations[fold.method], index) < 0) {
+              continue;
+            }
+            pictures.AddPredicted(fold.method, s, fold.first_row,
+                                  fold.fit.Relight(set.lights()[index]).View());
+          }
+        },
+        fold_options);
+  }
+  const ReportSet info{set.source(),   set.size(), width,        height,
+                       set.channels(), pixels,     set.lights(), set.image_names()};
+  WriteReportFolder(folder, info, evaluations, plan, pictures, options);
 }
 
 }  // namespace photomat

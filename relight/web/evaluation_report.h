@@ -1,12 +1,15 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "capture/io/streamed_set.h"
 #include "core/image.h"
 #include "core/light_direction.h"
 #include "core/photometric_set.h"
@@ -53,6 +56,30 @@ struct EvaluationReportOptions {
 void WriteEvaluationReport(const std::filesystem::path& folder, const PhotometricSet& set,
                            const std::vector<MethodEvaluation>& evaluations, const Image* truth,
                            const EvaluationReportOptions& options = {});
+
+// The same report from a set and its fits read band by band (`evaluate --stream --report`, README
+// "Streamed relighting and export"), for sets too large to hold: `stacks[m]` is the fit of every
+// image for evaluations[m] (a map stack, as the evaluation made it: least squares, or robust with
+// options.robust), the photographs are read from `set` in bands, the shown images' predictions are
+// fitted band by band (VisitFoldFits, their folds only: a fold per shown image for leave-one-out,
+// the one held-out fit otherwise) and `truth` (ground-truth normals) is read in bands. The pictures
+// are gathered at display size as they stream (report_pictures.h), so memory follows the band.
+// The same page and pictures as WriteEvaluationReport, to the fits' float rounding (a displayed
+// code may step by one). Throws Error naming the stack or truth whose size differs from the set's,
+// and as WriteEvaluationReport.
+struct StreamedReportOptions {
+  // Bytes the bands may hold; 0: DefaultBandBudget(kMinimumReportMemory).
+  std::size_t memory_bytes = 0;
+  // > 0: exactly this many rows per band (tests).
+  int band_rows = 0;
+};
+inline constexpr std::size_t kMinimumReportMemory = std::size_t{16} << 20;
+void WriteEvaluationReportStreamed(const std::filesystem::path& folder, StreamedSet& set,
+                                   std::span<const std::filesystem::path> stacks,
+                                   const std::vector<MethodEvaluation>& evaluations,
+                                   const std::optional<std::filesystem::path>& truth,
+                                   const EvaluationReportOptions& options = {},
+                                   const StreamedReportOptions& bands = {});
 
 // Demsar's critical-difference diagram as inline SVG (<svg class="cd-diagram">): the mean-rank axis
 // with the best rank on the right, each method's mean rank marked and labelled, the critical

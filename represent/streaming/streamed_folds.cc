@@ -130,7 +130,7 @@ int VisitFoldFits(StreamedSet& set, std::span<const Method> methods,
           }
           return FitObservations(observations, set.lights(), method, fitted, set.source());
         }();
-        visit(FoldFit{i, f, fit, observations});
+        visit(FoldFit{i, f, band.first, fit, observations});
       });
     }
   });

@@ -38,11 +38,12 @@ struct FoldFitOptions {
 };
 
 // One band's fit of method `method` from fold `fold`'s fitted images. `fit` holds the band's maps
-// and `observations` the band's selected pixels of every image, the intensities applied. Both are
-// valid during the visit only.
+// (rows [first_row, first_row + fit.height()) of the image) and `observations` the band's selected
+// pixels of every image, the intensities applied. Both are valid during the visit only.
 struct FoldFit {
   std::size_t method = 0;
   std::size_t fold = 0;
+  int first_row = 0;
   const Representation& fit;
   const Observations& observations;
 };

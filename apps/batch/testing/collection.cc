@@ -96,7 +96,7 @@ std::string RunByHand(const fs::path& capture, const std::string& name, const fs
       {"export", c, "--ptm", name + ".ptm", "--rti", name + ".rti"},
       {"export", "stacks", "--viewer", "viewer"},
       {"evaluate", c, "--methods", "gradient,ptm", "--json", "evaluation.json", "--report",
-       "report"},
+       "report", "--stream"},
   };
   for (const auto& arguments : commands) {
     const ChildOutcome outcome = RunPhotomatIn(folder, arguments);
