@@ -29,7 +29,7 @@ DisplayReduction::DisplayReduction(int width, int height, int channels, int fact
   const std::size_t size = static_cast<std::size_t>(display_width_) * display_height_ *
                            static_cast<std::size_t>(channels);
   sums_.assign(size, 0.0);
-  counts_.assign(size, 0.0);
+  if (skip_negative_) valid_counts_.assign(size, 0);
   row_added_.assign(static_cast<std::size_t>(height), 0);
 }
 
@@ -55,9 +55,11 @@ void DisplayReduction::Add(int first, ConstImageView band) {
           c * plane + static_cast<std::size_t>((first + y) / factor_) * display_width_;
       for (int x = 0; x < width_; ++x) {
         const float v = row[x];
-        if (skip_negative_ && v < 0.0f) continue;
+        if (skip_negative_) {
+          if (v < 0.0f) continue;
+          ++valid_counts_[offset + x / factor_];
+        }
         sums_[offset + x / factor_] += v;
-        counts_[offset + x / factor_] += 1.0;
       }
     }
   }
@@ -69,22 +71,30 @@ void DisplayReduction::CountMissingRowsAsZero() {
     if (row_added_[static_cast<std::size_t>(y)]) continue;
     row_added_[static_cast<std::size_t>(y)] = 1;
     ++rows_added_;
+    if (!skip_negative_) continue;  // the count follows from the rows added
     for (int c = 0; c < channels_; ++c) {
       const std::size_t offset = c * plane + static_cast<std::size_t>(y / factor_) * display_width_;
-      for (int x = 0; x < width_; ++x) counts_[offset + x / factor_] += 1.0;
+      for (int x = 0; x < width_; ++x) ++valid_counts_[offset + x / factor_];
     }
   }
 }
 
 Image DisplayReduction::Result() const {
+  // Without skipping, a block's count is its rows added times its columns.
+  std::vector<double> rows(static_cast<std::size_t>(display_height_), 0.0);
+  for (int y = 0; y < height_; ++y) rows[y / factor_] += row_added_[static_cast<std::size_t>(y)];
   Image out(display_width_, display_height_, channels_);
   const std::size_t plane = static_cast<std::size_t>(display_width_) * display_height_;
   for (int c = 0; c < channels_; ++c) {
     auto values = out.plane(c);
-    for (std::size_t p = 0; p < plane; ++p) {
-      const double count = counts_[c * plane + p];
-      values[p] = count > 0.0 ? static_cast<float>(sums_[c * plane + p] / count)
-                              : (skip_negative_ ? -1.0f : 0.0f);
+    for (int y = 0; y < display_height_; ++y) {
+      for (int x = 0; x < display_width_; ++x) {
+        const std::size_t p = static_cast<std::size_t>(y) * display_width_ + x;
+        const double columns = std::min(factor_, width_ - x * factor_);
+        const double count = skip_negative_ ? valid_counts_[c * plane + p] : rows[y] * columns;
+        values[p] = count > 0.0 ? static_cast<float>(sums_[c * plane + p] / count)
+                                : (skip_negative_ ? -1.0f : 0.0f);
+      }
     }
   }
   return out;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/image.h"
@@ -23,6 +24,8 @@ int ReportDisplayFactor(int width, int height);
 // smaller). With `skip_negative`, values below 0 (undefined, as AngularErrorMap's -1) are left
 // out of the means and a block without any other reads -1. Sums are in double, added in the
 // order the rows arrive, so bands given in row order make the same picture whatever their height.
+// Memory: 8 bytes per display value (12 with skip_negative): 19 MB for an RGB picture of 1024 x
+// 768, whatever the image's size.
 class DisplayReduction {
  public:
   DisplayReduction(int width, int height, int channels, int factor, bool skip_negative = false);
@@ -44,8 +47,9 @@ class DisplayReduction {
   int width_, height_, channels_, factor_;
   bool skip_negative_;
   int display_width_, display_height_;
-  std::vector<double> sums_;  // planar, display size
-  std::vector<double> counts_;
+  std::vector<double> sums_;                 // planar, display size
+  std::vector<std::uint32_t> valid_counts_;  // with skip_negative only
+
   std::vector<char> row_added_;
   int rows_added_ = 0;
 };
