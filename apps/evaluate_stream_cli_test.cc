@@ -245,5 +245,22 @@ TEST(EvaluateStreamCliTest, AReportStreamsAndShowsTheInMemoryPictures) {
               ::testing::ElementsAre("capture", "streamed", "whole"));
 }
 
+// A photograph truncated part-way: the streamed evaluation with a report fails naming it, and
+// leaves neither report, JSON nor scratch stacks.
+TEST(EvaluateStreamCliTest, AnImageTruncatedMidwayLeavesNoReport) {
+  const TempDir dir;
+  const std::string capture = (dir / "capture").string();
+  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 64x256 --seed 6").exit_code, 0);
+  const fs::path victim = dir / "capture" / "img_030.png";
+  fs::resize_file(victim, fs::file_size(victim) / 2);
+  fs::create_directories(dir / "out");
+  const RunResult evaluated = RunPhotomat(
+      "evaluate " + capture + " --stream --memory 1 --methods gradient --hold-out-every 6 --json " +
+      (dir / "out" / "e.json").string() + " --report " + (dir / "out" / "report").string());
+  EXPECT_EQ(evaluated.exit_code, 1) << evaluated.output;
+  EXPECT_THAT(evaluated.output, HasSubstr("img_030.png"));
+  EXPECT_TRUE(testing::EntriesOf(dir / "out").empty()) << evaluated.output;
+}
+
 }  // namespace
 }  // namespace photomat

@@ -170,6 +170,13 @@ TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
   EXPECT_EQ(exported.exit_code, 1) << exported.output;
   EXPECT_THAT(exported.output, HasSubstr("img_030.png"));
   EXPECT_TRUE(testing::EntriesOf(dir / "out").empty()) << exported.output;
+  // relight's rbf planes, read from the photographs themselves: the same.
+  const RunResult rbf =
+      RunPhotomat("export " + capture + " --stream --memory 1 --relight-basis rbf --relight-web " +
+                  (dir / "out" / "web").string());
+  EXPECT_EQ(rbf.exit_code, 1) << rbf.output;
+  EXPECT_THAT(rbf.output, HasSubstr("img_030.png"));
+  EXPECT_TRUE(testing::EntriesOf(dir / "out").empty()) << rbf.output;
 }
 
 // What is made from a whole stack (relight's ptm planes and their ranges, the compact form's PCA,
