@@ -300,10 +300,7 @@ TEST(CalibrateCliTest, ApplyUnderAnAddressSpaceLimitFarBelowTheCaptureSucceedsAn
 TEST(CalibrateCliTest, FitAndEvaluateRobust) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture +
-                        " --size 40x40 --relief 50 --shadows --specular 0.4 --seed 3")
-                .exit_code,
-            0);
+  testing::GenerateCapture(capture, "--size 40x40 --relief 50 --shadows --specular 0.4 --seed 3");
   const RunResult fit = RunPhotomat("fit " + capture +
                                     " --method gradient,ptm,eigen3 --robust "
                                     "--loss tukey --out " +

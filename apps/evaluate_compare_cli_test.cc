@@ -23,9 +23,7 @@ using testing::TempDir;
 TEST(EvaluateCompareCliTest, RanksTheMethodsInTheTableTheJsonAndTheReport) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(
-      RunPhotomat("generate --out " + capture + " --size 24x20 --pattern bumps --seed 5").exit_code,
-      0);
+  testing::GenerateCapture(capture, "--size 24x20 --pattern bumps --seed 5");
   const RunResult evaluate = RunPhotomat(
       "evaluate " + capture + " --methods gradient,ptm,eigen6 --hold-out-every 4 --compare " +
       "--json " + (dir / "e.json").string() + " --report " + (dir / "report").string());
@@ -74,7 +72,7 @@ TEST(EvaluateCompareCliTest, RanksTheMethodsInTheTableTheJsonAndTheReport) {
 TEST(EvaluateCompareCliTest, RefusesAComparisonWithoutPredictionOrOfOneMethod) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 12x10 --seed 1").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 12x10 --seed 1");
   const RunResult no_prediction =
       RunPhotomat("evaluate " + capture + " --methods gradient,ptm --no-prediction --compare");
   EXPECT_EQ(no_prediction.exit_code, 1);

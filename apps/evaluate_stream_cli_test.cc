@@ -157,8 +157,7 @@ TEST(EvaluateStreamCliTest, RobustPredictionStreamedGivesTheInMemoryFigures) {
 
 TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsPbrAndTooSmallFolds) {
   const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 24x20 --seed 4").exit_code, 0);
+  const std::string capture = testing::GenerateCapture(dir / "capture", "--size 24x20 --seed 4");
   // "all" holds eigen3 and eigen6, whose robust fold fits impute over the whole set.
   const RunResult robust = RunPhotomat("evaluate " + capture + " --stream --robust");
   EXPECT_EQ(robust.exit_code, 1) << robust.output;
@@ -212,8 +211,7 @@ TEST(EvaluateStreamCliTest, UnderAnAddressSpaceLimitPredictionStreamsByItselfAnd
 // pictures byte for byte (measured), the same images shown, the same eta to float rounding.
 TEST(EvaluateStreamCliTest, AReportStreamsAndShowsTheInMemoryPictures) {
   const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x36 --seed 5").exit_code, 0);
+  const std::string capture = testing::GenerateCapture(dir / "capture", "--size 40x36 --seed 5");
   const std::string evaluate = "evaluate " + capture + " --methods gradient,ptm,eigen6 --report ";
   const RunResult whole = RunPhotomat(evaluate + (dir / "whole").string());
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
@@ -249,8 +247,7 @@ TEST(EvaluateStreamCliTest, AReportStreamsAndShowsTheInMemoryPictures) {
 // leaves neither report, JSON nor scratch stacks.
 TEST(EvaluateStreamCliTest, AnImageTruncatedMidwayLeavesNoReport) {
   const TempDir dir;
-  const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 64x256 --seed 6").exit_code, 0);
+  const std::string capture = testing::GenerateCapture(dir / "capture", "--size 64x256 --seed 6");
   const fs::path victim = dir / "capture" / "img_030.png";
   fs::resize_file(victim, fs::file_size(victim) / 2);
   fs::create_directories(dir / "out");

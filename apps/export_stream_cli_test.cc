@@ -160,7 +160,7 @@ TEST(ExportStreamCliTest, ASetExportedStreamedEqualsTheInMemoryExport) {
 TEST(ExportStreamCliTest, AnImageTruncatedMidwayFailsNamingItAndLeavesNothing) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 64x256 --seed 6").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 64x256 --seed 6");
   const fs::path victim = dir / "capture" / "img_030.png";
   fs::resize_file(victim, fs::file_size(victim) / 2);
   fs::create_directories(dir / "out");
@@ -312,9 +312,7 @@ bool JsonNear(const nlohmann::json& a, const nlohmann::json& b, double tolerance
 TEST(ExportStreamCliTest, ASetsViewerExportedStreamedEqualsTheInMemoryViewer) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(
-      RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 9").exit_code,
-      0);
+  testing::GenerateCapture(capture, "--size 40x32 --pattern bumps --seed 9");
   const RunResult whole = RunPhotomat("export " + capture + " --viewer " + (dir / "w").string());
   ASSERT_EQ(whole.exit_code, 0) << whole.output;
   const RunResult streamed =

@@ -36,7 +36,7 @@ std::size_t FilesIn(const fs::path& folder) {
 TEST(FitStreamCliTest, ImageOfAnotherSizeFailsNamingItAndLeavesNoOutput) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x32 --seed 5").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 40x32 --seed 5");
   WriteImage(dir / "capture" / "img_007.png", Image(40, 31, 3), testing::Linear16Bit());
   const RunResult fit =
       RunPhotomat("fit " + capture + " --method all --out " + (dir / "out").string());
@@ -48,7 +48,7 @@ TEST(FitStreamCliTest, ImageOfAnotherSizeFailsNamingItAndLeavesNoOutput) {
 TEST(FitStreamCliTest, ImageTruncatedMidwayFailsNamingItAndLeavesNoOutput) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 64x256 --seed 6").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 64x256 --seed 6");
   const fs::path victim = dir / "capture" / "img_030.png";
   fs::resize_file(victim, fs::file_size(victim) / 2);
   const RunResult fit = RunPhotomat("fit " + capture + " --method all --robust --memory 1 --out " +

@@ -28,9 +28,7 @@ using testing::TempDir;
 TEST(PhotomatCliTest, GenerateFitRelightEvaluate) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(
-      RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 4").exit_code,
-      0);
+  testing::GenerateCapture(capture, "--size 40x32 --pattern bumps --seed 4");
   EXPECT_EQ(LoadPhotometricSet(capture).set.size(), 36);
 
   const RunResult fit = RunPhotomat("fit " + capture + " --method gradient,ptm,eigen6 --out " +
@@ -76,9 +74,7 @@ TEST(PhotomatCliTest, GenerateFitRelightEvaluate) {
 TEST(PhotomatCliTest, FitWritesTheChosenLosslessExrCompression) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(
-      RunPhotomat("generate --out " + capture + " --size 40x32 --pattern bumps --seed 5").exit_code,
-      0);
+  testing::GenerateCapture(capture, "--size 40x32 --pattern bumps --seed 5");
   // The default on a full frame (auto: none), rle, the smallest on real stacks (zip) and piz:
   // the same maps, bit for bit.
   std::vector<Image> maps;
@@ -203,7 +199,7 @@ TEST(PhotomatCliTest, ExportWritesTheWebViewerOfAFitFolderAPtmFileOrASet) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
   const std::string stacks = (dir / "stacks").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 3").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 20x16 --seed 3");
   ASSERT_EQ(
       RunPhotomat("fit " + capture + " --method eigen3,ptm,gradient --out " + stacks).exit_code, 0);
   // Every stack of the fit folder, in photomat's method order, linear values.
@@ -260,7 +256,7 @@ TEST(PhotomatCliTest, NeuralFitsAndRelightsOrSaysWhatThisBuildLacks) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
   const std::string stacks = (dir / "stacks").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 12x10 --seed 4").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 12x10 --seed 4");
   const RunResult fit = RunPhotomat("fit " + capture + " --method neural --neural-k 4 " +
                                     "--neural-epochs 2 --seed 3 --out " + stacks);
   if (!app::ComponentAbsence(app::Component::kNeural).empty()) {
@@ -294,7 +290,7 @@ TEST(PhotomatCliTest, RbfAndBilinearFitRelightAndExportLikeEveryMethod) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
   const std::string stacks = (dir / "stacks").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 4").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 20x16 --seed 4");
   const RunResult fit = RunPhotomat("fit " + capture + " --method rbf,bilinear --planes 5 " +
                                     "--rbf-width 20 --grid-size 8 --out " + stacks);
   ASSERT_EQ(fit.exit_code, 0) << fit.output;
@@ -323,7 +319,7 @@ TEST(PhotomatCliTest, RbfAndBilinearFitRelightAndExportLikeEveryMethod) {
 TEST(PhotomatCliTest, EvaluateWritesAReportOfTheChosenImages) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 20x16 --seed 2").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 20x16 --seed 2");
   const RunResult evaluate =
       RunPhotomat("evaluate " + capture + " --methods gradient,ptm --no-prediction --report " +
                   (dir / "report").string() + " --report-images 1,35");

@@ -33,7 +33,7 @@ using testing::TempDir;
 // (quick to write and read back). 1536 x 1536 x 18 float maps: 170 MB.
 fs::path WriteLargePtmStack(const TempDir& dir, int side) {
   const std::string capture = (dir / "capture").string();
-  EXPECT_EQ(RunPhotomat("generate --out " + capture + " --size 64x64 --seed 3").exit_code, 0);
+  testing::GenerateCapture(capture, "--size 64x64 --seed 3");
   EXPECT_EQ(
       RunPhotomat("fit " + capture + " --method ptm --out " + (dir / "small").string()).exit_code,
       0);
@@ -85,8 +85,7 @@ TEST(RelightStreamCliTest, RelightUnderAnAddressSpaceLimitBelowTheWholeStackMatc
 TEST(RelightStreamCliTest, EvaluateAStackStreamedGivesTheInMemoryEta) {
   const TempDir dir;
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 48x40 --shadows --seed 4").exit_code,
-            0);
+  testing::GenerateCapture(capture, "--size 48x40 --shadows --seed 4");
   ASSERT_EQ(
       RunPhotomat("fit " + capture + " --method ptm --out " + (dir / "fit").string()).exit_code, 0);
   const RunResult streamed =

@@ -25,8 +25,7 @@ using testing::TempDir;
 // A fitted 40 x 40 capture: DIR/stacks holds gradient and ptm.
 void MakeStacks(const TempDir& dir) {
   const std::string capture = (dir / "capture").string();
-  ASSERT_EQ(RunPhotomat("generate --out " + capture + " --size 40x40 --pattern bumps").exit_code,
-            0);
+  testing::GenerateCapture(capture, "--size 40x40 --pattern bumps");
   const RunResult fit =
       RunPhotomat("fit " + capture + " --method gradient,ptm --out " + (dir / "stacks").string());
   ASSERT_EQ(fit.exit_code, 0) << fit.output;
