@@ -59,19 +59,44 @@ std::optional<std::filesystem::path> TruthPath(const std::filesystem::path& give
   return given.empty() ? named : std::optional(given);
 }
 
+// The methods fitted alike (`members` their places in the evaluation's list): pbr with robust
+// options of its own (`evaluate` fits it as `fit` does, robustly with its --pbr-* options, with
+// or without --robust), the others least squares or with the evaluation's robust options.
+struct FitGroup {
+  std::vector<std::size_t> members;
+  std::vector<Method> methods;
+  std::optional<RobustFitOptions> robust;
+};
+
+std::vector<FitGroup> FitGroups(const std::vector<Method>& methods,
+                                const std::optional<RobustFitOptions>& robust,
+                                const RobustFitOptions& pbr_robust) {
+  FitGroup others{{}, {}, robust}, pbr{{}, {}, pbr_robust};
+  for (std::size_t m = 0; m < methods.size(); ++m) {
+    FitGroup& group = methods[m].kind == Method::Kind::kPbr ? pbr : others;
+    group.members.push_back(m);
+    group.methods.push_back(methods[m]);
+  }
+  std::vector<FitGroup> groups;
+  for (FitGroup* group : {&others, &pbr}) {
+    if (!group->methods.empty()) groups.push_back(std::move(*group));
+  }
+  return groups;
+}
+
 // `evaluate INPUT --stream` (README "Streamed relighting and export"): `methods` fitted to `set`
 // in bands (FitStreamed) into scratch stacks, each then evaluated against the set streamed
 // (EvaluateStackStreamed): the same eta of reconstruction as the in-memory evaluation to float
 // rounding, and the same normal errors. With `prediction`, the folds are fitted band by band
-// first (PredictStreamed): the same eta and PSNR of prediction. `use(results, stacks)` then gets
-// the evaluations and the scratch stacks (a report is drawn from them). IMPLEMENTER CHOICE: the
-// scratch folder is beside `output` (the JSON or report the user chose a place for), else in the
-// current folder; its free space is checked first, and it is removed however the evaluation ends.
+// first (PredictStreamed): the same eta and PSNR of prediction. Each group of FitGroups is fitted
+// in passes of its own. `use(results, stacks)` then gets the evaluations and the scratch stacks
+// (a report is drawn from them). IMPLEMENTER CHOICE: the scratch folder is beside `output` (the
+// JSON or report the user chose a place for), else in the current folder; its free space is
+// checked first, and it is removed however the evaluation ends.
 using UseStreamedEvaluations = std::function<void(const std::vector<MethodEvaluation>&,
                                                   std::span<const std::filesystem::path>)>;
 void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
-                         StreamedEvaluationOptions options,
-                         const std::optional<RobustFitOptions>& robust,
+                         StreamedEvaluationOptions options, const std::vector<FitGroup>& groups,
                          const std::optional<StreamedPredictionOptions>& prediction,
                          const std::filesystem::path& output, const UseStreamedEvaluations& use) {
   const std::filesystem::path beside = output.empty() || output.parent_path().empty()
@@ -82,18 +107,30 @@ void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
   std::vector<MethodEvaluation> results(methods.size());
   // Prediction first: a fold too small for a method fails before any fit is written.
   if (prediction) {
-    StreamedPredictionOptions predict = *prediction;
-    predict.progress = &bar;
-    PredictStreamed(set, methods, results, predict);
+    for (const FitGroup& group : groups) {
+      StreamedPredictionOptions predict = *prediction;
+      predict.robust = group.robust;
+      predict.progress = &bar;
+      std::vector<MethodEvaluation> predicted(group.methods.size());
+      PredictStreamed(set, group.methods, predicted, predict);
+      for (std::size_t i = 0; i < group.members.size(); ++i) {
+        results[group.members[i]] = std::move(predicted[i]);
+      }
+    }
   }
   const ScratchFolder scratch(beside, "photomat-evaluate");
-  StreamedFitOptions fit;
-  fit.memory_bytes = options.memory_bytes;
-  fit.progress = &bar;
-  fit.robust = robust.has_value();
-  if (robust) fit.robust_options = *robust;
-  const std::vector<std::filesystem::path> stacks =
-      FitIntoFolder(set, methods, scratch.path(), set.source().string(), fit, true);
+  std::vector<std::filesystem::path> stacks(methods.size());
+  for (const FitGroup& group : groups) {
+    StreamedFitOptions fit;
+    fit.memory_bytes = options.memory_bytes;
+    fit.progress = &bar;
+    fit.robust = group.robust.has_value();
+    if (group.robust) fit.robust_options = *group.robust;
+    const std::vector<std::filesystem::path> fitted =
+        FitIntoFolder(set, group.methods, scratch.path(), set.source().string(), fit,
+                      /*warn_clipped=*/&group == &groups.front());
+    for (std::size_t i = 0; i < group.members.size(); ++i) stacks[group.members[i]] = fitted[i];
+  }
   options.progress = &bar;
   for (std::size_t i = 0; i < methods.size(); ++i) {
     StackBandReader stack(stacks[i]);
@@ -119,12 +156,14 @@ void CheckReportImages(const std::vector<int>& images, int set_size) {
 EvaluationReportOptions ReportOptions(const std::filesystem::path& input,
                                       const std::vector<int>& images,
                                       const std::optional<RobustFitOptions>& robust,
+                                      const RobustFitOptions& pbr_robust,
                                       const std::optional<MethodComparison>& comparison,
                                       Progress& progress) {
   EvaluationReportOptions report;
   report.title = fmt::format("photomat evaluation of {}", PublishedName(input));
   report.images = images;
   report.robust = robust;
+  report.pbr_robust = pbr_robust;
   report.comparison = comparison;
   report.progress = &progress;
   return report;
@@ -235,7 +274,7 @@ void AddEvaluateCommand(CLI::App& app) {
                     "--report (or in the current folder) and evaluate those streamed, and fit "
                     "the prediction's folds band by band: the same numbers in memory for a "
                     "band, whatever the set's size; a --report's pictures are drawn band by band "
-                    "(not with pbr; --robust prediction not for eigenK, rbf or bilinear)");
+                    "(--robust prediction not for eigenK, rbf or bilinear)");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -284,11 +323,11 @@ void AddEvaluateCommand(CLI::App& app) {
     const bool robust_folds_stream =
         !options->robust || options->no_prediction ||
         std::all_of(methods.begin(), methods.end(), StreamsRobustFolds);
-    const bool streamable = !pbr_asked && robust_folds_stream;
+    const bool streamable = robust_folds_stream;
     if (options->stream && !streamable) {
       throw Error(
-          "--stream evaluates in bands: it does not go with pbr or --robust prediction of "
-          "eigenK, rbf or bilinear (each fold's fit imputes over the whole set)");
+          "--stream evaluates in bands: it does not go with --robust prediction of eigenK, rbf "
+          "or bilinear (each fold's fit imputes over the whole set)");
     }
     const std::vector<int> report_images = ParseIndexList(options->report_images);
     if (streamable) {
@@ -308,6 +347,8 @@ void AddEvaluateCommand(CLI::App& app) {
         const std::vector<Mask> found_per_band;
         std::optional<RobustFitOptions> robust;
         if (options->robust) robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
+        RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
+        pbr_robust.pbr = options->pbr;
         std::optional<StreamedPredictionOptions> prediction;
         if (!options->no_prediction) {
           prediction.emplace();
@@ -331,11 +372,12 @@ void AddEvaluateCommand(CLI::App& app) {
           bands.memory_bytes = streamed.memory_bytes;
           WriteEvaluationReportStreamed(
               options->report, set, stacks, results, streamed.ground_truth_normals,
-              ReportOptions(options->input, report_images, robust, comparison, bar), bands);
+              ReportOptions(options->input, report_images, robust, pbr_robust, comparison, bar),
+              bands);
           fmt::print("report: {}\n", (options->report / "index.html").string());
         };
-        EvaluateSetStreamed(set, methods, streamed, robust, prediction,
-                            options->json.empty() ? options->report : options->json,
+        EvaluateSetStreamed(set, methods, streamed, FitGroups(methods, robust, pbr_robust),
+                            prediction, options->json.empty() ? options->report : options->json,
                             print_and_report);
         return;
       }
@@ -365,13 +407,12 @@ void AddEvaluateCommand(CLI::App& app) {
     if (options->robust) {
       evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
     }
+    RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options->loss, input.measured);
+    pbr_robust.pbr = options->pbr;
     std::vector<MethodEvaluation> results;
     for (const Method& method : methods) {
       EvaluationOptions method_evaluation = evaluation;
-      if (method.kind == Method::Kind::kPbr) {
-        method_evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
-        method_evaluation.robust->pbr = options->pbr;
-      }
+      if (method.kind == Method::Kind::kPbr) method_evaluation.robust = pbr_robust;
       results.push_back(EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr,
                                        method_evaluation));
     }
@@ -380,9 +421,9 @@ void AddEvaluateCommand(CLI::App& app) {
                     truth ? fmt::format(", ground truth {}", truth_path->string()) : ""),
         results, options->compare, options->json);
     if (!options->report.empty()) {
-      WriteEvaluationReport(
-          options->report, loaded.set, results, truth ? &*truth : nullptr,
-          ReportOptions(options->input, report_images, evaluation.robust, comparison, bar));
+      WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
+                            ReportOptions(options->input, report_images, evaluation.robust,
+                                          pbr_robust, comparison, bar));
       fmt::print("report: {}\n", (options->report / "index.html").string());
     }
   });

@@ -155,16 +155,13 @@ TEST(EvaluateStreamCliTest, RobustPredictionStreamedGivesTheInMemoryFigures) {
   ExpectSameReconstruction(a, b, {"gradient", "ptm"});
 }
 
-TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsPbrAndTooSmallFolds) {
+TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsAndTooSmallFolds) {
   const TempDir dir;
   const std::string capture = testing::GenerateCapture(dir / "capture", "--size 24x20 --seed 4");
   // "all" holds eigen3 and eigen6, whose robust fold fits impute over the whole set.
   const RunResult robust = RunPhotomat("evaluate " + capture + " --stream --robust");
   EXPECT_EQ(robust.exit_code, 1) << robust.output;
   EXPECT_THAT(robust.output, HasSubstr("--robust prediction of eigenK, rbf or bilinear"));
-  const RunResult pbr = RunPhotomat("evaluate " + capture + " --stream --methods pbr");
-  EXPECT_EQ(pbr.exit_code, 1) << pbr.output;
-  EXPECT_THAT(pbr.output, HasSubstr("--stream evaluates in bands: it does not go with pbr"));
   // Holding out every image leaves none to fit: refused before anything is fitted or written.
   fs::create_directories(dir / "out");
   const RunResult small =
@@ -257,6 +254,43 @@ TEST(EvaluateStreamCliTest, AnImageTruncatedMidwayLeavesNoReport) {
   EXPECT_EQ(evaluated.exit_code, 1) << evaluated.output;
   EXPECT_THAT(evaluated.output, HasSubstr("img_030.png"));
   EXPECT_TRUE(testing::EntriesOf(dir / "out").empty()) << evaluated.output;
+}
+
+// pbr evaluates streamed too: fitted as `fit` fits it (robustly, with its --pbr-* options) in
+// passes of its own, reconstruction, held-out prediction and the report's pictures; the
+// in-memory evaluation's numbers to float rounding and its report's pictures byte for byte.
+TEST(EvaluateStreamCliTest, PbrStreamsWithItsOwnFitOptions) {
+  const TempDir dir;
+  const std::string capture = testing::GenerateCapture(
+      dir / "capture", "--size 24x20 --pattern bumps --ggx --roughness 0.4,0.6 --seed 7");
+  const std::string evaluate =
+      "evaluate " + capture + " --methods gradient,pbr --hold-out-every 6 --pbr-iterations 20 ";
+  const RunResult whole = RunPhotomat(evaluate + "--json " + (dir / "whole.json").string() +
+                                      " --report " + (dir / "whole").string());
+  if (whole.output.find("built without") != std::string::npos) {
+    GTEST_SKIP() << whole.output;  // PHOTOMAT_WITH_CERES=OFF: no pbr fit
+  }
+  ASSERT_EQ(whole.exit_code, 0) << whole.output;
+  const RunResult streamed =
+      RunPhotomat(evaluate + "--stream --memory 1 --json " + (dir / "streamed.json").string() +
+                  " --report " + (dir / "streamed").string());
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+  EXPECT_THAT(streamed.output, HasSubstr("(streamed)"));
+  const nlohmann::json a = ReadJsonFile(dir / "streamed.json");
+  const nlohmann::json b = ReadJsonFile(dir / "whole.json");
+  for (const char* method : {"gradient", "pbr"}) {
+    for (const char* eta : {"eta_reconstruction", "eta_prediction"}) {
+      const double x = a[method][eta], y = b[method][eta];
+      EXPECT_NEAR(x, y, 1e-9 * y) << method << " " << eta;
+    }
+  }
+  const std::vector<std::string> files = testing::EntriesOf(dir / "whole" / "images");
+  ASSERT_EQ(testing::EntriesOf(dir / "streamed" / "images"), files);
+  for (const std::string& file : files) {
+    EXPECT_EQ(ReadTextFile(dir / "streamed" / "images" / file),
+              ReadTextFile(dir / "whole" / "images" / file))
+        << file;
+  }
 }
 
 }  // namespace

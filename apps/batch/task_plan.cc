@@ -41,13 +41,11 @@ void AppendRobust(std::vector<std::string>& arguments, const RecipeFit& fit) {
   if (fit.robust) Append(arguments, {"--robust", "--loss", fit.loss});
 }
 
-// Whether a --method list ("gradient,pbr") names pbr, which is always fitted robustly.
-// Whether `evaluate --stream` evaluates these methods (ParseMethodList's list): not pbr, and with
-// robust prediction none whose robust fit imputes over the whole set (README "Streamed
-// relighting and export").
+// Whether `evaluate --stream` evaluates these methods (ParseMethodList's list): with robust
+// prediction none whose robust fit imputes over the whole set (README "Streamed relighting and
+// export").
 bool EvaluationStreams(const std::string& methods, bool robust, bool prediction) {
   for (const Method& method : ParseMethodList(methods)) {
-    if (method.kind == Method::Kind::kPbr) return false;
     if (robust && prediction && RobustFitImputesOverTheSet(method)) return false;
   }
   return true;
@@ -168,7 +166,7 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
              {"--report-images", fmt::format("{}", fmt::join(evaluation.report_images, ","))});
     }
     AppendRobust(arguments, recipe.fit);
-    // Evaluated streamed, prediction and report too (evaluate --stream), but for pbr and robust
+    // Evaluated streamed, prediction and report too (evaluate --stream), but for robust
     // prediction of methods that impute over the set.
     if (EvaluationStreams(recipe.fit.methods, recipe.fit.robust, evaluation.prediction)) {
       arguments.push_back("--stream");

@@ -21,6 +21,7 @@
 #include "relight/web/published_name.h"
 #include "relight/web/report_pictures.h"
 #include "represent/fitting/fit.h"
+#include "represent/model/method.h"
 #include "represent/stack/stack_band_reader.h"
 #include "represent/streaming/streamed_folds.h"
 
@@ -473,6 +474,13 @@ ReportPlan PlanReport(const fs::path& folder, int images, const std::vector<Ligh
   return plan;
 }
 
+// The robust options `method` was fitted with by the evaluation (none: least squares).
+const std::optional<RobustFitOptions>& FitOptionsFor(const Method& method,
+                                                     const EvaluationReportOptions& options) {
+  if (method.kind == Method::Kind::kPbr && options.pbr_robust) return options.pbr_robust;
+  return options.robust;
+}
+
 // The set as the page states it.
 struct ReportSet {
   fs::path source;
@@ -816,10 +824,11 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
   const Observations observations(set);
   // The fits as the evaluation made them: least squares, or robust with its options.
   const auto fit = [&](const Method& method, std::span<const int> selected) {
-    if (!options.robust) {
+    const std::optional<RobustFitOptions>& options_for = FitOptionsFor(method, options);
+    if (!options_for) {
       return FitObservations(observations, set.lights(), method, selected, set.source());
     }
-    RobustFitOptions robust = *options.robust;
+    RobustFitOptions robust = *options_for;
     robust.progress = nullptr;
     return RobustFit(observations, set.lights(), selected, robust, set.source()).Fit(method);
   };
@@ -937,27 +946,36 @@ void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
   }
   progress.Finish();
 
-  // Pass 2: the shown images' predictions, by their folds fitted band by band.
+  // Pass 2: the shown images' predictions, by their folds fitted band by band; pbr in a pass of
+  // its own when it was fitted with options of its own.
   const std::vector<PredictionFold> folds = ShownFolds(plan, set.size());
-  if (!folds.empty()) {
+  for (const bool pbr_pass : {false, true}) {
+    std::vector<std::size_t> members;
     std::vector<Method> methods;
-    for (const MethodEvaluation& e : evaluations) methods.push_back(e.method);
+    for (std::size_t m = 0; m < evaluations.size(); ++m) {
+      const Method& method = evaluations[m].method;
+      if ((method.kind == Method::Kind::kPbr && options.pbr_robust) != pbr_pass) continue;
+      members.push_back(m);
+      methods.push_back(method);
+    }
+    if (folds.empty() || members.empty()) continue;
     FoldFitOptions fold_options;
     fold_options.memory_bytes = bands.memory_bytes;
     fold_options.band_rows = bands.band_rows;
-    fold_options.robust = options.robust;
+    fold_options.robust = FitOptionsFor(methods.front(), options);
     fold_options.progress = options.progress;
     VisitFoldFits(
         set, methods, folds,
         [&](const FoldFit& fold) {
+          const std::size_t m = members[fold.method];
           const std::vector<int>& predicted = folds[fold.fold].predicted;
           for (std::size_t s = 0; s < plan.shown.size(); ++s) {
             const int index = plan.shown[s];
             if (std::find(predicted.begin(), predicted.end(), index) == predicted.end() ||
-                PredictionPosition(evaluations[fold.method], index) < 0) {
+                PredictionPosition(evaluations[m], index) < 0) {
               continue;
             }
-            pictures.AddPredicted(fold.method, s, fold.first_row,
+            pictures.AddPredicted(m, s, fold.first_row,
                                   fold.fit.Relight(set.lights()[index]).View());
           }
         },

@@ -45,6 +45,10 @@ struct EvaluationReportOptions {
   // The fits the evaluation used: set when it evaluated robust fits (EvaluationOptions::robust), so
   // that the relit images and normal maps are those of the same fits.
   std::optional<RobustFitOptions> robust;
+  // pbr's fit, when the evaluation fitted it with options of its own (`evaluate` fits pbr robustly
+  // with its --pbr-* options, with or without --robust); unset: as `robust` says (without it,
+  // FitObservations' default robust start).
+  std::optional<RobustFitOptions> pbr_robust;
   // The ranking of the methods (CompareMethods of the same evaluations), shown when set.
   std::optional<MethodComparison> comparison;
   Progress* progress = nullptr;

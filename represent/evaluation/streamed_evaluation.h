@@ -61,7 +61,7 @@ struct StreamedPredictionOptions {
 
 // Sets the method and prediction of `evaluations[i]` (prediction_images, eta_prediction,
 // psnr_prediction and their per-image values) for `methods[i]` fitted to `set`. Throws Error naming
-// the set's source when the sizes differ, for a method that cannot be streamed (pbr, neural,
+// the set's source when the sizes differ, for a method that cannot be streamed (neural,
 // robust Eigen-k, rbf and bilinear) or a fold too small for a method, and naming the image at
 // fault for a truncated or corrupt one.
 void PredictStreamed(StreamedSet& set, std::span<const Method> methods,

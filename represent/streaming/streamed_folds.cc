@@ -25,11 +25,6 @@ void CheckStreamable(const StreamedSet& set, std::span<const Method> methods,
                      std::span<const PredictionFold> folds, bool robust) {
   for (const Method& method : methods) {
     if (method.kind == Method::Kind::kNeural) throw Error(set.source(), NeuralIsTrainedApart());
-    if (method.kind == Method::Kind::kPbr) {
-      throw Error(set.source(),
-                  "pbr's prediction folds are not streamed (a nonlinear fit per pixel and fold: "
-                  "evaluate it in memory)");
-    }
     if (robust && !StreamsRobustFolds(method)) {
       throw Error(set.source(),
                   fmt::format("robust {}'s prediction folds are not streamed (each fold's fit "
@@ -77,8 +72,7 @@ FoldBases MakeFoldBases(const StreamedSet& set, std::span<const Method> methods,
 }  // namespace
 
 bool StreamsRobustFolds(const Method& method) {
-  return !RobustFitImputesOverTheSet(method) && method.kind != Method::Kind::kPbr &&
-         method.kind != Method::Kind::kNeural;
+  return !RobustFitImputesOverTheSet(method) && method.kind != Method::Kind::kNeural;
 }
 
 int VisitFoldFits(StreamedSet& set, std::span<const Method> methods,

@@ -22,9 +22,11 @@ namespace photomat {
 // the Gram matrix of every image (RowGram, one streamed pass first): a fold's basis takes the
 // rows and columns of its fitted images, as the in-memory fit of that fold does. So a band's fold
 // fit is the rows of the in-memory fold fit, to float rounding. Robust folds too, for the methods
-// fitted per pixel from the robust weights (3I, Gradient, PTM, PTM-LRGB, HSH): each fold's robust
-// fit of the band, its measured masks found on the band as captured. Robust Eigen-k, rbf and
-// bilinear (EM imputation over the whole set per fit), pbr and the neural basis are refused.
+// fitted per pixel from the robust weights (3I, Gradient, PTM, PTM-LRGB, HSH, and pbr, whose
+// nonlinear fit starts from them): each fold's robust fit of the band, its measured masks found on
+// the band as captured (pbr without robust options: FitObservations' default robust start, as in
+// memory). Robust Eigen-k, rbf and bilinear (EM imputation over the whole set per fit) and the
+// neural basis are refused.
 
 struct FoldFitOptions {
   // Bytes the bands may hold; 0: DefaultStreamedBudget(set). Sets the band height.
