@@ -14,7 +14,9 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "relight/web/report_pictures.h"
 #include "relight/web/viewer_pyramid.h"
+#include "represent/model/method.h"
 
 namespace photomat::batch {
 namespace {
@@ -48,6 +50,12 @@ namespace fs = std::filesystem;
 //   --stream --out maps --height fc`, 2026-12-06, after the FFT height streamed): Gradient 742
 //   MiB, PTM 754 MiB peak RSS (before, with the stack loaded whole and the in-memory export: 1317
 //   and 8566 MiB); the estimate is 854 MiB.
+// - a streamed evaluation with a report adds its pictures, held at display size
+//   (relight/web/report_pictures.h: at most kReportDisplaySide on the longer side, 8 bytes per
+//   value): the 3 images shown captured, relit and predicted by every method (RGB), a heat map
+//   per method and the mask. Measured at 4096 x 3072 x 50 (`evaluate --stream --methods
+//   gradient,ptm --hold-out-every 8 --report`, 2026-12-06): 601 MiB peak RSS, 285 MiB without
+//   the report; the estimate is 1174 MiB (the streamed step's 790, 384 for the pictures).
 // The request adds --mem-margin on top.
 constexpr std::int64_t kBaseBytes = 150LL << 20;
 constexpr std::int64_t kStreamedStepBytes = 256LL << 20;
@@ -64,6 +72,20 @@ std::string OptionValue(const TaskStep& step, std::string_view option, std::stri
                                                                             : otherwise;
 }
 
+// The report's pictures of a streamed evaluation (above).
+double ReportPictureBytes(const TaskStep& step, const Task& task) {
+  if (step.name != "evaluate" ||
+      std::find(step.arguments.begin(), step.arguments.end(), "--report") == step.arguments.end()) {
+    return 0.0;
+  }
+  const auto methods =
+      static_cast<double>(ParseMethodList(OptionValue(step, "--methods", "all")).size());
+  const double side = kReportDisplaySide;
+  const double display_pixels = std::min(static_cast<double>(task.pixels), side * side);
+  constexpr double kShown = 3;
+  return 8.0 * display_pixels * (3 * kShown * (1 + 2 * methods) + methods + 1);
+}
+
 double StepNeedBytes(const TaskStep& step, const Task& task) {
   const auto pixels = static_cast<double>(task.pixels);
   if (StepHoldsWholeSet(step))
@@ -75,7 +97,8 @@ double StepNeedBytes(const TaskStep& step, const Task& task) {
       task.pixels <= static_cast<std::uint64_t>(kViewerTilingThresholdPixels)) {
     return kInMemoryViewerBytesPerPixel * pixels;
   }
-  return static_cast<double>(kStreamedStepBytes) + kStreamedBytesPerPixel * pixels;
+  return static_cast<double>(kStreamedStepBytes) + kStreamedBytesPerPixel * pixels +
+         ReportPictureBytes(step, task);
 }
 
 std::vector<std::string> SplitWords(const std::string& text) {

@@ -157,6 +157,30 @@ TEST(SlurmMemoryTest, StreamedStepsNeedWhatTheirBandsAndPixelsNeed) {
             40 * static_cast<std::int64_t>(task.pixel_images));
 }
 
+// A streamed evaluation with a report holds its pictures at display size: the estimate covers what
+// `evaluate --stream --methods gradient,ptm --hold-out-every 8 --report` took at 4096 x 3072 x 50
+// (601 MiB peak RSS), and grows with the methods (their relit and predicted pictures).
+TEST(SlurmMemoryTest, AStreamedReportAddsItsPicturesAtDisplaySize) {
+  Task task;
+  task.pixels = 4096ULL * 3072ULL;
+  task.pixel_images = task.pixels * 50;
+  const auto need = [&](const std::string& methods, bool report) {
+    task.steps = {
+        {"evaluate",
+         {"evaluate", "capture", "--methods", methods, "--hold-out-every", "8", "--stream"}}};
+    if (report) task.steps[0].arguments.insert(task.steps[0].arguments.end(), {"--report", "r"});
+    return TaskMemoryNeedBytes(task, std::nullopt);
+  };
+  EXPECT_GT(need("gradient,ptm", true), 601LL << 20);
+  // 1024 x 1024 display values (the most), 8 bytes each: 3 x 3 x 5 RGB pictures, 2 heat maps and
+  // the mask for two methods; 2 x 3 x 3 more RGB pictures and a heat map per further method.
+  const double display = 8.0 * 1024 * 1024;
+  EXPECT_NEAR(static_cast<double>(need("gradient,ptm", true) - need("gradient,ptm", false)),
+              display * (45 + 3), display);
+  EXPECT_NEAR(static_cast<double>(need("gradient,ptm,hsh9", true) - need("gradient,ptm", true)),
+              display * (18 + 1), display);
+}
+
 // Maps with the whole-map FFT height stream, but hold the gradient field and its spectra whole:
 // the estimate covers what `export CAPTURE --stream --out maps --height fc` was measured to take
 // at 4096 x 3072 x 50 (peak RSS 2026-12-06: Gradient 742 MiB, PTM 754 MiB; the method no longer
