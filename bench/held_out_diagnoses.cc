@@ -38,7 +38,7 @@ double ClampedHeldOutPsnr(const Observations& observations, const HoldOut& hold_
         (predicted.col(h) - matrix.col(hold_out.held_out[h]).cwiseMax(0.0f).cwiseMin(float(peak)))
             .cast<double>()
             .squaredNorm();
-    total += 10.0 * std::log10(peak * peak * static_cast<double>(matrix.rows()) / error);
+    total += PsnrDecibels(peak, error / static_cast<double>(matrix.rows()));
   }
   return total / static_cast<double>(hold_out.held_out.size());
 }
