@@ -36,6 +36,9 @@ namespace photomat {
 //  - with a comparison (evaluate --compare), the ranking of the methods over the predicted images:
 //    the table of mean ranks, the Friedman test, the Nemenyi p-values of every pair and the
 //    critical-difference diagram (<section id="ranking">).
+// Pictures are shown at most kReportDisplaySide pixels on their longer side (report_pictures.h:
+// a larger capture reduced by a whole factor, stated on the page and as report.json's
+// "display_factor"); the heat scale and the brightening come from the pictures as shown.
 
 struct EvaluationReportOptions {
   std::string title = "photomat evaluation";
@@ -64,7 +67,7 @@ void WriteEvaluationReport(const std::filesystem::path& folder, const Photometri
 // The same report from a set and its fits read band by band (`evaluate --stream --report`, README
 // "Streamed relighting and export"), for sets too large to hold: `stacks[m]` is the fit of every
 // image for evaluations[m] (a map stack, as the evaluation made it: least squares, or robust with
-// options.robust), the photographs are read from `set` in bands, the shown images' predictions are
+// options.robust, pbr with options.pbr_robust), the photographs are read from `set` in bands, the shown images' predictions are
 // fitted band by band (VisitFoldFits, their folds only: a fold per shown image for leave-one-out,
 // the one held-out fit otherwise) and `truth` (ground-truth normals) is read in bands. The pictures
 // are gathered at display size as they stream (report_pictures.h), so memory follows the band.
