@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "core/error.h"
 #include "core/image_io.h"
@@ -32,6 +33,21 @@ double RelativeRmsDifference(const Image& a, const Image& b) {
   return std::sqrt(sum / count) / (high - low);
 }
 
+// `stack` saved as `dir`/NAME.exr, beside the empty folders NAME-whole and NAME-streamed for the
+// in-memory and streamed exports.
+struct StackAndExportFolders {
+  fs::path stack, whole, streamed;
+};
+StackAndExportFolders SaveStackBesideExportFolders(const fs::path& dir, const std::string& name,
+                                                   const LoadedStack& stack) {
+  const StackAndExportFolders paths{dir / (name + ".exr"), dir / (name + "-whole"),
+                                    dir / (name + "-streamed")};
+  SaveRepresentation(paths.stack, stack.representation, stack.provenance);
+  fs::create_directories(paths.whole);
+  fs::create_directories(paths.streamed);
+  return paths;
+}
+
 // The streamed export writes the files of the in-memory one: normals, albedo, the stack's maps and
 // its derived layers value for value; the height by tiled Poisson, measured against the exact
 // solve. Bands of 9 rows, tiles of 64 + 8 over a 150 x 130 map: several of each.
@@ -49,12 +65,8 @@ TEST(StreamedExportTest, StreamedFilesEqualTheInMemoryExport) {
     }
     const LoadedStack stack{small.WithMaps(std::move(maps)),
                             {synthetic.set.lights(), "linear", "synthetic"}};
-    const fs::path stack_path = dir / fmt::format("{}.exr", name);
-    SaveRepresentation(stack_path, stack.representation, stack.provenance);
-    const fs::path whole = dir / fmt::format("{}-whole", name);
-    const fs::path streamed = dir / fmt::format("{}-streamed", name);
-    fs::create_directories(whole);
-    fs::create_directories(streamed);
+    const auto [stack_path, whole, streamed] =
+        SaveStackBesideExportFolders(dir.path(), name, stack);
     ExportMaps(stack, whole);
     StreamedExportOptions options;
     options.band_rows = 9;
@@ -185,12 +197,8 @@ TEST(StreamedExportTest, FrankotChellappaEqualsTheInMemoryExport) {
       fit = fit.WithMaps(std::move(maps));
     }
     const LoadedStack stack{fit, {synthetic.set.lights(), "linear", "synthetic"}};
-    const fs::path stack_path = dir / fmt::format("{}.exr", name);
-    SaveRepresentation(stack_path, stack.representation, stack.provenance);
-    const fs::path whole = dir / fmt::format("{}-whole", name);
-    const fs::path streamed = dir / fmt::format("{}-streamed", name);
-    fs::create_directories(whole);
-    fs::create_directories(streamed);
+    const auto [stack_path, whole, streamed] =
+        SaveStackBesideExportFolders(dir.path(), name, stack);
     ExportOptions fc;
     fc.height = HeightIntegrator::kFrankotChellappa;
     const nlohmann::json whole_description = ExportMaps(stack, whole, fc);
