@@ -98,4 +98,17 @@ std::size_t DefaultBandBudget(std::size_t minimum, std::size_t fixed_bytes) {
   return std::min(DefaultMemoryBudget(minimum), fixed_bytes + kFastBandMemory);
 }
 
+int RowsWithinBytes(std::size_t memory_bytes, std::size_t row_bytes, int height) {
+  const std::size_t rows = memory_bytes / std::max<std::size_t>(row_bytes, 1);
+  return static_cast<int>(
+      std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(std::max(height, 1))));
+}
+
+int BudgetedBandRows(int fixed_rows, std::size_t memory_bytes, std::size_t minimum,
+                     std::size_t row_bytes, int height) {
+  if (fixed_rows > 0) return std::min(fixed_rows, height);
+  return RowsWithinBytes(memory_bytes > 0 ? memory_bytes : DefaultBandBudget(minimum), row_bytes,
+                         height);
+}
+
 }  // namespace photomat

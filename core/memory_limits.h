@@ -70,6 +70,15 @@ inline constexpr std::size_t kFastBandMemory = std::size_t{64} << 20;
 // kFastBandMemory, at most DefaultMemoryBudget(minimum).
 std::size_t DefaultBandBudget(std::size_t minimum, std::size_t fixed_bytes = 0);
 
+// As many rows of `row_bytes` as `memory_bytes` holds, at least 1 and at most `height`: a band's
+// height from its budget.
+int RowsWithinBytes(std::size_t memory_bytes, std::size_t row_bytes, int height);
+
+// A streamed step's band height: `fixed_rows` when positive (tests; at most `height`), else
+// RowsWithinBytes of its budget, `memory_bytes` or, when 0, DefaultBandBudget(`minimum`).
+int BudgetedBandRows(int fixed_rows, std::size_t memory_bytes, std::size_t minimum,
+                     std::size_t row_bytes, int height);
+
 }  // namespace photomat
 
 #endif  // PHOTOMAT_CORE_MEMORY_LIMITS_H_

@@ -174,5 +174,21 @@ TEST(MemoryLimitsTest, WithoutTheThresholdsFreedBandsAreFreshPagesAgain) {
       ::testing::ExitedWithCode(0), "");
 }
 
+// A band's height: as many rows as the budget holds, at least one and at most the image's; a fixed
+// height (tests) is kept within the image; no budget means the default band budget.
+TEST(MemoryLimitsTest, BandRowsAreWhatTheBudgetHoldsWithinTheImage) {
+  EXPECT_EQ(RowsWithinBytes(1000, 100, 50), 10);
+  EXPECT_EQ(RowsWithinBytes(1099, 100, 50), 10);
+  EXPECT_EQ(RowsWithinBytes(10, 100, 50), 1);       // less than a row: one row
+  EXPECT_EQ(RowsWithinBytes(100000, 100, 50), 50);  // more than the image: the image
+  EXPECT_EQ(BudgetedBandRows(7, 1000, 0, 100, 50), 7);
+  EXPECT_EQ(BudgetedBandRows(70, 1000, 0, 100, 50), 50);
+  EXPECT_EQ(BudgetedBandRows(0, 1000, 0, 100, 50), 10);
+  const std::size_t minimum = std::size_t{16} << 20;
+  const std::size_t row = std::size_t{1} << 20;
+  EXPECT_EQ(BudgetedBandRows(0, 0, minimum, row, 1 << 20),
+            static_cast<int>(DefaultBandBudget(minimum) / row));
+}
+
 }  // namespace
 }  // namespace photomat

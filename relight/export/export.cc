@@ -458,13 +458,9 @@ HeightSummary FrankotChellappaHeight(const fs::path& surface_path, const fs::pat
 }
 
 int StreamedBandRows(const StackBandReader& stack, const StreamedExportOptions& options) {
-  if (options.band_rows > 0) return std::min(options.band_rows, stack.height());
-  const std::size_t memory =
-      options.memory_bytes > 0 ? options.memory_bytes : DefaultBandBudget(kMinimumExportMemory);
-  const std::size_t row =
-      static_cast<std::size_t>(stack.width()) * StreamedExportBytesPerPixel(stack);
-  return static_cast<int>(std::clamp<std::size_t>(memory / std::max<std::size_t>(row, 1), 1,
-                                                  static_cast<std::size_t>(stack.height())));
+  return BudgetedBandRows(
+      options.band_rows, options.memory_bytes, kMinimumExportMemory,
+      static_cast<std::size_t>(stack.width()) * StreamedExportBytesPerPixel(stack), stack.height());
 }
 
 }  // namespace

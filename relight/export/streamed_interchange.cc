@@ -22,14 +22,10 @@ namespace fs = std::filesystem;
 constexpr std::size_t kMostRefitPlanes = 18;
 
 int BandRows(const StackBandReader& stack, const StreamedInterchangeOptions& options) {
-  if (options.band_rows > 0) return std::min(options.band_rows, stack.height());
-  const std::size_t memory = options.memory_bytes > 0
-                                 ? options.memory_bytes
-                                 : DefaultBandBudget(kMinimumInterchangeMemory);
-  const std::size_t row =
-      static_cast<std::size_t>(stack.width()) * StreamedInterchangeBytesPerPixel(stack);
-  return static_cast<int>(std::clamp<std::size_t>(memory / std::max<std::size_t>(row, 1), 1,
-                                                  static_cast<std::size_t>(stack.height())));
+  return BudgetedBandRows(
+      options.band_rows, options.memory_bytes, kMinimumInterchangeMemory,
+      static_cast<std::size_t>(stack.width()) * StreamedInterchangeBytesPerPixel(stack),
+      stack.height());
 }
 
 // One pass over the stack from its first row: each band refitted to `method` in encoded values.

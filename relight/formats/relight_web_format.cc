@@ -696,14 +696,10 @@ class StackNodes final : public MrgbNodeSource {
 // The band height of an mrgb construction: the band's profiles (a float per node and channel),
 // their pixel indices (RowGram) and what the source holds, within the budget.
 int MrgbBandRows(const MrgbNodeSource& source, int dimension, const RelightWebBands& bands) {
-  if (bands.band_rows > 0) return std::min(bands.band_rows, source.height());
-  const std::size_t memory =
-      bands.memory_bytes > 0 ? bands.memory_bytes : DefaultBandBudget(kMinimumRelightWebMemory);
   const std::size_t pixel =
       sizeof(float) * dimension + sizeof(std::size_t) + source.BandBytesPerPixel();
-  const std::size_t row = static_cast<std::size_t>(source.width()) * pixel;
-  return static_cast<int>(
-      std::clamp<std::size_t>(memory / row, 1, static_cast<std::size_t>(source.height())));
+  return BudgetedBandRows(bands.band_rows, bands.memory_bytes, kMinimumRelightWebMemory,
+                          static_cast<std::size_t>(source.width()) * pixel, source.height());
 }
 
 // One pass over `source`: each band's profiles in codes, one row per pixel (y * width + x

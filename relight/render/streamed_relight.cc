@@ -99,9 +99,7 @@ int RelightBandRows(std::size_t memory_bytes, const StackBandReader& stack, int 
   const std::size_t row_bytes =
       static_cast<std::size_t>(stack.width()) *
       (4 * static_cast<std::size_t>(stack.stored_channels()) + 4 * maps + 8 * outputs);
-  const std::size_t rows = memory_bytes / std::max<std::size_t>(row_bytes, 1);
-  return static_cast<int>(
-      std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(stack.height())));
+  return RowsWithinBytes(memory_bytes, row_bytes, stack.height());
 }
 
 std::size_t RelitOutputBytes(int width, int height, int channels, int lights, RelitFormat format) {

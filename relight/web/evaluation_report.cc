@@ -906,13 +906,8 @@ void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
   // image, normals and errors at a time.
   const std::size_t pixel_bytes =
       4 * (static_cast<std::size_t>(set.size()) * set.channels() + stored_channels + 3 + 8);
-  const int band_rows =
-      bands.band_rows > 0 ? std::min(bands.band_rows, height)
-                          : static_cast<int>(std::clamp<std::size_t>(
-                                (bands.memory_bytes > 0 ? bands.memory_bytes
-                                                        : DefaultBandBudget(kMinimumReportMemory)) /
-                                    (static_cast<std::size_t>(width) * pixel_bytes),
-                                1, static_cast<std::size_t>(height)));
+  const int band_rows = BudgetedBandRows(bands.band_rows, bands.memory_bytes, kMinimumReportMemory,
+                                         static_cast<std::size_t>(width) * pixel_bytes, height);
   ReportPictures pictures(width, height, set.channels(), plan, evaluations, truth.has_value());
 
   // Pass 1: the photographs shown, every fit's relighting of them and its normal errors.

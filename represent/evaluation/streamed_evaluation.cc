@@ -49,9 +49,6 @@ struct ImageSums {
 
 int BandRows(const StreamedSet& set, const StackBandReader& stack,
              const StreamedEvaluationOptions& options) {
-  if (options.band_rows > 0) return std::min(options.band_rows, set.height());
-  const std::size_t memory =
-      options.memory_bytes > 0 ? options.memory_bytes : DefaultBandBudget(kMinimumEvaluationMemory);
   // Per pixel: the set's band and its observation matrix (4 bytes x images x channels each), the
   // stack's band as stored and gathered, and the relit values of the images relit at once (one
   // per thread).
@@ -61,8 +58,8 @@ int BandRows(const StreamedSet& set, const StackBandReader& stack,
       4 * (static_cast<std::size_t>(stack.stored_channels() +
                                     stack.header().representation.maps().channels()) +
            threads * static_cast<std::size_t>(set.channels()));
-  const std::size_t rows = memory / std::max<std::size_t>(pixel * set.width(), 1);
-  return static_cast<int>(std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(set.height())));
+  return BudgetedBandRows(options.band_rows, options.memory_bytes, kMinimumEvaluationMemory,
+                          pixel * static_cast<std::size_t>(set.width()), set.height());
 }
 
 }  // namespace

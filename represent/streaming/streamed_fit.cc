@@ -145,8 +145,7 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
                                 scratch;
   const std::size_t fixed = DecoderChunkBytes(set);
   const std::size_t room = memory_bytes > fixed ? memory_bytes - fixed : 0;
-  const std::size_t rows = room / std::max<std::size_t>(per_pixel * width, 1);
-  return static_cast<int>(std::clamp<std::size_t>(rows, 1, static_cast<std::size_t>(set.height())));
+  return RowsWithinBytes(room, per_pixel * width, set.height());
 }
 
 StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
