@@ -41,8 +41,7 @@ void AddPlan(CLI::App& batch) {
   command
       ->add_option("--large-capture", options->large,
                    "Pixels x images above which a capture is flagged large when a step of the "
-                   "recipe holds every image in memory (evaluate, maps or viewer from the "
-                   "capture)")
+                   "recipe holds every image in memory (the neural basis's fit)")
       ->capture_default_str();
   command->callback([options] {
     const Recipe recipe = ReadRecipe(options->recipe);

@@ -273,8 +273,8 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Fit the methods to INPUT in bands into scratch stacks beside --json or "
                     "--report (or in the current folder) and evaluate those streamed, and fit "
                     "the prediction's folds band by band: the same numbers in memory for a "
-                    "band, whatever the set's size; a --report's pictures are drawn band by band "
-                    "(--robust prediction not for eigenK, rbf or bilinear)");
+                    "band, whatever the set's size; a --report's pictures are drawn band by "
+                    "band");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -320,67 +320,56 @@ void AddEvaluateCommand(CLI::App& app) {
           "--compare ranks two or more methods by their prediction errors: it needs --methods "
           "with at least two methods and does not go with --no-prediction");
     }
-    const bool robust_folds_stream =
-        !options->robust || options->no_prediction ||
-        std::all_of(methods.begin(), methods.end(), StreamsRobustFolds);
-    const bool streamable = robust_folds_stream;
-    if (options->stream && !streamable) {
-      throw Error(
-          "--stream evaluates in bands: it does not go with --robust prediction of eigenK, rbf "
-          "or bilinear (each fold's fit imputes over the whole set)");
-    }
     const std::vector<int> report_images = ParseIndexList(options->report_images);
-    if (streamable) {
-      StreamedSet set = OpenStreamedSet(options->input, load);
-      CheckReportImages(report_images, set.size());
-      const std::size_t budget = options->memory_mb > 0
-                                     ? options->memory_mb << 20
-                                     : DefaultMemoryBudget(kMinimumEvaluationMemory);
-      // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
-      // held whole would not fit the budget.
-      if (options->stream || HoldingSetExceeds(set, budget)) {
-        StreamedEvaluationOptions streamed;
-        streamed.memory_bytes = options->memory_mb << 20;
-        streamed.literal_thesis_rms = options->literal_rms;
-        streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
-        // The measured masks are found per band (StreamedFitOptions, FoldFitOptions).
-        const std::vector<Mask> found_per_band;
-        std::optional<RobustFitOptions> robust;
-        if (options->robust) robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
-        RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
-        pbr_robust.pbr = options->pbr;
-        std::optional<StreamedPredictionOptions> prediction;
-        if (!options->no_prediction) {
-          prediction.emplace();
-          prediction->memory_bytes = streamed.memory_bytes;
-          prediction->hold_out_every = options->hold_out_every;
-          prediction->literal_thesis_rms = options->literal_rms;
-          prediction->robust = robust;
-        }
-        const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
-                                          std::span<const std::filesystem::path> stacks) {
-          const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
-              fmt::format(
-                  "{} images (streamed){}", set.size(),
-                  streamed.ground_truth_normals
-                      ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
-                      : ""),
-              results, options->compare, options->json);
-          if (options->report.empty()) return;
-          TerminalProgressBar bar;
-          StreamedReportOptions bands;
-          bands.memory_bytes = streamed.memory_bytes;
-          WriteEvaluationReportStreamed(
-              options->report, set, stacks, results, streamed.ground_truth_normals,
-              ReportOptions(options->input, report_images, robust, pbr_robust, comparison, bar),
-              bands);
-          fmt::print("report: {}\n", (options->report / "index.html").string());
-        };
-        EvaluateSetStreamed(set, methods, streamed, FitGroups(methods, robust, pbr_robust),
-                            prediction, options->json.empty() ? options->report : options->json,
-                            print_and_report);
-        return;
+    StreamedSet set = OpenStreamedSet(options->input, load);
+    CheckReportImages(report_images, set.size());
+    const std::size_t budget = options->memory_mb > 0
+                                   ? options->memory_mb << 20
+                                   : DefaultMemoryBudget(kMinimumEvaluationMemory);
+    // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
+    // held whole would not fit the budget.
+    if (options->stream || HoldingSetExceeds(set, budget)) {
+      StreamedEvaluationOptions streamed;
+      streamed.memory_bytes = options->memory_mb << 20;
+      streamed.literal_thesis_rms = options->literal_rms;
+      streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
+      // The measured masks are found per band (StreamedFitOptions, FoldFitOptions).
+      const std::vector<Mask> found_per_band;
+      std::optional<RobustFitOptions> robust;
+      if (options->robust) robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
+      RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
+      pbr_robust.pbr = options->pbr;
+      std::optional<StreamedPredictionOptions> prediction;
+      if (!options->no_prediction) {
+        prediction.emplace();
+        prediction->memory_bytes = streamed.memory_bytes;
+        prediction->hold_out_every = options->hold_out_every;
+        prediction->literal_thesis_rms = options->literal_rms;
+        prediction->robust = robust;
       }
+      const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
+                                        std::span<const std::filesystem::path> stacks) {
+        const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
+            fmt::format(
+                "{} images (streamed){}", set.size(),
+                streamed.ground_truth_normals
+                    ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
+                    : ""),
+            results, options->compare, options->json);
+        if (options->report.empty()) return;
+        TerminalProgressBar bar;
+        StreamedReportOptions bands;
+        bands.memory_bytes = streamed.memory_bytes;
+        WriteEvaluationReportStreamed(
+            options->report, set, stacks, results, streamed.ground_truth_normals,
+            ReportOptions(options->input, report_images, robust, pbr_robust, comparison, bar),
+            bands);
+        fmt::print("report: {}\n", (options->report / "index.html").string());
+      };
+      EvaluateSetStreamed(set, methods, streamed, FitGroups(methods, robust, pbr_robust),
+                          prediction, options->json.empty() ? options->report : options->json,
+                          print_and_report);
+      return;
     }
     // pbr is fitted as `fit --method pbr` fits it, robustly (its start, the measured masks and
     // the --pbr-* options), with or without --robust.

@@ -143,25 +143,23 @@ TEST(EvaluateStreamCliTest, PredictionStreamedGivesTheInMemoryFiguresAndRanking)
   }
 }
 
-// Robust fits stream too, prediction included for the methods fitted per pixel from the robust
-// weights: the in-memory robust figures (the fold fits are the same, StreamedEvaluationTest).
+// Robust fits stream too, prediction included, for the methods fitted per pixel from the robust
+// weights and for those fitted on imputed profiles (Eigen-k's EM, rbf): the in-memory robust
+// figures (the fold fits are the same, StreamedEvaluationTest).
 TEST(EvaluateStreamCliTest, RobustPredictionStreamedGivesTheInMemoryFigures) {
   const TempDir dir;
+  const std::vector<std::string> methods = {"gradient", "ptm", "eigen6", "rbf"};
   const auto [b, a] = EvaluateInMemoryAndStreamed(
       dir, WriteShadowedCapture(dir),
-      " --robust --loss tukey --methods gradient,ptm --hold-out-every 4");
+      " --robust --loss tukey --methods gradient,ptm,eigen6,rbf --hold-out-every 4");
   ASSERT_FALSE(a.is_null());
-  ExpectSamePrediction(a, b, {"gradient", "ptm"}, 1e-9, 1e-8);
-  ExpectSameReconstruction(a, b, {"gradient", "ptm"});
+  ExpectSamePrediction(a, b, methods, 1e-9, 1e-8);
+  ExpectSameReconstruction(a, b, methods);
 }
 
-TEST(EvaluateStreamCliTest, StreamingRefusesRobustEigenFoldsAndTooSmallFolds) {
+TEST(EvaluateStreamCliTest, StreamingRefusesTooSmallFolds) {
   const TempDir dir;
   const std::string capture = testing::GenerateCapture(dir / "capture", "--size 24x20 --seed 4");
-  // "all" holds eigen3 and eigen6, whose robust fold fits impute over the whole set.
-  const RunResult robust = RunPhotomat("evaluate " + capture + " --stream --robust");
-  EXPECT_EQ(robust.exit_code, 1) << robust.output;
-  EXPECT_THAT(robust.output, HasSubstr("--robust prediction of eigenK, rbf or bilinear"));
   // Holding out every image leaves none to fit: refused before anything is fitted or written.
   fs::create_directories(dir / "out");
   const RunResult small =
@@ -205,39 +203,45 @@ TEST(EvaluateStreamCliTest, UnderAnAddressSpaceLimitPredictionStreamsByItselfAnd
 // `evaluate --stream --report`: the report's pictures drawn band by band from the scratch stacks,
 // the photographs and the shown images' prediction folds
 // (relight/web/evaluation_report.h, WriteEvaluationReportStreamed): the in-memory report's
-// pictures byte for byte (measured), the same images shown, the same eta to float rounding.
+// pictures byte for byte (measured), the same images shown, the same eta to float rounding;
+// least squares and robust (Eigen-k's robust folds by their EM passes).
 TEST(EvaluateStreamCliTest, AReportStreamsAndShowsTheInMemoryPictures) {
   const TempDir dir;
   const std::string capture = testing::GenerateCapture(dir / "capture", "--size 40x36 --seed 5");
-  const std::string evaluate = "evaluate " + capture + " --methods gradient,ptm,eigen6 --report ";
-  const RunResult whole = RunPhotomat(evaluate + (dir / "whole").string());
-  ASSERT_EQ(whole.exit_code, 0) << whole.output;
-  const RunResult streamed =
-      RunPhotomat(evaluate + (dir / "streamed").string() + " --stream --memory 1");
-  ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
-  EXPECT_THAT(streamed.output, HasSubstr("(streamed)"));
-  const nlohmann::json a = ReadJsonFile(dir / "streamed" / "report.json");
-  const nlohmann::json b = ReadJsonFile(dir / "whole" / "report.json");
-  EXPECT_EQ(a["images_shown"], b["images_shown"]);
-  ASSERT_EQ(a["evaluation"].size(), 3u);
-  for (const char* method : {"gradient", "ptm", "eigen6"}) {
-    for (const char* eta : {"eta_reconstruction", "eta_prediction"}) {
-      const double x = a["evaluation"][method][eta], y = b["evaluation"][method][eta];
-      EXPECT_NEAR(x, y, 1e-9 * y) << method << " " << eta;
+  for (const std::string fit : {"least-squares", "robust"}) {
+    SCOPED_TRACE(fit);
+    const fs::path out = dir / fit;
+    const std::string evaluate = "evaluate " + capture + " --methods gradient,ptm,eigen6" +
+                                 (fit == "robust" ? " --robust" : "") + " --report ";
+    const RunResult whole = RunPhotomat(evaluate + (out / "whole").string());
+    ASSERT_EQ(whole.exit_code, 0) << whole.output;
+    const RunResult streamed =
+        RunPhotomat(evaluate + (out / "streamed").string() + " --stream --memory 1");
+    ASSERT_EQ(streamed.exit_code, 0) << streamed.output;
+    EXPECT_THAT(streamed.output, HasSubstr("(streamed)"));
+    const nlohmann::json a = ReadJsonFile(out / "streamed" / "report.json");
+    const nlohmann::json b = ReadJsonFile(out / "whole" / "report.json");
+    EXPECT_EQ(a["images_shown"], b["images_shown"]);
+    ASSERT_EQ(a["evaluation"].size(), 3u);
+    for (const char* method : {"gradient", "ptm", "eigen6"}) {
+      for (const char* eta : {"eta_reconstruction", "eta_prediction"}) {
+        const double x = a["evaluation"][method][eta], y = b["evaluation"][method][eta];
+        EXPECT_NEAR(x, y, 1e-9 * y) << method << " " << eta;
+      }
     }
+    const std::vector<std::string> files = testing::EntriesOf(out / "whole" / "images");
+    ASSERT_EQ(testing::EntriesOf(out / "streamed" / "images"), files);
+    // Captured, relit and predicted; the heat maps of Gradient and PTM (Eigen-k gives no
+    // normals).
+    EXPECT_EQ(files.size(), 3u * (1 + 2 * 3) + 2);
+    for (const std::string& file : files) {
+      EXPECT_EQ(ReadTextFile(out / "streamed" / "images" / file),
+                ReadTextFile(out / "whole" / "images" / file))
+          << file;
+    }
+    // Nothing beside the report: the scratch stacks are gone.
+    EXPECT_THAT(testing::EntriesOf(out), ::testing::ElementsAre("streamed", "whole"));
   }
-  const std::vector<std::string> files = testing::EntriesOf(dir / "whole" / "images");
-  ASSERT_EQ(testing::EntriesOf(dir / "streamed" / "images"), files);
-  // Captured, relit and predicted; the heat maps of Gradient and PTM (Eigen-k gives no normals).
-  EXPECT_EQ(files.size(), 3u * (1 + 2 * 3) + 2);
-  for (const std::string& file : files) {
-    EXPECT_EQ(ReadTextFile(dir / "streamed" / "images" / file),
-              ReadTextFile(dir / "whole" / "images" / file))
-        << file;
-  }
-  // Nothing beside the report: the scratch stacks are gone.
-  EXPECT_THAT(testing::EntriesOf(dir.path()),
-              ::testing::ElementsAre("capture", "streamed", "whole"));
 }
 
 // A photograph truncated part-way: the streamed evaluation with a report fails naming it, and

@@ -269,6 +269,14 @@ RecipeExports ParseExports(const JsonReader& reader, const std::vector<std::stri
         }
       }
     }
+    // photomat-neural evaluates the neural basis alone and only on held-out lights
+    // (`evaluate --methods neural --hold-out-every K`), not the evaluation a batch asks.
+    if (std::find(fitted.begin(), fitted.end(), "neural") != fitted.end()) {
+      reader["evaluation"].Fail(
+          "the neural basis is evaluated on its own (photomat evaluate CAPTURE --methods neural "
+          "--hold-out-every K), not in a batch: leave it out of fit.methods or turn the "
+          "evaluation off");
+    }
     exports.evaluation = evaluation;
   }
   if (!exports.stacks && !exports.maps && !exports.ptm && !exports.rti && !exports.viewer &&

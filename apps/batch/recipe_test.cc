@@ -136,6 +136,11 @@ TEST_F(RecipeTest, EveryErrorNamesTheFileAndTheKey) {
       {[](auto& j) { j["exports"]["evaluation"]["reports"] = true; },
        "exports.evaluation.reports: unknown key"},
       {[](auto& j) {
+         j["fit"]["methods"] = "neural";
+         j["exports"].erase("maps");
+       },
+       "exports.evaluation: the neural basis is evaluated on its own"},
+      {[](auto& j) {
          j["exports"] = {{"stacks", false}, {"viewer", false}};
        },
        "exports: nothing to write"},

@@ -41,16 +41,6 @@ void AppendRobust(std::vector<std::string>& arguments, const RecipeFit& fit) {
   if (fit.robust) Append(arguments, {"--robust", "--loss", fit.loss});
 }
 
-// Whether `evaluate --stream` evaluates these methods (ParseMethodList's list): with robust
-// prediction none whose robust fit imputes over the whole set (README "Streamed relighting and
-// export").
-bool EvaluationStreams(const std::string& methods, bool robust, bool prediction) {
-  for (const Method& method : ParseMethodList(methods)) {
-    if (robust && prediction && RobustFitImputesOverTheSet(method)) return false;
-  }
-  return true;
-}
-
 struct CaptureSize {
   std::uint64_t pixels = 0, pixel_images = 0;
 };
@@ -96,7 +86,16 @@ std::string TaskHash(const Task& task) {
 bool StepHoldsWholeSet(const TaskStep& step) {
   // calibrate apply streams whatever it corrects (a target's gain maps band by band, the
   // semi-calibrated intensities from sampled pixels gathered in a first pass).
-  if (step.name == "fit" || step.name == "calibrate") return false;
+  if (step.name == "calibrate") return false;
+  // Every method is fitted in bands but the neural basis, whose training visits every pixel's
+  // profile each epoch (photomat-neural holds the set).
+  if (step.name == "fit") {
+    const auto methods = std::find(step.arguments.begin(), step.arguments.end(), "--method");
+    if (methods == step.arguments.end() || methods + 1 == step.arguments.end()) return false;
+    const std::vector<Method> fitted = ParseMethodList(*(methods + 1));
+    return std::any_of(fitted.begin(), fitted.end(),
+                       [](const Method& m) { return m.kind == Method::Kind::kNeural; });
+  }
   // Exports of the stacks read them in bands; from the capture, export --stream fits the
   // photographs in bands first (the interchange files, and maps and viewer without stacks).
   if ((step.name == "maps" || step.name == "viewer") && step.arguments.size() >= 2 &&
@@ -166,11 +165,8 @@ std::vector<TaskStep> TaskSteps(const Recipe& recipe, std::size_t index) {
              {"--report-images", fmt::format("{}", fmt::join(evaluation.report_images, ","))});
     }
     AppendRobust(arguments, recipe.fit);
-    // Evaluated streamed, prediction and report too (evaluate --stream), but for robust
-    // prediction of methods that impute over the set.
-    if (EvaluationStreams(recipe.fit.methods, recipe.fit.robust, evaluation.prediction)) {
-      arguments.push_back("--stream");
-    }
+    // Evaluated streamed, prediction, robust fits and report too (evaluate --stream).
+    arguments.push_back("--stream");
     steps.push_back({"evaluate", arguments});
   }
   return steps;

@@ -39,10 +39,11 @@ struct Task {
 };
 
 // Whether `step` holds every image of its capture in memory at once (or as much), so that its
-// memory grows with pixels x images: evaluate, and maps or a viewer made from the capture. The
-// other steps stream in bands (README "Streamed fitting", "Streamed relighting and export",
-// "Calibration"), among them an export with --stream (the interchange files, fitted to the
-// photographs in bands): their memory does not grow with the number of images.
+// memory grows with pixels x images: the fit of the neural basis, and any step without --stream
+// that reads the capture. The other steps stream in bands (README "Streamed fitting", "Streamed
+// relighting and export", "Calibration"), among them every other fit, the evaluation and an
+// export with --stream (the interchange files, fitted to the photographs in bands): their memory
+// does not grow with the number of images.
 bool StepHoldsWholeSet(const TaskStep& step);
 
 struct PlanOptions {

@@ -135,9 +135,10 @@ TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
   WriteSyntheticCapture(dir_ / "captures/c1", synthetic.material, synthetic.set, {});
   nlohmann::json json = Full();
   json.erase("calibration");
-  // Robust prediction of Eigen-k (imputed over the whole set) holds the set.
-  json["fit"]["methods"] = {"ptm", "eigen6"};
-  json["exports"]["evaluation"]["prediction"] = true;
+  // The neural basis's training holds the set (photomat-neural); it has no batch evaluation.
+  json["fit"]["methods"] = {"neural"};
+  json["exports"].erase("evaluation");
+  json["exports"].erase("maps");
   PlanOptions options;
   options.large_capture_pixel_images = 20 * 20 * 36 - 1;
   const TaskPlan plan = PlanTasks(Parse(json), options);
@@ -152,7 +153,7 @@ TEST_F(TaskPlanTest, PixelImagesComeFromTheLightFileAndTheFirstImage) {
 
   // Only streamed steps (the fit, maps and viewer from the stacks, the .ptm and .rti fitted in
   // bands): not large at any size.
-  json["exports"].erase("evaluation");
+  json["fit"]["methods"] = {"ptm", "eigen6"};
   const TaskPlan streamed = PlanTasks(Parse(json), options);
   EXPECT_EQ(streamed.tasks[0].pixel_images, 20u * 20u * 36u);
   EXPECT_FALSE(streamed.tasks[0].large);
@@ -175,8 +176,8 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   // Without stacks, maps and viewer are made from the capture, streamed too.
   json["exports"]["stacks"] = false;
   EXPECT_THAT(whole_set_steps(json), ElementsAre());
-  // The evaluation streams too, with or without prediction and report, pbr included (evaluate
-  // --stream); robust prediction of Eigen-k, rbf or bilinear holds the set.
+  // The evaluation streams too, with or without prediction and report, robust fits and pbr
+  // included (evaluate --stream).
   json = Full();
   json["fit"] = {{"methods", {"gradient", "ptm"}}};
   for (const bool prediction : {false, true}) {
@@ -187,14 +188,19 @@ TEST_F(TaskPlanTest, StepHoldsWholeSetNamesTheStepsThatDoNotStream) {
   }
   json["exports"]["evaluation"] = {{"prediction", true}, {"report", true}};
   EXPECT_THAT(whole_set_steps(json), ElementsAre());
-  // Robust fits stream, but robust prediction of Eigen-k (imputed over the whole set) does not.
+  // Robust fits and robust prediction stream, Eigen-k's, rbf's and bilinear's (imputed over the
+  // set, in passes of their own) too.
   json["exports"]["evaluation"] = {{"prediction", true}, {"report", false}};
   json["fit"]["robust"] = true;
   EXPECT_THAT(whole_set_steps(json), ElementsAre());
-  json["fit"]["methods"] = {"ptm", "eigen6"};
-  EXPECT_THAT(whole_set_steps(json), ElementsAre("evaluate"));
-  json["exports"]["evaluation"] = {{"prediction", false}, {"report", false}};
+  json["fit"]["methods"] = {"ptm", "eigen6", "rbf", "bilinear"};
   EXPECT_THAT(whole_set_steps(json), ElementsAre());
+  EXPECT_EQ(PlanTasks(Parse(json)).tasks[0].steps.back().arguments.back(), "--stream");
+  // The neural basis's training visits every pixel's profile each epoch: the set is held.
+  json["exports"].erase("evaluation");
+  json["exports"].erase("maps");
+  json["fit"] = {{"methods", {"neural"}}};
+  EXPECT_THAT(whole_set_steps(json), ElementsAre("fit"));
   json["fit"] = {{"methods", {"gradient", "ptm"}}};
   json["exports"]["evaluation"] = {{"prediction", false}, {"report", false}};
   json["fit"]["methods"] = {"ptm", "pbr"};

@@ -141,9 +141,4 @@ int StackMapCount(const Method& method, int images, int channels) {
   return 8 + 2 * channels;
 }
 
-bool RobustFitImputesOverTheSet(const Method& method) {
-  return method.kind == Method::Kind::kEigen || method.kind == Method::Kind::kRbf ||
-         method.kind == Method::Kind::kBilinear;
-}
-
 }  // namespace photomat

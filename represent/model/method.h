@@ -97,11 +97,6 @@ std::string NeuralIsTrainedApart();
 // bound; neural: its default 9 coefficients): what memory and disk estimates count per pixel.
 int StackMapCount(const Method& method, int images, int channels);
 
-// Whether `method`'s robust fit imputes over the whole set (robust Eigen-k's EM, rbf and bilinear
-// on imputed profiles: represent/fitting/robust_fit.h) rather than fitting each pixel from its
-// robust weights: such fits need passes over every pixel, per fit.
-bool RobustFitImputesOverTheSet(const Method& method);
-
 // "all" (AllMethods) or a comma-separated list of names.
 std::vector<Method> ParseMethodList(std::string_view list);
 // 3i, gradient, ptm, ptm-lrgb, eigen3, eigen6: the thesis's five and PTM's LRGB form (not pbr, a

@@ -121,10 +121,11 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
   const auto width = static_cast<std::size_t>(set.width());
   // Per pixel of a band: the image data matrix (4 bytes per sample), which least squares
   // decodes straight into (Streamer::ReadLeastSquaresBand), but a robust fit decodes into band
-  // images first and copies (4 + 4); robust: the weights (4 per image), the measured masks (1)
-  // and, for Eigen-k, rbf and bilinear, the imputed matrix and its products (8 per sample). Two
-  // bands are held at once (the next one is decoded while this one is fitted: Streamer::Pass).
-  // One method's maps at a time (per concurrent fit), with the fit's products and the writer's
+  // images first and copies (4 + 4), and keeps the measured masks (1 per image). Two bands are
+  // held at once (the next one is decoded while this one is fitted: Streamer::Pass). Each robust
+  // fit: the weights (4 per image) and, for Eigen-k, rbf and bilinear, the imputed matrix and its
+  // products (8 per sample); one per band held (FitStreamed) or per concurrent fold fit. One
+  // method's maps at a time (per concurrent fit), with the fit's products and the writer's
   // interleaved copy (12 bytes per map). A masked least-squares fit adds each decoding thread's
   // scratch band (4 bytes per channel; only the band being read has them).
   int planes = 0;
@@ -133,13 +134,14 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
     planes = std::max(planes, StackMapCount(method, set.size(), set.channels()));
     imputed |= NeedsGram(method);
   }
-  std::size_t per_band_pixel = n * channels * (robust ? 8 : 4);
-  if (robust) per_band_pixel += n * 5 + (imputed ? n * channels * 8 : 0);
+  const std::size_t per_band_pixel = n * channels * (robust ? 8 : 4) + (robust ? n : 0);
+  const std::size_t per_robust_fit = robust ? n * 4 + (imputed ? n * channels * 8 : 0) : 0;
+  const std::size_t robust_fits = static_cast<std::size_t>(std::max(concurrent_fits, 2));
   const std::size_t scratch =
       !robust && set.masked()
           ? static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()) * channels * 4
           : 0;
-  const std::size_t per_pixel = 2 * per_band_pixel +
+  const std::size_t per_pixel = 2 * per_band_pixel + robust_fits * per_robust_fit +
                                 static_cast<std::size_t>(planes) * 12 *
                                     static_cast<std::size_t>(std::max(concurrent_fits, 1)) +
                                 scratch;

@@ -21,12 +21,13 @@ namespace photomat {
 // per pixel once its light basis is known, and the bases of Eigen-k, rbf and bilinear follow from
 // the Gram matrix of every image (RowGram, one streamed pass first): a fold's basis takes the
 // rows and columns of its fitted images, as the in-memory fit of that fold does. So a band's fold
-// fit is the rows of the in-memory fold fit, to float rounding. Robust folds too, for the methods
-// fitted per pixel from the robust weights (3I, Gradient, PTM, PTM-LRGB, HSH, and pbr, whose
-// nonlinear fit starts from them): each fold's robust fit of the band, its measured masks found on
-// the band as captured (pbr without robust options: FitObservations' default robust start, as in
-// memory). Robust Eigen-k, rbf and bilinear (EM imputation over the whole set per fit) and the
-// neural basis are refused.
+// fit is the rows of the in-memory fold fit, to float rounding. Robust folds too: each fold's
+// robust fit of the band, its measured masks found on the band as captured, made once per band
+// and fold for all methods (3I, Gradient, PTM, PTM-LRGB, HSH and pbr, whose nonlinear fit starts
+// from it, are per pixel from its weights). Robust Eigen-k, rbf and bilinear fit on the fold's
+// imputed profiles, whose Gram matrix is a streamed pass of its own (every fold's at once), and
+// robust Eigen-k makes one pass more per further EM iteration (kRobustEigenIterations), as
+// FitStreamed does for the whole set. The neural basis is refused (trained apart).
 
 struct FoldFitOptions {
   // Bytes the bands may hold; 0: DefaultStreamedBudget(set). Sets the band height.
@@ -50,12 +51,14 @@ struct FoldFit {
   const Observations& observations;
 };
 
-// Whether VisitFoldFits streams `method`'s robust folds (its robust fit is per pixel).
+// Whether VisitFoldFits streams `method`'s folds, least squares and robust: every method but the
+// neural basis.
 bool StreamsRobustFolds(const Method& method);
 
 // Calls `visit` for every band of `set` (in row order) that the mask does not leave empty, for
 // every method and every fold. The folds of one band and method are fitted in parallel, so
-// `visit` is called from several threads at once, each with another fold. Returns the band rows.
+// `visit` is called from several threads at once, each with another fold (robust: each fold's
+// methods in turn, so several methods at once too). Returns the band rows.
 // Throws Error naming the set's source for a method that cannot be streamed or a fold with too
 // few images for a method, and naming the image for a truncated or corrupt band.
 int VisitFoldFits(StreamedSet& set, std::span<const Method> methods,
