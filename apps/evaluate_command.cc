@@ -86,12 +86,12 @@ std::vector<FitGroup> FitGroups(const std::vector<Method>& methods,
 
 // `evaluate INPUT --stream` (README "Streamed relighting and export"): `methods` fitted to `set`
 // in bands (FitStreamed) into scratch stacks, each then evaluated against the set streamed
-// (EvaluateStackStreamed): the same eta of reconstruction as the in-memory evaluation to float
-// rounding, and the same normal errors. With `prediction`, the folds are fitted band by band
-// first (PredictStreamed): the same eta and PSNR of prediction. Each group of FitGroups is fitted
-// in passes of its own. `use(results, stacks)` then gets the evaluations and the scratch stacks
-// (a report is drawn from them). IMPLEMENTER CHOICE: the scratch folder is beside `output` (the
-// JSON or report the user chose a place for), else in the current folder; its free space is
+// in one pass (EvaluateStacksStreamed): the same eta of reconstruction as the in-memory evaluation
+// to float rounding, and the same normal errors. With `prediction`, the folds are fitted band by
+// band first (PredictStreamed): the same eta and PSNR of prediction. Each group of FitGroups is
+// fitted in passes of its own. `use(results, stacks)` then gets the evaluations and the scratch
+// stacks (a report is drawn from them). IMPLEMENTER CHOICE: the scratch folder is beside `output`
+// (the JSON or report the user chose a place for), else in the current folder; its free space is
 // checked first, and it is removed however the evaluation ends.
 using UseStreamedEvaluations = std::function<void(const std::vector<MethodEvaluation>&,
                                                   std::span<const std::filesystem::path>)>;
@@ -132,9 +132,13 @@ void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
     for (std::size_t i = 0; i < group.members.size(); ++i) stacks[group.members[i]] = fitted[i];
   }
   options.progress = &bar;
+  std::vector<StackBandReader> readers;
+  std::vector<StackBandReader*> open;
+  readers.reserve(stacks.size());
+  for (const std::filesystem::path& stack : stacks) open.push_back(&readers.emplace_back(stack));
+  std::vector<MethodEvaluation> reconstructions = EvaluateStacksStreamed(set, open, options);
   for (std::size_t i = 0; i < methods.size(); ++i) {
-    StackBandReader stack(stacks[i]);
-    MethodEvaluation reconstruction = EvaluateStackStreamed(set, stack, options);
+    MethodEvaluation& reconstruction = reconstructions[i];
     results[i].method = methods[i];
     results[i].eta_reconstruction = reconstruction.eta_reconstruction;
     results[i].reconstruction_per_image = std::move(reconstruction.reconstruction_per_image);

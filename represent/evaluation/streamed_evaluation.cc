@@ -47,25 +47,25 @@ struct ImageSums {
   }
 };
 
-int BandRows(const StreamedSet& set, const StackBandReader& stack,
+int BandRows(const StreamedSet& set, std::span<StackBandReader* const> stacks,
              const StreamedEvaluationOptions& options) {
-  // Per pixel: the set's band and its observation matrix (4 bytes x images x channels each), the
+  // Per pixel: the set's band and its observation matrix (4 bytes x images x channels each), each
   // stack's band as stored and gathered, and the relit values of the images relit at once (one
   // per thread).
   const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  std::size_t maps = 0;
+  for (const StackBandReader* stack : stacks) {
+    maps += static_cast<std::size_t>(stack->stored_channels() +
+                                     stack->header().representation.maps().channels());
+  }
   const std::size_t pixel =
       8 * static_cast<std::size_t>(set.size()) * static_cast<std::size_t>(set.channels()) +
-      4 * (static_cast<std::size_t>(stack.stored_channels() +
-                                    stack.header().representation.maps().channels()) +
-           threads * static_cast<std::size_t>(set.channels()));
+      4 * (maps + threads * static_cast<std::size_t>(set.channels()));
   return BudgetedBandRows(options.band_rows, options.memory_bytes, kMinimumEvaluationMemory,
                           pixel * static_cast<std::size_t>(set.width()), set.height());
 }
 
-}  // namespace
-
-MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
-                                       const StreamedEvaluationOptions& options) {
+void CheckStackFitsSet(const StreamedSet& set, const StackBandReader& stack) {
   const Representation& header = stack.header().representation;
   if (stack.width() != set.width() || stack.height() != set.height() ||
       header.output_channels() != set.channels()) {
@@ -75,11 +75,27 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
                             stack.width(), stack.height(), header.output_channels(),
                             set.source().string(), set.width(), set.height(), set.channels()));
   }
+}
+
+// One stack's reconstruction sums and normal errors over the bands so far.
+struct StackSums {
+  std::vector<ImageSums> images;
+  NormalErrors normal_errors;
+  bool gives_normals = false;
+};
+
+}  // namespace
+
+std::vector<MethodEvaluation> EvaluateStacksStreamed(StreamedSet& set,
+                                                     std::span<StackBandReader* const> stacks,
+                                                     const StreamedEvaluationOptions& options) {
+  for (const StackBandReader* stack : stacks) CheckStackFitsSet(set, *stack);
   if (set.next_row() != 0) set.Rewind();
-  if (stack.next_row() != 0) stack.Rewind();
-  const int band_rows = BandRows(set, stack, options);
+  for (StackBandReader* stack : stacks) {
+    if (stack->next_row() != 0) stack->Rewind();
+  }
+  const int band_rows = BandRows(set, stacks, options);
   const int bands = (set.height() + band_rows - 1) / band_rows;
-  std::vector<ImageSums> sums(static_cast<std::size_t>(set.size()));
   std::optional<ImageBandReader> truth;
   if (options.ground_truth_normals) {
     truth.emplace(*options.ground_truth_normals);
@@ -89,8 +105,11 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
                               truth->height(), set.width(), set.height()));
     }
   }
-  NormalErrors normal_errors;
-  bool gives_normals = truth.has_value();
+  std::vector<StackSums> sums(stacks.size());
+  for (StackSums& stack : sums) {
+    stack.images.resize(static_cast<std::size_t>(set.size()));
+    stack.gives_normals = truth.has_value();
+  }
   NullProgress none;
   Progress& progress = OrNull(options.progress, none);
   progress.Start("evaluate", static_cast<std::size_t>(bands));
@@ -98,41 +117,57 @@ MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
     const int first = set.next_row();
     const int rows = std::min(band_rows, set.height() - first);
     const PhotometricSet band = set.ReadBand(rows);
-    const LoadedStack maps = stack.ReadNext(rows);
+    std::optional<Image> truth_band;
     if (truth) {
-      Image truth_band(truth->width(), rows, truth->channels());
-      truth->ReadNext(truth_band.View());
-      std::optional<Image> normals;
-      if (gives_normals) normals = EstimateNormals(maps.representation);
-      gives_normals = normals.has_value();  // a method that gives none gives none in any band
-      // The mask's rows from the set (a band set has none where they select nothing: ReadBand).
-      if (normals) normal_errors.Add(*normals, truth_band, set.MaskRows(first, rows));
+      truth_band.emplace(truth->width(), rows, truth->channels());
+      truth->ReadNext(truth_band->View());
     }
-    if (set.SelectedPixels(first, rows) == 0) {
-      progress.Advance();
-      continue;
+    const bool selects = set.SelectedPixels(first, rows) > 0;
+    std::optional<Observations> observations;
+    if (selects) observations.emplace(band);
+    for (std::size_t m = 0; m < stacks.size(); ++m) {
+      const LoadedStack maps = stacks[m]->ReadNext(rows);
+      StackSums& stack = sums[m];
+      if (truth_band) {
+        std::optional<Image> normals;
+        if (stack.gives_normals) normals = EstimateNormals(maps.representation);
+        // A method that gives none gives none in any band.
+        stack.gives_normals = normals.has_value();
+        // The mask's rows from the set (a band set has none where they select nothing: ReadBand).
+        if (normals) stack.normal_errors.Add(*normals, *truth_band, set.MaskRows(first, rows));
+      }
+      if (!observations) continue;
+      // Each image's sums are its own: the images are relit in parallel.
+      tbb::parallel_for(0, set.size(), [&](int k) {
+        const Eigen::VectorXf relit =
+            RelightObservedPixels(maps.representation, *observations, band.light(k));
+        stack.images[static_cast<std::size_t>(k)].Add(observations->matrix().col(k).cast<double>(),
+                                                      relit);
+      });
     }
-    const Observations observations(band);
-    // Each image's sums are its own: the images are relit in parallel.
-    tbb::parallel_for(0, set.size(), [&](int k) {
-      const Eigen::VectorXf relit =
-          RelightObservedPixels(maps.representation, observations, band.light(k));
-      sums[static_cast<std::size_t>(k)].Add(observations.matrix().col(k).cast<double>(), relit);
-    });
     progress.Advance();
   }
   progress.Finish();
-  MethodEvaluation result;
-  result.method = Method::Parse(header.method());
-  double total = 0.0;
-  for (const ImageSums& image : sums) {
-    if (image.count == 0.0) throw Error(set.source(), "the mask selects no pixel to evaluate");
-    result.reconstruction_per_image.push_back(image.NormalisedError(options.literal_thesis_rms));
-    total += result.reconstruction_per_image.back();
+  std::vector<MethodEvaluation> results;
+  for (std::size_t m = 0; m < stacks.size(); ++m) {
+    MethodEvaluation& result = results.emplace_back();
+    result.method = Method::Parse(stacks[m]->header().representation.method());
+    double total = 0.0;
+    for (const ImageSums& image : sums[m].images) {
+      if (image.count == 0.0) throw Error(set.source(), "the mask selects no pixel to evaluate");
+      result.reconstruction_per_image.push_back(image.NormalisedError(options.literal_thesis_rms));
+      total += result.reconstruction_per_image.back();
+    }
+    result.eta_reconstruction = total / static_cast<double>(sums[m].images.size());
+    if (sums[m].gives_normals) result.normals = sums[m].normal_errors.Summary();
   }
-  result.eta_reconstruction = total / static_cast<double>(sums.size());
-  if (gives_normals) result.normals = normal_errors.Summary();
-  return result;
+  return results;
+}
+
+MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
+                                       const StreamedEvaluationOptions& options) {
+  StackBandReader* const one[] = {&stack};
+  return std::move(EvaluateStacksStreamed(set, one, options).front());
 }
 
 void PredictStreamed(StreamedSet& set, std::span<const Method> methods,

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "capture/io/streamed_set.h"
 #include "core/progress.h"
@@ -40,6 +41,14 @@ inline constexpr std::size_t kMinimumEvaluationMemory = std::size_t{16} << 20;
 // its size or output channels differ from the set's, or the truth when its size differs.
 MethodEvaluation EvaluateStackStreamed(StreamedSet& set, StackBandReader& stack,
                                        const StreamedEvaluationOptions& options = {});
+
+// EvaluateStackStreamed of several stacks of the set in one pass over its photographs (each band
+// decoded once for all of them, the bands as high as the budget allows with every stack's band
+// held): the evaluations in the stacks' order, each the stack's alone to double rounding (its
+// sums are grouped by other bands).
+std::vector<MethodEvaluation> EvaluateStacksStreamed(StreamedSet& set,
+                                                     std::span<StackBandReader* const> stacks,
+                                                     const StreamedEvaluationOptions& options = {});
 
 // The ability of prediction streamed (VisitFoldFits, represent/streaming/streamed_folds.h): each
 // fold of the leave-one-out (or held-out) evaluation fitted band by band, its predicted images

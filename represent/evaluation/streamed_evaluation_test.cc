@@ -108,6 +108,55 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryNormalErrors) {
   EXPECT_GE(compared, 2);  // Gradient and PTM give normals
 }
 
+// Several stacks evaluated in one pass over the photographs (EvaluateStacksStreamed, what
+// `evaluate --stream` does) give each stack's evaluation alone: the same normal statistics bit for
+// bit and the same eta to double rounding (measured: equal here, both in bands of 5 rows; bound
+// 1e-12 relative), in the stacks' order.
+TEST(StreamedEvaluationTest, StacksEvaluatedInOnePassGiveEachStacksEvaluation) {
+  testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  const Image truth(testing::ShadowedSpecularSet(40).material.normals.Rows(0, 36));
+  ImageWriteOptions exr;
+  exr.sample_type = SampleType::kFloat;
+  WriteImage(dir / "truth.exr", truth, exr);
+  const LoadedSet loaded = LoadPhotometricSet(input);
+  const std::vector<std::string> names = {"hsh9", "gradient", "eigen6", "ptm"};
+  std::vector<StackBandReader> readers;
+  readers.reserve(names.size());
+  std::vector<StackBandReader*> stacks;
+  for (const std::string& name : names) {
+    const fs::path path = dir / (name + ".exr");
+    SaveRepresentation(path, Fit(loaded.set, Method::Parse(name)));
+    stacks.push_back(&readers.emplace_back(path));
+  }
+  StreamedEvaluationOptions options;
+  options.band_rows = 5;
+  options.ground_truth_normals = dir / "truth.exr";
+  StreamedSet set = OpenStreamedSet(input);
+  const std::vector<MethodEvaluation> together = EvaluateStacksStreamed(set, stacks, options);
+  ASSERT_EQ(together.size(), names.size());
+  for (std::size_t m = 0; m < names.size(); ++m) {
+    const MethodEvaluation alone = EvaluateStackStreamed(set, *stacks[m], options);
+    EXPECT_EQ(together[m].method.Name(), names[m]);
+    EXPECT_NEAR(together[m].eta_reconstruction, alone.eta_reconstruction,
+                1e-12 * alone.eta_reconstruction)
+        << names[m];
+    ASSERT_EQ(together[m].reconstruction_per_image.size(), alone.reconstruction_per_image.size());
+    for (std::size_t k = 0; k < alone.reconstruction_per_image.size(); ++k) {
+      EXPECT_NEAR(together[m].reconstruction_per_image[k], alone.reconstruction_per_image[k],
+                  1e-12 * alone.reconstruction_per_image[k])
+          << names[m] << " image " << k;
+    }
+    ASSERT_EQ(together[m].normals.has_value(), alone.normals.has_value()) << names[m];
+    if (alone.normals) {
+      EXPECT_EQ(together[m].normals->ToJson(), alone.normals->ToJson()) << names[m];
+    }
+  }
+  // Gradient and PTM give normals, HSH and Eigen-k none.
+  EXPECT_TRUE(together[1].normals && together[3].normals);
+  EXPECT_FALSE(together[0].normals || together[2].normals);
+}
+
 // `methods` predicted on the capture at `input` streamed, in bands of 5 rows, and in memory with
 // `in_memory`'s folds and robust options: the same predicted images, and eta and PSNR within
 // 1e-12 relative and 1e-11 dB (mean and per image). Returns the in-memory evaluations.
