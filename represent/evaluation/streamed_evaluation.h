@@ -54,8 +54,8 @@ std::vector<MethodEvaluation> EvaluateStacksStreamed(StreamedSet& set,
 // fold of the leave-one-out (or held-out) evaluation fitted band by band, its predicted images
 // relit in the band and the per-image sums of e_k, sigma_k and the PSNR (its peak the largest
 // captured value) accumulated over the bands: the same eta and PSNR of prediction as
-// EvaluateMethod, to float rounding, in memory for a band. Least squares, or robust for the
-// methods VisitFoldFits streams robust.
+// EvaluateMethod, to float rounding, in memory for a band. Least squares or robust, every method
+// but the neural basis (StreamsRobustFolds).
 struct StreamedPredictionOptions {
   // Bytes the bands may hold; 0: the fit's default (DefaultStreamedBudget).
   std::size_t memory_bytes = 0;
