@@ -312,6 +312,31 @@ void StreamedSet::Rewind() {
                     [&](std::size_t i) { readers_[i] = ImageBandReader(files_[i], read_); });
 }
 
+StreamedSet StreamedSet::Subset(std::span<const int> images) const {
+  if (images.empty()) throw Error(source_, "a subset of a photometric set needs an image");
+  StreamedSet subset;
+  subset.read_ = read_;
+  subset.source_ = source_;
+  subset.kind_ = kind_;
+  subset.mask_ = mask_;
+  subset.apply_intensities_ = apply_intensities_;
+  subset.ground_truth_normals_ = ground_truth_normals_;
+  subset.near_lamps_ = near_lamps_;
+  for (int image : images) {
+    if (image < 0 || image >= size()) {
+      throw Error(source_, fmt::format("image {} is not in the set (0 to {})", image, size() - 1));
+    }
+    const auto i = static_cast<std::size_t>(image);
+    subset.files_.push_back(files_[i]);
+    subset.names_.push_back(names_[i]);
+    subset.lights_.push_back(lights_[i]);
+    if (!intensities_.empty()) subset.intensities_.push_back(intensities_[i]);
+  }
+  subset.readers_.resize(subset.files_.size());
+  subset.Rewind();
+  return subset;
+}
+
 std::vector<ImageEncodingRecord> StreamedSet::encodings() const {
   std::vector<ImageEncodingRecord> records;
   for (const ImageBandReader& reader : readers_) {

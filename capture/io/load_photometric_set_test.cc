@@ -4,7 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "capture/io/capture_manifest.h"
+#include "capture/io/streamed_set.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "tests/support/layouts.h"
@@ -193,6 +196,63 @@ TEST(LoadEncodingTest, EachImageIsDecodedAsItsFileSaysAndRecorded) {
   // measured 9.8e-4 linear, 2.0e-4 sRGB). Read with the untagged value (sRGB), b would be 0.05.
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(loaded.set.image(i).at(1, 1, 0), 0.25, 2e-3) << i;
   EXPECT_TRUE(WarnIfEncodingsDisagree(loaded.encodings));
+}
+
+// A subset of a streamed set decodes only its images: each band of image j of the subset is the
+// set's band of image images[j], bit for bit, with that image's light, name and intensities
+// (applied as the set applies them), and the set's mask.
+TEST(StreamedSetTest, SubsetReadsItsImagesAsTheSetDoes) {
+  TempDir dir;
+  const int width = 8, height = 6;
+  std::vector<Image> images;
+  std::vector<LightDirection> lights;
+  std::vector<std::vector<float>> intensities;
+  for (int i = 0; i < 5; ++i) {
+    Image image(width, height, 3);
+    for (std::size_t v = 0; v < image.values().size(); ++v) {
+      image.values()[v] =
+          static_cast<float>((v * 7 + static_cast<std::size_t>(i) * 13) % 97) / 97.0f;
+    }
+    images.push_back(std::move(image));
+    lights.push_back(LightDirection::FromSlantTilt(0.3 + 0.1 * i, 1.2 * i));
+    intensities.push_back({1.0f + 0.1f * i, 0.9f, 1.2f - 0.05f * i});
+  }
+  PhotometricSet set(std::move(images), lights);
+  set.set_intensities(intensities);
+  Mask mask(width, height, false);
+  for (int y = 1; y < height; ++y) mask.Set(y, y, true);
+  set.set_mask(mask);
+  SaveSetOptions options;
+  options.sample_type = SampleType::kFloat;
+  SavePhotometricSet(dir.path() / "capture", set, options);
+
+  StreamedSet whole = OpenStreamedSet(dir.path() / "capture");
+  const std::vector<int> chosen = {3, 0};
+  StreamedSet subset = whole.Subset(chosen);
+  ASSERT_EQ(subset.size(), 2);
+  EXPECT_EQ(subset.width(), width);
+  EXPECT_TRUE(subset.masked());
+  for (int first = 0; first < height; first += 4) {
+    const int rows = std::min(4, height - first);
+    const PhotometricSet all = whole.ReadBand(rows);
+    const PhotometricSet some = subset.ReadBand(rows);
+    EXPECT_EQ(subset.next_row(), first + rows);
+    for (std::size_t j = 0; j < chosen.size(); ++j) {
+      const int i = chosen[j];
+      const auto got = some.image(static_cast<int>(j)).values();
+      const auto expected = all.image(i).values();
+      EXPECT_TRUE(std::equal(got.begin(), got.end(), expected.begin(), expected.end())) << i;
+      EXPECT_EQ(some.light(static_cast<int>(j)).vector(), all.light(i).vector()) << i;
+      EXPECT_EQ(subset.image_names()[j], whole.image_names()[static_cast<std::size_t>(i)]);
+      EXPECT_EQ(subset.intensities()[j], whole.intensities()[static_cast<std::size_t>(i)]);
+    }
+    EXPECT_EQ(subset.MaskRows(first, rows).CountSet(), whole.MaskRows(first, rows).CountSet());
+  }
+  const std::vector<int> outside = {5};
+  EXPECT_THAT([&] { whole.Subset(outside); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("image 5 is not in the set (0 to 4)")));
+  EXPECT_THAT([&] { whole.Subset({}); },
+              ::testing::ThrowsMessage<Error>(HasSubstr("needs an image")));
 }
 
 }  // namespace

@@ -70,6 +70,11 @@ class StreamedSet {
   Mask MaskRows(int first, int rows) const;
   // Back to row 0 (every file reopened): a further streamed pass.
   void Rewind();
+  // The images `images` of the set (indices, in that order) opened anew at row 0: their lights,
+  // names and intensities, the same mask, near lamps and options. For a pass that needs a few
+  // images only (the evaluation report's pictures), without decoding the others. Throws Error
+  // naming the set's source for an empty list or an index out of range.
+  StreamedSet Subset(std::span<const int> images) const;
   // Per image, the clipped pixels (a channel at full scale) of the rows read so far.
   std::vector<std::size_t> SaturatedPixels() const;
 

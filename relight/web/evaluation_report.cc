@@ -902,27 +902,31 @@ void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
   }
   NullProgress no_progress;
   Progress& progress = OrNull(options.progress, no_progress);
-  // A band holds the photographs' band, every fit's band and the truth's (floats), and a relit
-  // image, normals and errors at a time.
+  // A band holds the shown photographs' band, every fit's band and the truth's (floats), and a
+  // relit image, normals and errors at a time.
   const std::size_t pixel_bytes =
-      4 * (static_cast<std::size_t>(set.size()) * set.channels() + stored_channels + 3 + 8);
+      4 * (plan.shown.size() * static_cast<std::size_t>(set.channels()) + stored_channels + 3 + 8);
   const int band_rows = BudgetedBandRows(bands.band_rows, bands.memory_bytes, kMinimumReportMemory,
                                          static_cast<std::size_t>(width) * pixel_bytes, height);
   ReportPictures pictures(width, height, set.channels(), plan, evaluations, truth.has_value());
 
-  // Pass 1: the photographs shown, every fit's relighting of them and its normal errors.
-  if (set.next_row() != 0) set.Rewind();
+  // Pass 1: the photographs shown, every fit's relighting of them and its normal errors. Only
+  // the shown photographs are decoded (a subset of the set, opened anew).
+  std::optional<StreamedSet> shown;
+  if (!plan.shown.empty()) shown.emplace(set.Subset(plan.shown));
   std::size_t pixels = 0;
   progress.Start("report: pictures",
                  static_cast<std::size_t>((height + band_rows - 1) / band_rows));
   for (int first = 0; first < height; first += band_rows) {
     const int rows = std::min(band_rows, height - first);
-    const PhotometricSet band = set.ReadBand(rows);
     const Mask mask = set.MaskRows(first, rows);
     pixels += mask.CountSet();
     pictures.AddMask(first, mask);
-    for (std::size_t s = 0; s < plan.shown.size(); ++s) {
-      pictures.AddCaptured(s, first, band.image(plan.shown[s]).View());
+    if (shown) {
+      const PhotometricSet band = shown->ReadBand(rows);
+      for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+        pictures.AddCaptured(s, first, band.image(static_cast<int>(s)).View());
+      }
     }
     std::optional<Image> truth_band;
     if (truth_rows) {
