@@ -68,6 +68,14 @@ Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights,
   return l;
 }
 
+std::vector<LightDirection> SelectLights(std::span<const LightDirection> lights,
+                                         std::span<const int> selected) {
+  std::vector<LightDirection> out;
+  out.reserve(selected.size());
+  for (int i : selected) out.push_back(lights[static_cast<std::size_t>(i)]);
+  return out;
+}
+
 std::vector<LightDirection> ThesisLightGrid() {
   std::vector<LightDirection> lights;
   for (double slant : {30.0, 45.0, 60.0}) {

@@ -49,6 +49,10 @@ std::vector<LightDirection> ThesisLightGrid();
 Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights);
 Eigen::Matrix3Xd LightMatrix(std::span<const LightDirection> lights, std::span<const int> selected);
 
+// The `selected` lights of `lights`, in that order (a fit's lights, of the images it fits).
+std::vector<LightDirection> SelectLights(std::span<const LightDirection> lights,
+                                         std::span<const int> selected);
+
 // Angle in degrees between two unit vectors, robust for nearly parallel vectors (atan2 form).
 double AngleBetweenDegrees(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 

@@ -35,11 +35,7 @@ struct FitContext {
   const fs::path& source;
 
   [[noreturn]] void Fail(const std::string& fault) const { throw Error(source, fault); }
-  std::vector<LightDirection> SelectedLights() const {
-    std::vector<LightDirection> out;
-    for (int i : selected) out.push_back(lights[i]);
-    return out;
-  }
+  std::vector<LightDirection> SelectedLights() const { return SelectLights(lights, selected); }
   Eigen::Index m() const { return observations.pixels(); }
   int channels() const { return observations.channels(); }
   // An N x d weight matrix that is `rows` (|S| x d) on the selected images and 0 elsewhere, so
@@ -317,8 +313,7 @@ Representation EigenRepresentation(const Observations& observations, const Eigen
     sum += singular[j] * singular[j];
     cumulative.push_back(total > 0 ? std::sqrt(sum / total) : 0.0);  // f_cumu, eq. 4.4.13
   }
-  std::vector<LightDirection> selected_lights;
-  for (int i : selected) selected_lights.push_back(lights[i]);
+  const std::vector<LightDirection> selected_lights = SelectLights(lights, selected);
   auto light_basis = std::make_shared<InterpolatedLightBasis>(selected_lights, basis.v.transpose());
   const std::string scheme(ToString(light_basis->interpolator().scheme()));
   const std::vector<double> singular_values(singular.data(), singular.data() + n);

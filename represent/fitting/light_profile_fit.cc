@@ -65,13 +65,6 @@ Eigen::MatrixXd BilinearLeaveOneOutWeights(const std::vector<LightDirection>& li
   return hat;
 }
 
-std::vector<LightDirection> Select(const std::vector<LightDirection>& lights,
-                                   const std::vector<int>& indices) {
-  std::vector<LightDirection> selected;
-  for (int i : indices) selected.push_back(lights[i]);
-  return selected;
-}
-
 }  // namespace
 
 double MedianNearestNeighbourDegrees(const std::vector<LightDirection>& lights) {
@@ -101,7 +94,7 @@ std::vector<Eigen::MatrixXd> RbfFoldWeights(const LeaveOutFolds& folds,
   }
   for (const LeaveOutFolds::Fold& fold : folds.folds()) {
     try {
-      const RbfInterpolation interpolation(Select(lights, fold.others), width, regularisation,
+      const RbfInterpolation interpolation(SelectLights(lights, fold.others), width, regularisation,
                                            tail);
       Eigen::MatrixXd fold_weights(fold.held_out.size(), fold.others.size());
       for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
@@ -130,7 +123,7 @@ std::vector<Eigen::MatrixXd> BilinearFoldWeights(const LeaveOutFolds& folds,
   }
   for (const LeaveOutFolds::Fold& fold : folds.folds()) {
     const Eigen::MatrixXd resampling =
-        BilinearResampling(Select(lights, fold.others), grid_size, smoothness);
+        BilinearResampling(SelectLights(lights, fold.others), grid_size, smoothness);
     Eigen::MatrixXd fold_weights = Eigen::MatrixXd::Zero(fold.held_out.size(), fold.others.size());
     for (std::size_t h = 0; h < fold.held_out.size(); ++h) {
       const LightDirection& l = lights[fold.held_out[h]];

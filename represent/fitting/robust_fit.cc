@@ -557,8 +557,7 @@ Representation RobustFit::FitLightProfileMethod(const Method& method) const {
   const Eigen::MatrixXf filled = EigenStart();
   std::vector<int> columns(filled.cols());
   std::iota(columns.begin(), columns.end(), 0);
-  std::vector<LightDirection> selected_lights;
-  for (int i : selected_) selected_lights.push_back(lights_[i]);
+  const std::vector<LightDirection> selected_lights = SelectLights(lights_, selected_);
   // RowGram: the same sums for any band height, as the streamed fit's.
   RowGram gram(filled.cols());
   gram.Add(filled, observations_.pixel_indices(), observations_.width(), observations_.channels());

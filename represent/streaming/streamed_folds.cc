@@ -159,10 +159,9 @@ FoldBases MakeRobustFoldBases(const StreamedSet& set, std::span<const Method> me
     tbb::parallel_for(std::size_t{0}, folds.size(), [&](std::size_t f) {
       const std::vector<int>& fitted = folds[f].fitted;
       if (profile) {
-        std::vector<LightDirection> lights;
-        for (int image : fitted) lights.push_back(set.lights()[static_cast<std::size_t>(image)]);
-        bases.profiles[i][f] = FitLightProfileModel(start[f].gram(), start[f].column_sums(), lights,
-                                                    method, set.source(), details);
+        bases.profiles[i][f] =
+            FitLightProfileModel(start[f].gram(), start[f].column_sums(),
+                                 SelectLights(set.lights(), fitted), method, set.source(), details);
         return;
       }
       bases.robust_eigen[i][f] = {EigenBasisFromGram(start[f].gram(), start[f].column_sums(),
