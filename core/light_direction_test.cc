@@ -67,5 +67,19 @@ TEST(LightDirectionTest, ThesisGridIsTwelveTiltsTimesThreeSlants) {
   EXPECT_NEAR(grid[35].TiltDegrees(), 330, 1e-9);
 }
 
+// SelectLights keeps the chosen lights in the order asked, and LightMatrix of them is the
+// selected columns.
+TEST(LightDirectionTest, SelectLightsTakesTheChosenOnesInOrder) {
+  const auto grid = ThesisLightGrid();
+  const std::vector<int> chosen = {13, 2, 35};
+  const std::vector<LightDirection> selected = SelectLights(grid, chosen);
+  ASSERT_EQ(selected.size(), 3u);
+  for (std::size_t j = 0; j < chosen.size(); ++j) {
+    EXPECT_EQ(selected[j].vector(), grid[static_cast<std::size_t>(chosen[j])].vector()) << j;
+  }
+  EXPECT_EQ(LightMatrix(selected), LightMatrix(grid, chosen));
+  EXPECT_TRUE(SelectLights(grid, {}).empty());
+}
+
 }  // namespace
 }  // namespace photomat

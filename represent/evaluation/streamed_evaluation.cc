@@ -122,9 +122,9 @@ std::vector<MethodEvaluation> EvaluateStacksStreamed(StreamedSet& set,
       truth_band.emplace(truth->width(), rows, truth->channels());
       truth->ReadNext(truth_band->View());
     }
-    const bool selects = set.SelectedPixels(first, rows) > 0;
+    // A band the mask leaves empty has normals to compare but no pixel to relight.
     std::optional<Observations> observations;
-    if (selects) observations.emplace(band);
+    if (set.SelectedPixels(first, rows) > 0) observations.emplace(band);
     for (std::size_t m = 0; m < stacks.size(); ++m) {
       const LoadedStack maps = stacks[m]->ReadNext(rows);
       StackSums& stack = sums[m];

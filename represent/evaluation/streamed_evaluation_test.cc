@@ -41,6 +41,15 @@ fs::path WriteCapture(const fs::path& folder) {
   return folder;
 }
 
+// The capture's ground-truth normals (WriteCapture's rows) as a float EXR at `path`; returns them.
+Image WriteTruthNormals(const fs::path& path) {
+  Image truth(testing::ShadowedSpecularSet(40).material.normals.Rows(0, 36));
+  ImageWriteOptions exr;
+  exr.sample_type = SampleType::kFloat;
+  WriteImage(path, truth, exr);
+  return truth;
+}
+
 // The streamed eta of reconstruction equals the in-memory evaluation's (the same fit relit at every
 // captured light) to double rounding: the same squared differences, summed per band.
 TEST(StreamedEvaluationTest, BandsGiveTheInMemoryEtaOfReconstruction) {
@@ -79,10 +88,7 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryEtaOfReconstruction) {
 TEST(StreamedEvaluationTest, BandsGiveTheInMemoryNormalErrors) {
   testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
-  const Image truth(testing::ShadowedSpecularSet(40).material.normals.Rows(0, 36));
-  ImageWriteOptions exr;
-  exr.sample_type = SampleType::kFloat;
-  WriteImage(dir / "truth.exr", truth, exr);
+  const Image truth = WriteTruthNormals(dir / "truth.exr");
   const LoadedSet loaded = LoadPhotometricSet(input);
   const Observations observations(loaded.set);
   EvaluationOptions in_memory;
@@ -115,10 +121,7 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryNormalErrors) {
 TEST(StreamedEvaluationTest, StacksEvaluatedInOnePassGiveEachStacksEvaluation) {
   testing::TempDir dir;
   const fs::path input = WriteCapture(dir / "capture");
-  const Image truth(testing::ShadowedSpecularSet(40).material.normals.Rows(0, 36));
-  ImageWriteOptions exr;
-  exr.sample_type = SampleType::kFloat;
-  WriteImage(dir / "truth.exr", truth, exr);
+  WriteTruthNormals(dir / "truth.exr");
   const LoadedSet loaded = LoadPhotometricSet(input);
   const std::vector<std::string> names = {"hsh9", "gradient", "eigen6", "ptm"};
   std::vector<StackBandReader> readers;
