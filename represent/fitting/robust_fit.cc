@@ -222,6 +222,30 @@ nlohmann::json RobustFitOptions::ToJson() const {
           {"measured_masks", !measured.empty()}};
 }
 
+void RobustFitSummary::Add(const RobustFitSummary& other) {
+  const auto mine = static_cast<double>(observations);
+  const auto theirs = static_cast<double>(other.observations);
+  const double total = std::max(mine + theirs, 1.0);
+  mean_weight = (mean_weight * mine + other.mean_weight * theirs) / total;
+  normal_inlier_fraction =
+      (normal_inlier_fraction * mine + other.normal_inlier_fraction * theirs) / total;
+  observations += other.observations;
+  not_measured += other.not_measured;
+  attached_shadow += other.attached_shadow;
+  down_weighted += other.down_weighted;
+}
+
+RobustFitSummary RobustFitSummary::FromJson(const nlohmann::json& json) {
+  RobustFitSummary summary;
+  summary.observations = json.at("observations").get<std::size_t>();
+  summary.not_measured = json.at("not_measured").get<std::size_t>();
+  summary.attached_shadow = json.at("attached_shadow").get<std::size_t>();
+  summary.down_weighted = json.at("down_weighted").get<std::size_t>();
+  summary.mean_weight = json.at("mean_weight").get<double>();
+  summary.normal_inlier_fraction = json.at("normal_inlier_fraction").get<double>();
+  return summary;
+}
+
 nlohmann::json RobustFitSummary::ToJson() const {
   return {{"observations", observations},       {"not_measured", not_measured},
           {"attached_shadow", attached_shadow}, {"down_weighted", down_weighted},

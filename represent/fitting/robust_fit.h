@@ -101,7 +101,13 @@ struct RobustFitSummary {
   std::size_t down_weighted = 0;        // weight below 0.5 from the loss
   double mean_weight = 0.0;             // shared outlier weight, over all observations
   double normal_inlier_fraction = 0.0;  // observations the normals were fitted from
+
+  // `other`'s observations added (a streamed fit's bands): counts add, the means weigh by the
+  // observations.
+  void Add(const RobustFitSummary& other);
   nlohmann::json ToJson() const;
+  // From ToJson's object; throws nlohmann::json's errors on another.
+  static RobustFitSummary FromJson(const nlohmann::json& json);
 };
 
 // EM iterations of the weighted low-rank approximation (robust Eigen-k). The reconstruction

@@ -34,6 +34,35 @@ TEST(RobustLossTest, WeightsAndNames) {
 }
 
 // Without outliers the robust fit is the least-squares fit.
+// A streamed fit sums its bands' summaries: counts add, the means weigh by the observations.
+TEST(RobustFitSummaryTest, BandsAddIntoTheWholeSetsSummary) {
+  RobustFitSummary top{.observations = 100,
+                       .not_measured = 3,
+                       .attached_shadow = 5,
+                       .down_weighted = 7,
+                       .mean_weight = 0.5,
+                       .normal_inlier_fraction = 1.0};
+  const RobustFitSummary bottom{.observations = 300,
+                                .not_measured = 11,
+                                .attached_shadow = 13,
+                                .down_weighted = 17,
+                                .mean_weight = 0.9,
+                                .normal_inlier_fraction = 0.5};
+  RobustFitSummary whole;
+  whole.Add(top);
+  EXPECT_EQ(whole.ToJson(), top.ToJson());  // an empty summary adds nothing
+  whole.Add(bottom);
+  EXPECT_EQ(whole.observations, 400u);
+  EXPECT_EQ(whole.not_measured, 14u);
+  EXPECT_EQ(whole.attached_shadow, 18u);
+  EXPECT_EQ(whole.down_weighted, 24u);
+  EXPECT_NEAR(whole.mean_weight, (100 * 0.5 + 300 * 0.9) / 400, 1e-15);             // 0.8
+  EXPECT_NEAR(whole.normal_inlier_fraction, (100 * 1.0 + 300 * 0.5) / 400, 1e-15);  // 0.625
+  EXPECT_EQ(RobustFitSummary::FromJson(whole.ToJson()).ToJson(), whole.ToJson());
+  EXPECT_THROW(RobustFitSummary::FromJson(nlohmann::json{{"observations", 1}}),
+               nlohmann::json::exception);
+}
+
 TEST(RobustFitTest, LambertianDataGiveTheLeastSquaresNormals) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 32);
   const Mask all = synthetic.set.MaskOrAll();
