@@ -14,6 +14,7 @@
 #include "represent/fitting/light_profile_fit.h"
 #include "represent/fitting/observations.h"
 #include "represent/streaming/band_streamer.h"
+#include "represent/streaming/fitted_stack_writer.h"
 
 namespace photomat {
 namespace {
@@ -23,82 +24,6 @@ using streaming_internal::Band;
 using streaming_internal::IsLightProfile;
 using streaming_internal::NeedsGram;
 using streaming_internal::Streamer;
-
-// The robust weights' summary over bands: counts add, means weigh by the observations.
-void AddSummary(const RobustFitSummary& band, RobustFitSummary& total, double& weight_sum,
-                double& inlier_sum) {
-  total.observations += band.observations;
-  total.not_measured += band.not_measured;
-  total.attached_shadow += band.attached_shadow;
-  total.down_weighted += band.down_weighted;
-  weight_sum += band.mean_weight * static_cast<double>(band.observations);
-  inlier_sum += band.normal_inlier_fraction * static_cast<double>(band.observations);
-}
-
-// The stack of one method: opened at its first band with maps (whose representation describes
-// the whole stack), with the rows of earlier empty bands written as zeros then. The data
-// summaries of its details ("robust_summary", "pbr_summary") are the whole set's, not the first
-// band's: late details of the stack (StackBandWriter), written at Commit.
-class MethodStack {
- public:
-  MethodStack(fs::path path, int width, int height, const StreamedFitOptions& options)
-      : path_(std::move(path)), width_(width), height_(height), options_(options) {}
-
-  void Write(const Representation& band) {
-    const nlohmann::json& band_details = band.details();
-    const auto pbr =
-        band_details.is_object() ? band_details.find("pbr_summary") : band_details.end();
-    if (!writer_) {
-      const nlohmann::json description = StackDescription(band, options_.provenance);
-      std::vector<std::string> late;
-      for (const char* summary : {"robust_summary", "pbr_summary"}) {
-        if (const nlohmann::json& details = description["details"];
-            details.is_object() && details.contains(summary)) {
-          late.emplace_back(summary);
-        }
-      }
-      names_ = band.maps().channel_names();
-      writer_.emplace(path_, description, names_, width_, height_, options_.compression,
-                      std::move(late));
-      WriteZeros(pending_zero_rows_);
-    }
-    if (pbr != band_details.end()) {
-      if (!pbr_summary_) pbr_summary_.emplace();
-      pbr_summary_->Add(PbrFitSummary::FromJson(*pbr));
-    }
-    writer_->Write(band.maps());
-  }
-  // A band the mask leaves empty: zero maps.
-  void WriteEmpty(int rows) {
-    if (!writer_) {
-      pending_zero_rows_ += rows;
-      return;
-    }
-    WriteZeros(rows);
-  }
-  // `robust_summary`: the whole set's, for a robust fit.
-  void Commit(const std::optional<RobustFitSummary>& robust_summary) {
-    if (!writer_) throw Error(path_, "no band of the set was fitted");
-    nlohmann::json late = nlohmann::json::object();
-    if (robust_summary) late["robust_summary"] = robust_summary->ToJson();
-    if (pbr_summary_) late["pbr_summary"] = pbr_summary_->ToJson();
-    writer_->Commit(late);
-  }
-  int maps() const { return static_cast<int>(names_.size()); }
-
- private:
-  void WriteZeros(int rows) {
-    if (rows > 0) writer_->Write(Image(width_, rows, static_cast<int>(names_.size())));
-  }
-
-  fs::path path_;
-  int width_, height_;
-  const StreamedFitOptions& options_;
-  std::vector<std::string> names_;
-  std::optional<StackBandWriter> writer_;
-  std::optional<PbrFitSummary> pbr_summary_;  // the bands' summed
-  int pending_zero_rows_ = 0;
-};
 
 // Fixed: every decoder's chunk (16 rows of up to 4-byte samples, alpha included).
 std::size_t DecoderChunkBytes(const StreamedSet& set) {
@@ -226,19 +151,16 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
     }
   }
 
-  std::vector<std::unique_ptr<MethodStack>> outputs;
+  std::vector<std::unique_ptr<FittedStackWriter>> outputs;
   for (const fs::path& path : stacks) {
-    outputs.push_back(std::make_unique<MethodStack>(path, set.width(), set.height(), options));
+    outputs.push_back(std::make_unique<FittedStackWriter>(path, set.width(), set.height(),
+                                                          options.compression, options.provenance));
   }
   StreamedFitReport report;
   RobustFitSummary summary;
-  double weight_sum = 0.0, inlier_sum = 0.0;
   streamer.Pass("fit: maps", [&](Band& band) {
-    if (band.empty()) {
-      for (auto& output : outputs) output->WriteEmpty(band.rows);
-      return;
-    }
-    if (band.robust) AddSummary(band.robust->summary(), summary, weight_sum, inlier_sum);
+    if (band.empty()) return;  // zero maps (FittedStackWriter)
+    if (band.robust) summary.Add(band.robust->summary());
     for (std::size_t i = 0; i < methods.size(); ++i) {
       const Method& method = methods[i];
       const auto representation = [&]() -> Representation {
@@ -266,16 +188,11 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
         if (!report.pbr_summary) report.pbr_summary.emplace();
         report.pbr_summary->Add(PbrFitSummary::FromJson(*found));
       }
-      outputs[i]->Write(representation);
+      outputs[i]->Write(band.first, representation);
     }
   });
-  if (options.robust) {
-    const double count = static_cast<double>(std::max<std::size_t>(summary.observations, 1));
-    summary.mean_weight = weight_sum / count;
-    summary.normal_inlier_fraction = inlier_sum / count;
-    report.robust_summary = summary;
-  }
-  for (auto& output : outputs) output->Commit(report.robust_summary);
+  if (options.robust) report.robust_summary = summary;
+  for (auto& output : outputs) output->Commit();
   report.band_rows = streamer.band_rows();
   report.passes = streamer.passes();
   for (const auto& output : outputs) report.map_counts.push_back(output->maps());
