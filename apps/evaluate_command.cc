@@ -1,11 +1,13 @@
 #include "apps/evaluate_command.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <charconv>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -27,8 +29,10 @@
 #include "represent/evaluation/evaluation.h"
 #include "represent/evaluation/method_comparison.h"
 #include "represent/evaluation/streamed_evaluation.h"
+#include "represent/fitting/prediction_folds.h"
 #include "represent/stack/map_stack.h"
 #include "represent/stack/stack_band_reader.h"
+#include "represent/streaming/fitted_stack_writer.h"
 #include "represent/streaming/streamed_fit.h"
 #include "represent/streaming/streamed_folds.h"
 
@@ -84,15 +88,52 @@ std::vector<FitGroup> FitGroups(const std::vector<Method>& methods,
   return groups;
 }
 
+// A group's prediction (PredictStreamed) and its fit of every image, made in the same passes
+// over the photographs (StreamedPredictionOptions::whole_set_fit), written into scratch stacks in
+// `folder` as FitIntoFolder writes them. The predictions go to `results` at the group's places.
+// Returns the stacks in the group's order.
+std::vector<std::filesystem::path> PredictAndFitIntoFolder(StreamedSet& set, const FitGroup& group,
+                                                           StreamedPredictionOptions predict,
+                                                           StreamedFitOptions fit,
+                                                           const std::filesystem::path& folder,
+                                                           std::vector<MethodEvaluation>& results,
+                                                           bool warn_clipped) {
+  const std::vector<std::filesystem::path> stacks =
+      PlanScratchStacks(set, group.methods, folder, set.source().string(), fit);
+  std::vector<std::unique_ptr<FittedStackWriter>> writers;
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < stacks.size(); ++i) {
+    writers.push_back(std::make_unique<FittedStackWriter>(stacks[i], set.width(), set.height(),
+                                                          fit.compression, fit.provenance));
+    names.push_back(group.methods[i].Name());
+  }
+  predict.robust = group.robust;
+  predict.whole_set_fit = [&](std::size_t i, int first_row, const Representation& band) {
+    writers[i]->Write(first_row, band);
+  };
+  std::vector<MethodEvaluation> predicted(group.methods.size());
+  PredictStreamed(set, group.methods, predicted, predict);
+  for (auto& writer : writers) writer->Commit();
+  for (std::size_t i = 0; i < group.members.size(); ++i) {
+    results[group.members[i]] = std::move(predicted[i]);
+  }
+  if (warn_clipped) WarnAboutClippedPixels(set.SaturatedPixels(), set.image_names());
+  fmt::print("fitted {} to the {} photographs (linear) in the prediction's passes\n",
+             fmt::join(names, ", "), set.size());
+  return stacks;
+}
+
 // `evaluate INPUT --stream` (README "Streamed relighting and export"): `methods` fitted to `set`
-// in bands (FitStreamed) into scratch stacks, each then evaluated against the set streamed
-// in one pass (EvaluateStacksStreamed): the same eta of reconstruction as the in-memory evaluation
-// to float rounding, and the same normal errors. With `prediction`, the folds are fitted band by
-// band first (PredictStreamed): the same eta and PSNR of prediction. Each group of FitGroups is
-// fitted in passes of its own. `use(results, stacks)` then gets the evaluations and the scratch
-// stacks (a report is drawn from them). IMPLEMENTER CHOICE: the scratch folder is beside `output`
-// (the JSON or report the user chose a place for), else in the current folder; its free space is
-// checked first, and it is removed however the evaluation ends.
+// in bands into scratch stacks, then all evaluated against the set streamed in one pass
+// (EvaluateStacksStreamed): the same eta of reconstruction as the in-memory evaluation to float
+// rounding, and the same normal errors. With `prediction`, the folds are fitted band by band
+// (PredictStreamed: the same eta and PSNR of prediction) and the fit of every image is made in
+// the same passes (PredictAndFitIntoFolder); without, the stacks are a streamed fit's
+// (FitIntoFolder). Each group of FitGroups is fitted in passes of its own. `use(results, stacks)`
+// then gets the evaluations and the scratch stacks (a report is drawn from them).
+// IMPLEMENTER CHOICE: the scratch folder is beside `output` (the JSON or report the user chose a
+// place for), else in the current folder; its free space is checked first, and it is removed
+// however the evaluation ends.
 using UseStreamedEvaluations = std::function<void(const std::vector<MethodEvaluation>&,
                                                   std::span<const std::filesystem::path>)>;
 void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
@@ -105,18 +146,11 @@ void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
   CreateFolder(beside);
   TerminalProgressBar bar;
   std::vector<MethodEvaluation> results(methods.size());
-  // Prediction first: a fold too small for a method fails before any fit is written.
   if (prediction) {
-    for (const FitGroup& group : groups) {
-      StreamedPredictionOptions predict = *prediction;
-      predict.robust = group.robust;
-      predict.progress = &bar;
-      std::vector<MethodEvaluation> predicted(group.methods.size());
-      PredictStreamed(set, group.methods, predicted, predict);
-      for (std::size_t i = 0; i < group.members.size(); ++i) {
-        results[group.members[i]] = std::move(predicted[i]);
-      }
-    }
+    // Every group's folds checked first: a fold too small for a method fails before any pass.
+    const std::vector<PredictionFold> folds =
+        PredictionFolds(set.size(), prediction->hold_out_every);
+    for (const Method& method : methods) CheckFoldsFit(folds, method, set.source());
   }
   const ScratchFolder scratch(beside, "photomat-evaluate");
   std::vector<std::filesystem::path> stacks(methods.size());
@@ -126,9 +160,16 @@ void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
     fit.progress = &bar;
     fit.robust = group.robust.has_value();
     if (group.robust) fit.robust_options = *group.robust;
-    const std::vector<std::filesystem::path> fitted =
-        FitIntoFolder(set, group.methods, scratch.path(), set.source().string(), fit,
-                      /*warn_clipped=*/&group == &groups.front());
+    const bool first = &group == &groups.front();
+    std::vector<std::filesystem::path> fitted;
+    if (prediction) {
+      StreamedPredictionOptions predict = *prediction;
+      predict.progress = &bar;
+      fitted = PredictAndFitIntoFolder(set, group, predict, fit, scratch.path(), results, first);
+    } else {
+      fitted = FitIntoFolder(set, group.methods, scratch.path(), set.source().string(), fit,
+                             /*warn_clipped=*/first);
+    }
     for (std::size_t i = 0; i < group.members.size(); ++i) stacks[group.members[i]] = fitted[i];
   }
   options.progress = &bar;

@@ -15,11 +15,11 @@ bool HoldingSetExceeds(const StreamedSet& set, std::size_t budget_bytes) {
   return kWholeSetBytesPerPixelImage * pixel_images > static_cast<double>(budget_bytes);
 }
 
-std::vector<std::filesystem::path> FitIntoFolder(StreamedSet& set,
-                                                 const std::vector<Method>& methods,
-                                                 const std::filesystem::path& folder,
-                                                 const std::string& source,
-                                                 StreamedFitOptions options, bool warn_clipped) {
+std::vector<std::filesystem::path> PlanScratchStacks(const StreamedSet& set,
+                                                     const std::vector<Method>& methods,
+                                                     const std::filesystem::path& folder,
+                                                     const std::string& source,
+                                                     StreamedFitOptions& options) {
   const std::size_t pixels = static_cast<std::size_t>(set.width()) * set.height();
   options.compression =
       FittedStackCompression("auto", set.SelectedPixels(0, set.height()) < pixels);
@@ -27,11 +27,19 @@ std::vector<std::filesystem::path> FitIntoFolder(StreamedSet& set,
                         set.encodings()};
   CheckDiskSpace(folder, StreamedStackBytes(set, methods), "the scratch map stacks");
   std::vector<std::filesystem::path> stacks;
+  for (const Method& method : methods) stacks.push_back(folder / (method.Name() + ".exr"));
+  return stacks;
+}
+
+std::vector<std::filesystem::path> FitIntoFolder(StreamedSet& set,
+                                                 const std::vector<Method>& methods,
+                                                 const std::filesystem::path& folder,
+                                                 const std::string& source,
+                                                 StreamedFitOptions options, bool warn_clipped) {
+  const std::vector<std::filesystem::path> stacks =
+      PlanScratchStacks(set, methods, folder, source, options);
   std::vector<std::string> names;
-  for (const Method& method : methods) {
-    stacks.push_back(folder / (method.Name() + ".exr"));
-    names.push_back(method.Name());
-  }
+  for (const Method& method : methods) names.push_back(method.Name());
   const StreamedFitReport report = FitStreamed(set, methods, stacks, options);
   if (warn_clipped) WarnAboutClippedPixels(report.saturated_pixels, set.image_names());
   fmt::print("fitted {} to the {} photographs ({}) in bands of {} of {} rows\n",

@@ -17,6 +17,17 @@ namespace photomat::app {
 // capture/io/load_photometric_set.h) would exceed `budget_bytes`: then a command streams it.
 bool HoldingSetExceeds(const StreamedSet& set, std::size_t budget_bytes);
 
+// The stacks of `methods` in `folder` (a scratch folder the command reads them back from), named
+// by method, with `options`' compression (lossless, as `fit` compresses by default) and
+// provenance (`set`'s lights, `source` and the encoding `options.encoded_values` fits: "srgb",
+// else "linear") set; the folder's free space checked for them first. Returns the stacks in the
+// order of `methods`.
+std::vector<std::filesystem::path> PlanScratchStacks(const StreamedSet& set,
+                                                     const std::vector<Method>& methods,
+                                                     const std::filesystem::path& folder,
+                                                     const std::string& source,
+                                                     StreamedFitOptions& options);
+
 // `methods` fitted to `set` in bands (FitStreamed) into map stacks in `folder` (a scratch folder
 // the command reads them back from), named by method: the folder's free space checked for them
 // first, lossless EXR compressed as `fit` compresses by default, the provenance `set`'s lights,

@@ -178,6 +178,13 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
                 fmt::format("{} methods but {} evaluations", methods.size(), evaluations.size()));
   }
   const std::vector<PredictionFold> folds = PredictionFolds(set.size(), options.hold_out_every);
+  std::vector<PredictionFold> fitted_folds = folds;
+  const std::size_t whole_set = folds.size();  // the fold of every image, when asked
+  if (options.whole_set_fit) {
+    PredictionFold all;
+    for (int k = 0; k < set.size(); ++k) all.fitted.push_back(k);
+    fitted_folds.push_back(std::move(all));
+  }
   // Per method, per image of the set: each image is predicted by one fold only, so the folds
   // fitted in parallel write to different sums.
   std::vector<std::vector<ImageSums>> sums(methods.size(), std::vector<ImageSums>(set.size()));
@@ -187,8 +194,12 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
   fits.robust = options.robust;
   fits.progress = options.progress;
   VisitFoldFits(
-      set, methods, folds,
+      set, methods, fitted_folds,
       [&](const FoldFit& band) {
+        if (band.fold == whole_set) {
+          options.whole_set_fit(band.method, band.first_row, band.fit);
+          return;
+        }
         const std::vector<int>& predicted = folds[band.fold].predicted;
         tbb::parallel_for(std::size_t{0}, predicted.size(), [&](std::size_t j) {
           const int k = predicted[j];

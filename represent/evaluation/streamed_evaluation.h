@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -19,7 +20,7 @@ namespace photomat {
 // sums that make e_k and sigma_k (count, sum of captured values and of their squares, sum of
 // squared differences, all in double) are accumulated over the bands, so memory follows the
 // band. The stack is what was fitted (it is not refitted): prediction (leave-one-out, held-out
-// lights) needs fits and stays in memory (EvaluateMethod). With ground-truth normals, the stack's
+// lights) needs fits of its own (PredictStreamed below). With ground-truth normals, the stack's
 // normals (EstimateNormals of each band) are compared with the truth's rows band by band
 // (NormalErrors): the same statistics as the in-memory CompareNormals, bit for bit.
 struct StreamedEvaluationOptions {
@@ -66,13 +67,20 @@ struct StreamedPredictionOptions {
   // As EvaluationOptions::robust (`measured` ignored: found per band).
   std::optional<RobustFitOptions> robust;
   Progress* progress = nullptr;
+  // Set: every method is also fitted to all the images in the same passes (a fold more, fitting
+  // every image and predicting none), and each band's fit handed here: the method's index, the
+  // band's first row, its fit (valid during the call). Called in row order for each method,
+  // never twice at once for one method; bands the mask leaves empty are not fitted. `evaluate
+  // --stream` writes its scratch stacks from it (FittedStackWriter) instead of making a fit's
+  // passes over the photographs again (the Gram pass, robust Eigen-k's EM passes).
+  std::function<void(std::size_t, int, const Representation&)> whole_set_fit;
 };
 
 // Sets the method and prediction of `evaluations[i]` (prediction_images, eta_prediction,
 // psnr_prediction and their per-image values) for `methods[i]` fitted to `set`. Throws Error naming
-// the set's source when the sizes differ, for a method that cannot be streamed (neural,
-// robust Eigen-k, rbf and bilinear) or a fold too small for a method, and naming the image at
-// fault for a truncated or corrupt one.
+// the set's source when the sizes differ, for a method that cannot be streamed (the neural
+// basis) or a fold too small for a method, and naming the image at fault for a truncated or
+// corrupt one.
 void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
                      std::span<MethodEvaluation> evaluations,
                      const StreamedPredictionOptions& options = {});

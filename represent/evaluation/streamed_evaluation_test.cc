@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <string>
 
 #include "calibrate/radiometry/exposure.h"
@@ -13,6 +14,8 @@
 #include "core/image_io.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
+#include "represent/streaming/fitted_stack_writer.h"
+#include "represent/streaming/streamed_fit.h"
 #include "tests/support/synthetic_sets.h"
 #include "tests/support/test_support.h"
 
@@ -250,6 +253,63 @@ TEST(StreamedEvaluationTest, BandsGiveTheInMemoryRobustPrediction) {
     in_memory.robust->loss = RobustLoss::kTukey;
     in_memory.robust->measured = measured;
     ExpectStreamedPredictionMatches(input, methods, in_memory);
+  }
+}
+
+// The fit of every image that PredictStreamed makes beside its folds (whole_set_fit), written by
+// FittedStackWriter, is FitStreamed's fit in the same bands: the same maps and details, least
+// squares and robust (robust Eigen-k's EM passes, rbf and bilinear from the imputed Gram matrix
+// included), so `evaluate --stream` takes its scratch stacks from the prediction's passes. The
+// fold more changes no fold's fit: the predictions are those made without it, bit for bit.
+TEST(StreamedEvaluationTest, TheWholeSetFitBesideTheFoldsIsTheStreamedFit) {
+  testing::TempDir dir;
+  const fs::path input = WriteCapture(dir / "capture");
+  std::vector<Method> methods;
+  for (const char* name : {"gradient", "ptm", "hsh9", "eigen6", "rbf", "bilinear"}) {
+    methods.push_back(Method::Parse(name));
+  }
+  for (const bool robust : {false, true}) {
+    StreamedSet set = OpenStreamedSet(input);
+    StreamedPredictionOptions predict;
+    predict.band_rows = 5;
+    predict.hold_out_every = 4;
+    StreamedFitOptions fit;
+    fit.band_rows = 5;
+    fit.robust = robust;
+    fit.robust_options.loss = RobustLoss::kTukey;
+    if (robust) predict.robust = fit.robust_options;
+    std::vector<MethodEvaluation> alone(methods.size()), beside(methods.size());
+    PredictStreamed(set, methods, alone, predict);
+
+    std::vector<fs::path> fitted, whole_set;
+    std::vector<std::unique_ptr<FittedStackWriter>> writers;
+    for (const Method& method : methods) {
+      const std::string name = fmt::format("{}{}.exr", robust ? "robust-" : "", method.Name());
+      fitted.push_back(dir / ("fitted-" + name));
+      whole_set.push_back(dir / ("beside-" + name));
+      writers.push_back(std::make_unique<FittedStackWriter>(
+          whole_set.back(), set.width(), set.height(), fit.compression, fit.provenance));
+    }
+    predict.whole_set_fit = [&](std::size_t i, int first_row, const Representation& band) {
+      writers[i]->Write(first_row, band);
+    };
+    PredictStreamed(set, methods, beside, predict);
+    for (auto& writer : writers) writer->Commit();
+    FitStreamed(set, methods, fitted, fit);
+
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+      const std::string label = fmt::format("{}{}", robust ? "robust " : "", methods[i].Name());
+      EXPECT_EQ(beside[i].prediction_images, alone[i].prediction_images) << label;
+      EXPECT_EQ(beside[i].prediction_per_image, alone[i].prediction_per_image) << label;
+      EXPECT_EQ(beside[i].psnr_prediction_per_image, alone[i].psnr_prediction_per_image) << label;
+      const LoadedStack streamed = LoadRepresentation(fitted[i]);
+      const LoadedStack predicted = LoadRepresentation(whole_set[i]);
+      EXPECT_TRUE(
+          testing::SameBits(predicted.representation.maps(), streamed.representation.maps()))
+          << label;
+      EXPECT_EQ(predicted.representation.details(), streamed.representation.details()) << label;
+      EXPECT_EQ(predicted.representation.method(), streamed.representation.method()) << label;
+    }
   }
 }
 
