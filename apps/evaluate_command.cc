@@ -94,10 +94,10 @@ std::vector<FitGroup> FitGroups(const std::vector<Method>& methods,
 // Returns the stacks in the group's order.
 std::vector<std::filesystem::path> PredictAndFitIntoFolder(StreamedSet& set, const FitGroup& group,
                                                            StreamedPredictionOptions predict,
-                                                           StreamedFitOptions fit,
                                                            const std::filesystem::path& folder,
                                                            std::vector<MethodEvaluation>& results,
                                                            bool warn_clipped) {
+  StreamedFitOptions fit;  // the stacks' compression and provenance, as FitIntoFolder's
   const std::vector<std::filesystem::path> stacks =
       PlanScratchStacks(set, group.methods, folder, set.source().string(), fit);
   std::vector<std::unique_ptr<FittedStackWriter>> writers;
@@ -155,18 +155,18 @@ void EvaluateSetStreamed(StreamedSet& set, const std::vector<Method>& methods,
   const ScratchFolder scratch(beside, "photomat-evaluate");
   std::vector<std::filesystem::path> stacks(methods.size());
   for (const FitGroup& group : groups) {
-    StreamedFitOptions fit;
-    fit.memory_bytes = options.memory_bytes;
-    fit.progress = &bar;
-    fit.robust = group.robust.has_value();
-    if (group.robust) fit.robust_options = *group.robust;
     const bool first = &group == &groups.front();
     std::vector<std::filesystem::path> fitted;
     if (prediction) {
       StreamedPredictionOptions predict = *prediction;
       predict.progress = &bar;
-      fitted = PredictAndFitIntoFolder(set, group, predict, fit, scratch.path(), results, first);
+      fitted = PredictAndFitIntoFolder(set, group, predict, scratch.path(), results, first);
     } else {
+      StreamedFitOptions fit;
+      fit.memory_bytes = options.memory_bytes;
+      fit.progress = &bar;
+      fit.robust = group.robust.has_value();
+      if (group.robust) fit.robust_options = *group.robust;
       fitted = FitIntoFolder(set, group.methods, scratch.path(), set.source().string(), fit,
                              /*warn_clipped=*/first);
     }

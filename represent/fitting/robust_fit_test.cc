@@ -33,7 +33,6 @@ TEST(RobustLossTest, WeightsAndNames) {
   EXPECT_EQ(ToString(RobustLoss::kCauchy), "cauchy");
 }
 
-// Without outliers the robust fit is the least-squares fit.
 // A streamed fit sums its bands' summaries: counts add, the means weigh by the observations.
 TEST(RobustFitSummaryTest, BandsAddIntoTheWholeSetsSummary) {
   RobustFitSummary top{.observations = 100,
@@ -63,6 +62,7 @@ TEST(RobustFitSummaryTest, BandsAddIntoTheWholeSetsSummary) {
                nlohmann::json::exception);
 }
 
+// Without outliers the robust fit is the least-squares fit.
 TEST(RobustFitTest, LambertianDataGiveTheLeastSquaresNormals) {
   const auto synthetic = testing::LambertianSet(SurfacePattern::kBumps, 32);
   const Mask all = synthetic.set.MaskOrAll();

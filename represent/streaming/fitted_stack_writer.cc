@@ -2,8 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
-
 #include "core/error.h"
 
 namespace photomat {
@@ -63,7 +61,6 @@ void FittedStackWriter::Commit() {
 
 void FittedStackWriter::WriteZeros(int rows) {
   if (rows > 0) writer_->Write(Image(width_, rows, maps()));
-  next_row_ += std::max(rows, 0);
 }
 
 }  // namespace photomat
