@@ -50,8 +50,9 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
     evaluation.prediction_images = fold.predicted;
     const std::vector<int>& kept = fold.fitted;
     TerminalProgressBar bar;
+    NeuralFitReport report;
     const Representation r =
-        FitNeural(observations, set.lights(), kept, options->neural, set.source(), &bar);
+        FitNeural(observations, set.lights(), kept, options->neural, set.source(), &bar, &report);
     // IMPLEMENTER CHOICE: the reconstruction error is that of the same training at the images it
     // saw (a second training on every image would double the time).
     for (int i : kept) {
@@ -73,9 +74,19 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
     evaluation.eta_prediction = mean(evaluation.prediction_per_image);
     evaluation.psnr_prediction = mean(evaluation.psnr_prediction_per_image);
     fmt::print("{}", FormatEvaluationTable({evaluation}));
-    fmt::print("neural: held out every {} ({} images), PSNR {:.2f} dB\n", options->hold_out_every,
-               evaluation.prediction_images.size(), *evaluation.psnr_prediction);
-    if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson({evaluation}));
+    fmt::print(
+        "neural: held out every {} ({} images), PSNR {:.2f} dB; trained {} epochs (best {}) "
+        "in {:.1f} s\n",
+        options->hold_out_every, evaluation.prediction_images.size(), *evaluation.psnr_prediction,
+        report.epochs, report.best_epoch, report.seconds);
+    if (!options->json.empty()) {
+      // The training's options and summary, as a neural stack's details hold them, so that a
+      // held-out score can be read beside the epochs and time it took.
+      nlohmann::json json = EvaluationsToJson({evaluation});
+      json["neural"]["neural"] = options->neural.ToJson();
+      json["neural"]["neural_training"] = report.ToJson();
+      WriteJsonFile(options->json, json);
+    }
   });
 }
 

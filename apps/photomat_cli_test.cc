@@ -280,6 +280,10 @@ TEST(PhotomatCliTest, NeuralFitsAndRelightsOrSaysWhatThisBuildLacks) {
   const nlohmann::json e = ReadJsonFile(dir / "e.json");
   EXPECT_EQ(e["neural"]["prediction_images"].size(), 6u);
   EXPECT_GT(e["neural"]["eta_prediction"].get<double>(), 0.0);
+  // The training's options and summary travel with the score.
+  EXPECT_EQ(e["neural"]["neural"]["max_epochs"], 2);
+  EXPECT_EQ(e["neural"]["neural_training"]["epochs"], 2);
+  EXPECT_THAT(evaluate.output, HasSubstr("trained 2 epochs"));
   const RunResult mixed =
       RunPhotomat("fit " + capture + " --method ptm,neural --out " + (dir / "mixed").string());
   EXPECT_EQ(mixed.exit_code, 1);
