@@ -80,11 +80,10 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
         options->hold_out_every, evaluation.prediction_images.size(), *evaluation.psnr_prediction,
         report.epochs, report.best_epoch, report.seconds);
     if (!options->json.empty()) {
-      // The training's options and summary, as a neural stack's details hold them, so that a
-      // held-out score can be read beside the epochs and time it took.
+      // The training's options and summary (the fit's details, as a neural stack holds them), so
+      // that a held-out score can be read beside the epochs and time it took.
       nlohmann::json json = EvaluationsToJson({evaluation});
-      json["neural"]["neural"] = options->neural.ToJson();
-      json["neural"]["neural_training"] = report.ToJson();
+      json["neural"].update(r.details());
       WriteJsonFile(options->json, json);
     }
   });
