@@ -125,31 +125,14 @@ Profile LinearGreyProfile() {
 
 // ---- chromaticities -------------------------------------------------------------------------
 
-Eigen::Vector3d XyzOfChromaticity(double x, double y) { return {x / y, 1.0, (1.0 - x - y) / y}; }
-
-// RGB -> XYZ of the primaries and white (x, y pairs of R, G, B, white); nullopt when singular.
-std::optional<Eigen::Matrix3d> RgbToXyz(const std::array<double, 8>& c) {
-  for (int i = 1; i < 8; i += 2) {
-    if (!(c[i] > 1e-6)) return std::nullopt;
-  }
-  Eigen::Matrix3d primaries;
-  for (int k = 0; k < 3; ++k) primaries.col(k) = XyzOfChromaticity(c[2 * k], c[2 * k + 1]);
-  if (std::abs(primaries.determinant()) < 1e-9) return std::nullopt;
-  const Eigen::Vector3d scale = primaries.inverse() * XyzOfChromaticity(c[6], c[7]);
-  return primaries * scale.asDiagonal();
-}
-
-constexpr std::array<double, 8> kRec709Chromaticities = {0.64, 0.33, 0.30,   0.60,
-                                                         0.15, 0.06, 0.3127, 0.3290};
-
 // File RGB -> Rec.709 RGB, white adapted to D65 with the Bradford transform when the file's white
 // is another (relative colorimetry: the file's white stays white).
 std::optional<std::array<double, 9>> ChromaticitiesToRec709(const std::array<float, 8>& file) {
-  std::array<double, 8> c{};
+  Chromaticities c{};
   std::copy(file.begin(), file.end(), c.begin());
-  const auto source = RgbToXyz(c);
+  const auto source = RgbToXyzMatrix(c);
   if (!source) return std::nullopt;
-  const Eigen::Matrix3d target = *RgbToXyz(kRec709Chromaticities);
+  const Eigen::Matrix3d target = *RgbToXyzMatrix(kRec709Chromaticities);
   Eigen::Matrix3d bradford;
   bradford << 0.8951, 0.2664, -0.1614, -0.7502, 1.7135, 0.0367, 0.0389, -0.0685, 1.0296;
   const Eigen::Vector3d from = bradford * XyzOfChromaticity(c[6], c[7]);
