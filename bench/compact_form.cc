@@ -41,6 +41,7 @@
 #include "relight/formats/relight_web_format.h"
 #include "relight/formats/stack_file.h"
 #include "represent/evaluation/evaluation.h"
+#include "represent/evaluation/image_comparison.h"
 #include "represent/fitting/fit.h"
 #include "represent/stack/map_stack.h"
 

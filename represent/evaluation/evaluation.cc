@@ -50,31 +50,6 @@ double PeakSignalToNoiseRatio(const Observations& observations, int image,
                       (relit.cast<double>() - captured).squaredNorm() / captured.size());
 }
 
-double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, double peak) {
-  if (predicted.width() != truth.width() || predicted.height() != truth.height() ||
-      predicted.channels() != truth.channels()) {
-    throw Error(fmt::format("PSNR of a {}x{}x{} image against a {}x{}x{} one", predicted.width(),
-                            predicted.height(), predicted.channels(), truth.width(), truth.height(),
-                            truth.channels()));
-  }
-  if (!mask.SameSize(truth)) throw Error("PSNR: the mask is not the images' size");
-  if (!(peak > 0.0)) throw Error(fmt::format("PSNR: peak {} is not positive", peak));
-  double sum = 0.0;
-  std::size_t count = 0;
-  for (int c = 0; c < truth.channels(); ++c) {
-    const auto a = predicted.plane(c);
-    const auto b = truth.plane(c);
-    for (std::size_t p = 0; p < truth.pixel_count(); ++p) {
-      if (!mask[p]) continue;
-      const double d = std::clamp(double{a[p]}, 0.0, peak) - std::clamp(double{b[p]}, 0.0, peak);
-      sum += d * d;
-      ++count;
-    }
-  }
-  if (count == 0) throw Error("PSNR: the mask selects no pixel");
-  return PsnrDecibels(peak, sum / static_cast<double>(count));
-}
-
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,
                                       const Observations& observations,
                                       const LightDirection& light) {

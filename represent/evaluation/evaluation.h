@@ -74,13 +74,6 @@ double NormalisedRmsError(const Observations& observations, int image, const Eig
 double PeakSignalToNoiseRatio(const Observations& observations, int image,
                               const Eigen::VectorXf& relit);
 
-// The PSNR in dB of `predicted` against `truth` over the pixels of `mask` and every channel, both
-// clamped to [0, peak] first (a fixed peak, e.g. 1 for images scaled to [0, 1] or 8-bit codes /
-// 255): 10 log10(peak^2 / MSE); infinite for equal images. The one PSNR of images the benchmarks
-// compare (bench/held_out_lights, bench/compact_form). Throws Error for images of different sizes
-// or channel counts, a mask of another size, an empty mask or a peak that is not positive.
-double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, double peak);
-
 // Relit values of `representation` under `light` at the observations' pixels, in their row order.
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,
                                       const Observations& observations,

@@ -92,29 +92,6 @@ TEST(EvaluationTest, PsnrIsPeakOverRootMeanSquareInDecibels) {
   EXPECT_TRUE(std::isinf(PeakSignalToNoiseRatio(observations, 0, relit)));
 }
 
-TEST(EvaluationTest, MaskedPsnrClampsToThePeakAndSkipsUnmaskedPixels) {
-  Image truth(3, 1, 2), predicted(3, 1, 2);
-  // Channel 0: errors 0.1 and (clamped) 0; channel 1: errors 0.1 and 0.3. Pixel 2 is masked out.
-  truth.plane(0)[0] = 0.5f;
-  predicted.plane(0)[0] = 0.6f;
-  truth.plane(0)[1] = 1.0f;
-  predicted.plane(0)[1] = 1.7f;  // both clamp to 1
-  truth.plane(1)[0] = 0.2f;
-  predicted.plane(1)[0] = 0.1f;
-  truth.plane(1)[1] = 0.3f;
-  predicted.plane(1)[1] = 0.0f;
-  truth.plane(0)[2] = 0.0f;
-  predicted.plane(0)[2] = 1.0f;
-  Mask mask(3, 1, true);
-  mask.Set(2, false);
-  // MSE = (0.01 + 0 + 0.01 + 0.09) / 4 = 0.0275, peak 1.
-  EXPECT_NEAR(MaskedPsnr(predicted, truth, mask, 1.0), 10.0 * std::log10(1.0 / 0.0275), 1e-5);
-  EXPECT_TRUE(std::isinf(MaskedPsnr(truth, truth, mask, 1.0)));
-  EXPECT_THROW(MaskedPsnr(predicted, Image(2, 1, 2), Mask(2, 1, true), 1.0), Error);
-  EXPECT_THROW(MaskedPsnr(predicted, truth, Mask(3, 1, false), 1.0), Error);
-  EXPECT_THROW(MaskedPsnr(predicted, truth, mask, 0.0), Error);
-}
-
 TEST(EvaluationTest, HoldingOutEveryKthImagePredictsThoseFromOneFit) {
   // The thesis grid's 36 lights, every 4th held out: images 0, 4, ..., 32 are predicted by a fit
   // of the other 27. A Lambertian sample is an exact 3-term model, so gradient predicts them as

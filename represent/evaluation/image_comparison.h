@@ -1,0 +1,38 @@
+#pragma once
+
+#include "core/image.h"
+
+namespace photomat {
+
+// How close a predicted image is to a captured one: the measures the held-out benchmarks report
+// (bench/held_out_lights, bench/compact_form). Each is taken over the pixels of `mask`, with both
+// images clamped to [0, peak] first: `peak` is the value shown as white (1 for images scaled to
+// [0, 1], e.g. 8-bit codes / 255), so the images compared are what a display of them would show.
+// Each throws Error for images of different sizes or channel counts, a mask of another size, an
+// empty mask or a peak that is not positive.
+
+// 10 log10(peak^2 / MSE) in dB over the mask and every channel, on the linear values; infinite
+// for equal images.
+double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, double peak);
+
+// The structural similarity (Wang, Bovik, Sheikh and Simoncelli 2004) of the images' sRGB
+// renderings: every value clamped, divided by `peak` and encoded with the sRGB curve; the SSIM
+// map of each channel with the paper's 11 x 11 Gaussian window (sigma 1.5, OpenCV's GaussianBlur,
+// borders mirrored as OpenCV's own SSIM in opencv_contrib's quality module does), K1 = 0.01,
+// K2 = 0.03 and dynamic range 1; its mean over the mask, then over the channels. 1 for equal
+// images. IMPLEMENTER CHOICE: pixels outside the mask are set to 0 in both images before the
+// windows are taken, so the background, which no fit models, neither helps nor hurts; windows at
+// the mask's border see the object's edge against the same black in both.
+double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak);
+
+// The mean CIEDE2000 colour difference over the mask (CieDe2000, core/colour.h) between the
+// images' renderings: every value clamped and divided by `peak`, read as linear Rec.709 / sRGB
+// RGB, converted to CIELAB under D65 (CieLabOfLinearRec709). The sRGB rendering's transfer curve
+// is undone by the conversion to XYZ, so the difference is that of the rendered colours
+// (IMPLEMENTER CHOICE: without an 8-bit quantisation of the rendering, which would floor every
+// difference at the code step). One-channel images are grey (R = G = B); images of another
+// channel count than 1 or 3 throw Error.
+double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Mask& mask,
+                            double peak);
+
+}  // namespace photomat

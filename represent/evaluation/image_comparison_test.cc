@@ -1,0 +1,172 @@
+#include "represent/evaluation/image_comparison.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/quality/qualityssim.hpp>
+#include <random>
+
+#include "core/colour.h"
+#include "core/error.h"
+
+namespace photomat {
+namespace {
+
+// A smooth RGB pattern with noise of `noise` (seeded), values in [0, 1].
+Image Pattern(int width, int height, double noise, unsigned seed) {
+  Image image(width, height, 3);
+  std::mt19937 random(seed);
+  std::normal_distribution<float> normal(0.0f, 1.0f);
+  for (int c = 0; c < 3; ++c) {
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        const double v = 0.5 + 0.3 * std::sin(0.2 * x + c) * std::cos(0.15 * y - c);
+        image.plane(c)[static_cast<std::size_t>(y) * width + x] =
+            static_cast<float>(std::clamp(v + noise * normal(random), 0.0, 1.0));
+      }
+    }
+  }
+  return image;
+}
+
+// The image as OpenCV's SSIM takes it: 8-bit-range floats (its constants are (K 255)^2) of the
+// sRGB-encoded values, channels interleaved.
+cv::Mat SrgbCodes(const Image& image) {
+  cv::Mat mat(image.height(), image.width(), CV_32FC3);
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * image.width() + x;
+      for (int c = 0; c < 3; ++c) {
+        mat.at<cv::Vec3f>(y, x)[c] = static_cast<float>(255.0 * LinearToSrgb(image.plane(c)[p]));
+      }
+    }
+  }
+  return mat;
+}
+
+TEST(ImageComparisonTest, MaskedPsnrClampsToThePeakAndSkipsUnmaskedPixels) {
+  Image truth(3, 1, 2), predicted(3, 1, 2);
+  // Channel 0: errors 0.1 and (clamped) 0; channel 1: errors 0.1 and 0.3. Pixel 2 is masked out.
+  truth.plane(0)[0] = 0.5f;
+  predicted.plane(0)[0] = 0.6f;
+  truth.plane(0)[1] = 1.0f;
+  predicted.plane(0)[1] = 1.7f;  // both clamp to 1
+  truth.plane(1)[0] = 0.2f;
+  predicted.plane(1)[0] = 0.1f;
+  truth.plane(1)[1] = 0.3f;
+  predicted.plane(1)[1] = 0.0f;
+  truth.plane(0)[2] = 0.0f;
+  predicted.plane(0)[2] = 1.0f;
+  Mask mask(3, 1, true);
+  mask.Set(2, false);
+  // MSE = (0.01 + 0 + 0.01 + 0.09) / 4 = 0.0275, peak 1.
+  EXPECT_NEAR(MaskedPsnr(predicted, truth, mask, 1.0), 10.0 * std::log10(1.0 / 0.0275), 1e-5);
+  EXPECT_TRUE(std::isinf(MaskedPsnr(truth, truth, mask, 1.0)));
+  EXPECT_THROW(MaskedPsnr(predicted, Image(2, 1, 2), Mask(2, 1, true), 1.0), Error);
+  EXPECT_THROW(MaskedPsnr(predicted, truth, Mask(3, 1, false), 1.0), Error);
+  EXPECT_THROW(MaskedPsnr(predicted, truth, mask, 0.0), Error);
+}
+
+TEST(ImageComparisonTest, SsimOfAWholeImageEqualsOpenCvsQualitySsim) {
+  const Image truth = Pattern(64, 48, 0.0, 1);
+  const Mask all(64, 48, true);
+  for (const double noise : {0.01, 0.05, 0.2}) {
+    const Image predicted = Pattern(64, 48, noise, 2);
+    const cv::Scalar reference =
+        cv::quality::QualitySSIM::compute(SrgbCodes(truth), SrgbCodes(predicted), cv::noArray());
+    const double expected = (reference[0] + reference[1] + reference[2]) / 3.0;
+    // OpenCV computes in float (its input here is float), photomat in double: measured
+    // differences at most 2.3e-9; bound 1e-8.
+    EXPECT_NEAR(MaskedSsim(predicted, truth, all, 1.0), expected, 1e-8) << noise;
+    EXPECT_LT(MaskedSsim(predicted, truth, all, 1.0), 1.0);
+  }
+  EXPECT_NEAR(MaskedSsim(truth, truth, all, 1.0), 1.0, 1e-12);
+}
+
+TEST(ImageComparisonTest, SsimOfConstantImagesIsTheLuminanceTerm) {
+  // No variance: SSIM = (2 a b + C1) / (a^2 + b^2 + C1) of the sRGB encodings a and b.
+  Image predicted(16, 16, 1), truth(16, 16, 1);
+  for (float& v : predicted.values()) v = 0.2f;
+  for (float& v : truth.values()) v = 0.6f;
+  const double a = LinearToSrgb(double{0.2f}), b = LinearToSrgb(double{0.6f}), c1 = 1e-4;
+  EXPECT_NEAR(MaskedSsim(predicted, truth, Mask(16, 16, true), 1.0),
+              (2.0 * a * b + c1) / (a * a + b * b + c1), 1e-9);
+  // The peak scales the values: 0.4 of peak 2 is 0.2 of peak 1; above the peak clamps.
+  for (float& v : predicted.values()) v = 0.4f;
+  for (float& v : truth.values()) v = 1.2f;
+  EXPECT_NEAR(MaskedSsim(predicted, truth, Mask(16, 16, true), 2.0),
+              (2.0 * a * b + c1) / (a * a + b * b + c1), 1e-9);
+  for (float& v : predicted.values()) v = 7.0f;
+  for (float& v : truth.values()) v = 1.0f;
+  EXPECT_NEAR(MaskedSsim(predicted, truth, Mask(16, 16, true), 1.0), 1.0, 1e-12);
+}
+
+TEST(ImageComparisonTest, SsimIgnoresWhatLiesOutsideTheMaskAndFallsWithNoise) {
+  const Image truth = Pattern(40, 40, 0.0, 1);
+  Mask mask(40, 40, false);
+  for (int y = 10; y < 30; ++y) {
+    for (int x = 10; x < 30; ++x) mask.Set(x, y, true);
+  }
+  Image predicted = truth;
+  const double equal = MaskedSsim(predicted, truth, mask, 1.0);
+  EXPECT_NEAR(equal, 1.0, 1e-12);
+  for (int c = 0; c < 3; ++c) predicted.plane(c)[0] = 0.9f;  // outside the mask
+  EXPECT_EQ(MaskedSsim(predicted, truth, mask, 1.0), equal);
+  double previous = 1.0;
+  for (const double noise : {0.01, 0.03, 0.1, 0.3}) {
+    const double ssim = MaskedSsim(Pattern(40, 40, noise, 3), truth, mask, 1.0);
+    EXPECT_LT(ssim, previous) << noise;
+    previous = ssim;
+  }
+  EXPECT_THROW(MaskedSsim(predicted, truth, Mask(40, 40, false), 1.0), Error);
+  EXPECT_THROW(MaskedSsim(predicted, Image(40, 39, 3), mask, 1.0), Error);
+}
+
+TEST(ImageComparisonTest, DeltaE2000OfWhiteAgainstBlackIsOneHundred) {
+  // L* 100 against 0, a* = b* = 0: CIEDE2000 is the lightness difference, 100 (the ICC's HDR
+  // working group's reference pair). Two of three pixels so: a mean of 200 / 3; one of two: 50.
+  Image predicted(2, 2, 3), truth(2, 2, 3);
+  for (int c = 0; c < 3; ++c) {
+    predicted.plane(c)[0] = 1.0f;
+    predicted.plane(c)[1] = 3.0f;  // clamps to white
+    predicted.plane(c)[2] = 0.25f;
+    truth.plane(c)[2] = 0.25f;
+    predicted.plane(c)[3] = 1.0f;  // outside the mask
+  }
+  Mask mask(2, 2, true);
+  mask.Set(3, false);
+  EXPECT_NEAR(MaskedMeanDeltaE2000(predicted, truth, mask, 1.0), 200.0 / 3.0, 1e-9);
+  Mask two(2, 2, false);
+  two.Set(0, true);
+  two.Set(2, true);
+  EXPECT_NEAR(MaskedMeanDeltaE2000(predicted, truth, two, 1.0), 50.0, 1e-9);
+  EXPECT_EQ(MaskedMeanDeltaE2000(truth, truth, mask, 1.0), 0.0);
+}
+
+TEST(ImageComparisonTest, DeltaE2000IsOfTheDisplayedColoursAndGreyImagesAreNeutral) {
+  Image predicted(1, 1, 3), truth(1, 1, 3);
+  const float rgb[3] = {0.8f, 0.3f, 0.1f}, other[3] = {0.7f, 0.35f, 0.12f};
+  for (int c = 0; c < 3; ++c) {
+    predicted.plane(c)[0] = 2.0f * rgb[c];  // peak 2
+    truth.plane(c)[0] = 2.0f * other[c];
+  }
+  EXPECT_NEAR(MaskedMeanDeltaE2000(predicted, truth, Mask(1, 1, true), 2.0),
+              CieDe2000(CieLabOfLinearRec709(rgb[0], rgb[1], rgb[2]),
+                        CieLabOfLinearRec709(other[0], other[1], other[2])),
+              1e-6);
+  // A grey image is R = G = B: its difference is the three-channel one of the same values.
+  Image grey_a(1, 1, 1), grey_b(1, 1, 1), rgb_a(1, 1, 3), rgb_b(1, 1, 3);
+  grey_a.plane(0)[0] = 0.3f;
+  grey_b.plane(0)[0] = 0.5f;
+  for (int c = 0; c < 3; ++c) {
+    rgb_a.plane(c)[0] = 0.3f;
+    rgb_b.plane(c)[0] = 0.5f;
+  }
+  EXPECT_DOUBLE_EQ(MaskedMeanDeltaE2000(grey_a, grey_b, Mask(1, 1, true), 1.0),
+                   MaskedMeanDeltaE2000(rgb_a, rgb_b, Mask(1, 1, true), 1.0));
+  EXPECT_THROW(MaskedMeanDeltaE2000(Image(1, 1, 2), Image(1, 1, 2), Mask(1, 1, true), 1.0), Error);
+}
+
+}  // namespace
+}  // namespace photomat
