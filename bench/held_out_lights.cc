@@ -27,7 +27,8 @@
 // training lamps' divided out and the held-out lamps' predicted from them
 // (PrintPredictedBrightnessTable).
 //
-//   held_out_lights [SET ...] [--every K[,K...]] [--methods ptm,hsh9,rbf,bilinear,rbf:-1,...]
+//   held_out_lights [SET|synthetic:phong|synthetic:ggx ...] [--every K[,K...]]
+//                   [--methods ptm,hsh9,rbf,bilinear,neural,rbf:-1,...]
 //                   [--float] [--relight-cli PATH|none] [--planes N] [--grid-size G]
 //                   [--rbf-width DEG] [--rbf-regularisation R] [--rbf-tail affine|quadratic]
 //                   [--leave-out one|block|edge|side] [--calibrated]
