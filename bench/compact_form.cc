@@ -121,12 +121,6 @@ RelightWebBasis BasisNamed(const std::string& name) {
 
 std::string FloatMethod(const std::string& basis) { return basis == "hsh" ? "hsh9" : basis; }
 
-std::string RelightCliArguments(const std::string& basis) {
-  if (basis == "ptm") return "-b ptm -p 18";
-  if (basis == "hsh") return "-b hsh -p 27";
-  return fmt::format("-b {} -p 9", basis);
-}
-
 std::uintmax_t FolderBytes(const fs::path& folder, bool materials) {
   std::uintmax_t bytes = 0;
   for (const auto& entry : fs::directory_iterator(folder)) {
@@ -134,12 +128,6 @@ std::uintmax_t FolderBytes(const fs::path& folder, bool materials) {
     const bool web = name == "info.json" || (name.starts_with("plane_") && name.ends_with(".jpg"));
     if (materials ? name == "materials.png" : web) bytes += entry.file_size();
   }
-  return bytes;
-}
-
-std::uintmax_t AllBytes(const fs::path& folder) {
-  std::uintmax_t bytes = 0;
-  for (const auto& entry : fs::directory_iterator(folder)) bytes += entry.file_size();
   return bytes;
 }
 
@@ -240,7 +228,7 @@ int Run(int argc, char** argv) {
     WriteCompactStack(compact_folder, float_stack, arguments.compact);
     const double compact_db =
         Psnr(ReadCompactStack(compact_folder).representation, held_out, false);
-    const auto compact_bytes = AllBytes(compact_folder);
+    const auto compact_bytes = StoredBytes(compact_folder);
     // The float stack refitted in sRGB-encoded values (what ptm/hsh folders hold), before any
     // quantisation: how much of the loss is the change of domain.
     std::string refit = "-";

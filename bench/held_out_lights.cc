@@ -359,6 +359,7 @@ Scores MeanScores(const Representation& r, const PhotometricSet& set,
                   const std::vector<int>& lights, double peak,
                   const std::vector<std::vector<float>>& scale = {}) {
   Scores total;
+  const Mask mask = set.MaskOrAll();
   for (int i : lights) {
     Image predicted = r.Relight(set.light(i));
     if (!scale.empty()) {
@@ -366,9 +367,9 @@ Scores MeanScores(const Representation& r, const PhotometricSet& set,
         for (float& v : predicted.plane(c)) v *= scale[i][static_cast<std::size_t>(c)];
       }
     }
-    total.psnr += MaskedPsnr(predicted, set.images()[i], set.MaskOrAll(), peak);
-    total.ssim += MaskedSsim(predicted, set.images()[i], set.MaskOrAll(), peak);
-    total.delta_e += MaskedMeanDeltaE2000(predicted, set.images()[i], set.MaskOrAll(), peak);
+    total.psnr += MaskedPsnr(predicted, set.images()[i], mask, peak);
+    total.ssim += MaskedSsim(predicted, set.images()[i], mask, peak);
+    total.delta_e += MaskedMeanDeltaE2000(predicted, set.images()[i], mask, peak);
   }
   const auto n = static_cast<double>(lights.size());
   return {total.psnr / n, total.ssim / n, total.delta_e / n};
@@ -388,14 +389,19 @@ std::string LastLine(const fs::path& log) {
   return last;
 }
 
-// The bytes of a file, or of every file in a folder.
-std::uintmax_t StoredBytes(const fs::path& path) {
-  if (!fs::is_directory(path)) return fs::file_size(path);
-  std::uintmax_t bytes = 0;
-  for (const auto& entry : fs::recursive_directory_iterator(path)) {
-    if (entry.is_regular_file()) bytes += entry.file_size();
+// A command run with its output in `log`: its wall time, or why it failed (the command and the
+// last line it wrote).
+struct CommandRun {
+  double seconds = 0.0;
+  std::string failure;  // empty: it succeeded
+};
+
+CommandRun RunLogged(const std::string& command, const fs::path& log) {
+  const auto start = std::chrono::steady_clock::now();
+  if (std::system(fmt::format("{} > {} 2>&1", command, log.string()).c_str()) != 0) {
+    return {0.0, fmt::format("{}: {}", command, LastLine(log))};
   }
-  return bytes;
+  return {SecondsSince(start), ""};
 }
 
 // The size of `r` as `photomat fit` stores it: its float stack, rle-compressed as fit's default
@@ -408,7 +414,7 @@ std::uintmax_t StackBytes(const Representation& r, const fs::path& work) {
   return bytes;
 }
 
-// relight-cli's four bases with its defaults (planes as bench/compact_form), `-I srgb`.
+// relight-cli's four bases (RelightCliArguments), `-I srgb`.
 std::vector<Row> RelightCliRows(const fs::path& relight_cli, const PhotometricSet& set,
                                 const fs::path& jpegs, const HoldOut& hold_out,
                                 const fs::path& work,
@@ -422,29 +428,25 @@ std::vector<Row> RelightCliRows(const fs::path& relight_cli, const PhotometricSe
   }
   WriteLightPositions(training / "lights.lp", set, hold_out.selected);
   std::vector<Row> rows;
-  for (const auto& [basis, arguments] :
-       std::vector<std::pair<std::string, std::string>>{{"ptm", "-b ptm -p 18"},
-                                                        {"hsh", "-b hsh -p 27"},
-                                                        {"rbf", "-b rbf -p 9"},
-                                                        {"bilinear", "-b bilinear -p 9"}}) {
+  for (const std::string basis : {"ptm", "hsh", "rbf", "bilinear"}) {
+    const std::string arguments = RelightCliArguments(basis);
     const fs::path folder = work / ("relight-" + basis);
     fs::remove_all(folder);
-    const std::string command =
-        fmt::format("{} {} -I srgb {} {} > {} 2>&1", relight_cli.string(), arguments,
-                    training.string(), folder.string(), (work / "relight-cli.log").string());
-    const auto start = std::chrono::steady_clock::now();
-    if (std::system(command.c_str()) != 0) {
-      Row row{"relight-cli", fmt::format("{} ({})", basis, arguments), 0, {}, {}, {}};
-      row.failure = fmt::format("{}: {}", command, LastLine(work / "relight-cli.log"));
+    const CommandRun run = RunLogged(fmt::format("{} {} -I srgb {} {}", relight_cli.string(),
+                                                 arguments, training.string(), folder.string()),
+                                     work / "relight-cli.log");
+    Row row{"relight-cli", fmt::format("{} ({})", basis, arguments), 0, {}, {}, {}};
+    if (!run.failure.empty()) {
+      row.failure = run.failure;
       rows.push_back(std::move(row));
       continue;
     }
-    const double seconds = SecondsSince(start);
     const LoadedStack stack = LoadStackFile(folder);
-    rows.push_back({"relight-cli", fmt::format("{} ({})", basis, arguments),
-                    stack.representation.maps().channels(),
-                    MeanScores(stack.representation, set, hold_out.held_out, 1.0, scale),
-                    StoredBytes(folder), seconds});
+    row.planes = stack.representation.maps().channels();
+    row.scores = MeanScores(stack.representation, set, hold_out.held_out, 1.0, scale);
+    row.bytes = StoredBytes(folder);
+    row.seconds = run.seconds;
+    rows.push_back(std::move(row));
   }
   return rows;
 }
@@ -466,17 +468,14 @@ Row NeuralRow(const PhotometricSet& set, const HoldOut& hold_out, double peak,
   const char* binary = std::getenv("PHOTOMAT_BINARY");
   const fs::path photomat =
       binary ? fs::path(binary) : fs::read_symlink("/proc/self/exe").parent_path() / "photomat";
-  const fs::path log = work / "neural.log";
-  const std::string command =
-      fmt::format("{} fit {} --method neural --out {} > {} 2>&1", photomat.string(),
-                  training.string(), out.string(), log.string());
-  const auto start = std::chrono::steady_clock::now();
-  if (std::system(command.c_str()) != 0) {
+  const CommandRun run = RunLogged(fmt::format("{} fit {} --method neural --out {}",
+                                               photomat.string(), training.string(), out.string()),
+                                   work / "neural.log");
+  if (!run.failure.empty()) {
     Row row{"photomat", "neural", 0, {}, {}, {}};
-    row.failure = fmt::format("{}: {}", command, LastLine(log));
+    row.failure = run.failure;
     return row;
   }
-  const double seconds = SecondsSince(start);
   const fs::path stack = out / "neural.exr";
   const LoadedStack loaded = LoadStackFile(stack);
   const nlohmann::json& report = loaded.representation.details()["neural_training"];
@@ -486,7 +485,7 @@ Row NeuralRow(const PhotometricSet& set, const HoldOut& hold_out, double peak,
           loaded.representation.maps().channels(),
           MeanScores(loaded.representation, set, hold_out.held_out, peak),
           StoredBytes(stack),
-          seconds};
+          run.seconds};
   fs::remove_all(training);
   fs::remove_all(out);
   return row;
