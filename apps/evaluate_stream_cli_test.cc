@@ -179,7 +179,8 @@ TEST(EvaluateStreamCliTest, UnderAnAddressSpaceLimitPredictionStreamsByItselfAnd
   const TempDir dir;
   const std::string lights =
       testing::WriteLargeLambertianCapture(dir / "capture", 1536, 1536).string();
-  const std::size_t limit = std::size_t{1000} << 20;
+  // 1000 MiB where the program starts in 453 (testing::StartupAddressSpace).
+  const std::size_t limit = testing::StartupAddressSpace("evaluate") + (std::size_t{547} << 20);
   const std::string common = " --methods gradient,ptm --hold-out-every 4 --json ";
   const RunResult limited =
       RunPhotomat("evaluate " + lights + common + (dir / "limited.json").string(), {limit});

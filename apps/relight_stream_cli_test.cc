@@ -53,15 +53,22 @@ fs::path WriteLargePtmStack(const TempDir& dir, int side) {
   return path;
 }
 
+// The address-space limit of the tests below: 900 MiB where the program starts in 453
+// (testing::StartupAddressSpace), so 447 MiB of room beyond it, which the large stack read
+// whole, its interleaved copy and the threads do not fit in.
+std::size_t LimitBelowTheWholeStack() {
+  return testing::StartupAddressSpace("relight") + (std::size_t{447} << 20);
+}
+
 // Under a hard address-space limit that the whole stack does not fit in beside the program (the
-// stack's 170 MB as read and its interleaved copy, plus about 0.65 GB of libraries, against 900
-// MB), relighting streams in bands with the default budget (half the room the limit leaves, less
-// the threads' stacks and arenas) and gives the in-memory relighting's values bit for bit; the
+// stack's 170 MB as read and its interleaved copy, against the room LimitBelowTheWholeStack
+// leaves), relighting streams in bands with the default budget (half the room the limit leaves,
+// less the threads' stacks and arenas) and gives the in-memory relighting's values bit for bit; the
 // in-memory export of the same stack, which loads it whole, runs out of memory under the limit.
 TEST(RelightStreamCliTest, RelightUnderAnAddressSpaceLimitBelowTheWholeStackMatches) {
   const TempDir dir;
   const fs::path stack = WriteLargePtmStack(dir, 1536);
-  const std::size_t limit = std::size_t{900} << 20;
+  const std::size_t limit = LimitBelowTheWholeStack();
   const RunResult relit = RunPhotomat(
       "relight " + stack.string() + " --light 45,30 --out " + (dir / "relit.exr").string(),
       {limit});
@@ -130,7 +137,7 @@ TEST(RelightStreamCliTest, AViewerThatWouldNotFitTheBudgetInMemoryIsTiled) {
 TEST(RelightStreamCliTest, ViewerTilesUnderAnAddressSpaceLimitBelowTheWholeStackMatch) {
   const TempDir dir;
   const fs::path stack = WriteLargePtmStack(dir, 1536);
-  const std::size_t limit = std::size_t{900} << 20;
+  const std::size_t limit = LimitBelowTheWholeStack();
   // The limit binds: the whole-texture viewer (--viewer-tiles never) loads the stack whole and
   // runs out of memory.
   const RunResult whole = RunPhotomat("export " + stack.string() + " --viewer " +

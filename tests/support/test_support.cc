@@ -135,4 +135,22 @@ RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
 
+std::size_t StartupAddressSpace(const std::string& command) {
+  constexpr std::size_t kMiB = std::size_t{1} << 20;
+  const auto starts = [&](std::size_t bytes) {
+    return RunPhotomat(command + " --help", {bytes}).exit_code == 0;
+  };
+  std::size_t fails = 64 * kMiB, runs = 8192 * kMiB;
+  if (!starts(runs)) {
+    ADD_FAILURE() << "`photomat " << command << " --help` does not start under 8 GiB";
+    return runs;
+  }
+  while (runs - fails > 4 * kMiB) {
+    const std::size_t middle = fails + (runs - fails) / 2;
+    (starts(middle) ? runs : fails) = middle;
+  }
+  std::printf("photomat %s starts in %zu MiB of address space\n", command.c_str(), runs / kMiB);
+  return runs;
+}
+
 }  // namespace photomat::testing

@@ -85,6 +85,15 @@ struct RunLimits {
 };
 RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits);
 
+// The address space `photomat COMMAND --help` needs (the program before it reads anything: its
+// libraries, their static buffers, the threads they start when loaded), found by bisection on
+// RLIMIT_AS to 4 MiB. Tests under an address-space limit set it this much plus the room their
+// work needs, so that the room, not the machine's libraries, is what they test: 453 MiB for every
+// command with the BLAS scripts/debian-packages.txt brings (ATLAS), about 0.3 GiB more where
+// OpenBLAS is the system's BLAS (README "Streamed fitting"). A failed bisection (no limit up to
+// 8 GiB lets it start) is a test failure.
+std::size_t StartupAddressSpace(const std::string& command);
+
 // `photomat generate --out FOLDER OPTIONS` (a synthetic capture), expected to succeed (a failure
 // is a test failure with photomat's output). Returns FOLDER as a string for command lines.
 std::string GenerateCapture(const std::filesystem::path& folder, const std::string& options);
