@@ -98,6 +98,8 @@ RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits) {
   // Everything the child needs is made before fork: after it, only async-signal-safe calls.
   const std::string command = PhotomatExecutable().string() + " " + arguments;
   const rlimit address_space{limits.address_space_bytes, limits.address_space_bytes};
+  const auto cpu_seconds = static_cast<rlim_t>(limits.cpu_seconds);
+  const rlimit cpu_time{cpu_seconds, cpu_seconds};
   std::array<int, 2> output_pipe{};
   if (pipe(output_pipe.data()) != 0) {
     ADD_FAILURE() << "cannot make a pipe for `" << command << "`: " << std::strerror(errno);
@@ -116,6 +118,7 @@ RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits) {
     close(output_pipe[0]);
     close(output_pipe[1]);
     if (limits.address_space_bytes > 0) setrlimit(RLIMIT_AS, &address_space);
+    if (limits.cpu_seconds > 0) setrlimit(RLIMIT_CPU, &cpu_time);
     execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
@@ -138,7 +141,7 @@ RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits) {
 std::size_t StartupAddressSpace(const std::string& command) {
   constexpr std::size_t kMiB = std::size_t{1} << 20;
   const auto starts = [&](std::size_t bytes) {
-    return RunPhotomat(command + " --help", {bytes}).exit_code == 0;
+    return RunPhotomat(command + " --help", {bytes, 10}).exit_code == 0;
   };
   std::size_t fails = 64 * kMiB, runs = 8192 * kMiB;
   if (!starts(runs)) {

@@ -82,6 +82,9 @@ struct RunLimits {
   // > 0: a hard limit on the child's address space (setrlimit RLIMIT_AS, soft and hard alike,
   // set in the child before photomat starts): allocations beyond it fail.
   std::size_t address_space_bytes = 0;
+  // > 0: a limit on the child's CPU time (RLIMIT_CPU, soft and hard alike): past it the kernel
+  // stops the child (SIGXCPU, then SIGKILL), which RunResult reports as exit code -1.
+  int cpu_seconds = 0;
 };
 RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits);
 
@@ -90,8 +93,9 @@ RunResult RunPhotomat(const std::string& arguments, const RunLimits& limits);
 // RLIMIT_AS to 4 MiB. Tests under an address-space limit set it this much plus the room their
 // work needs, so that the room, not the machine's libraries, is what they test: 453 MiB for every
 // command with the BLAS scripts/debian-packages.txt brings (ATLAS), about 0.3 GiB more where
-// OpenBLAS is the system's BLAS (README "Streamed fitting"). A failed bisection (no limit up to
-// 8 GiB lets it start) is a test failure.
+// OpenBLAS is the system's BLAS (README "Streamed fitting"). Each probe may use 10 s of CPU:
+// under too low a limit OpenBLAS retries its failed buffer allocation forever. A failed bisection
+// (no limit up to 8 GiB lets it start) is a test failure.
 std::size_t StartupAddressSpace(const std::string& command);
 
 // `photomat generate --out FOLDER OPTIONS` (a synthetic capture), expected to succeed (a failure
