@@ -22,7 +22,9 @@ double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, 
 // K2 = 0.03 and dynamic range 1; its mean over the mask, then over the channels. 1 for equal
 // images. IMPLEMENTER CHOICE: pixels outside the mask are set to 0 in both images before the
 // windows are taken, so the background, which no fit models, neither helps nor hurts; windows at
-// the mask's border see the object's edge against the same black in both.
+// the mask's border see the object's edge against the same black in both. The map is computed
+// only where the mask's windows reach (its bounding box grown by the window's radius), which
+// gives the whole map's values there.
 double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak);
 
 // The mean CIEDE2000 colour difference over the mask (CieDe2000, core/colour.h) between the

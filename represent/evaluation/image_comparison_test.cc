@@ -84,6 +84,44 @@ TEST(ImageComparisonTest, SsimOfAWholeImageEqualsOpenCvsQualitySsim) {
   EXPECT_NEAR(MaskedSsim(truth, truth, all, 1.0), 1.0, 1e-12);
 }
 
+TEST(ImageComparisonTest, MaskedSsimIsTheWholeImagesMapAveragedOverTheMask) {
+  // MaskedSsim computes the map only where the mask's windows reach; the reference is OpenCV's
+  // map of the whole images (0 outside the mask, as the IMPLEMENTER CHOICE says) averaged over
+  // the mask. Masks inside the image, at its corners and across it.
+  const Image truth = Pattern(64, 48, 0.0, 1);
+  const Image predicted = Pattern(64, 48, 0.05, 2);
+  struct Box {
+    int left, top, right, bottom;  // right and bottom excluded
+  };
+  for (const Box box : {Box{20, 15, 40, 30}, Box{0, 0, 30, 20}, Box{40, 30, 64, 48},
+                        Box{0, 10, 64, 20}, Box{31, 3, 32, 4}}) {
+    Mask mask(64, 48, false);
+    Image truth_in_mask(64, 48, 3), predicted_in_mask(64, 48, 3);
+    for (int y = box.top; y < box.bottom; ++y) {
+      for (int x = box.left; x < box.right; ++x) {
+        mask.Set(x, y, true);
+        for (int c = 0; c < 3; ++c) {
+          truth_in_mask.at(x, y, c) = truth.at(x, y, c);
+          predicted_in_mask.at(x, y, c) = predicted.at(x, y, c);
+        }
+      }
+    }
+    cv::Mat map;
+    cv::quality::QualitySSIM::compute(SrgbCodes(truth_in_mask), SrgbCodes(predicted_in_mask), map);
+    double sum = 0.0;
+    for (int y = box.top; y < box.bottom; ++y) {
+      for (int x = box.left; x < box.right; ++x) {
+        const cv::Vec3d v = map.at<cv::Vec3d>(y, x);  // OpenCV's map is in double
+        sum += (v[0] + v[1] + v[2]) / 3.0;
+      }
+    }
+    const double expected = sum / static_cast<double>(mask.CountSet());
+    // As above: OpenCV in float, photomat in double.
+    EXPECT_NEAR(MaskedSsim(predicted, truth, mask, 1.0), expected, 1e-8)
+        << box.left << "," << box.top;
+  }
+}
+
 TEST(ImageComparisonTest, SsimOfConstantImagesIsTheLuminanceTerm) {
   // No variance: SSIM = (2 a b + C1) / (a^2 + b^2 + C1) of the sRGB encodings a and b.
   Image predicted(16, 16, 1), truth(16, 16, 1);
