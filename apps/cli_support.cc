@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <optional>
 
 #include "core/colour.h"
 #include "core/error.h"
@@ -136,16 +137,30 @@ void CreateFolder(const std::filesystem::path& folder) {
 }
 
 std::string FormatEvaluationTable(const std::vector<MethodEvaluation>& evaluations) {
-  const bool normals = std::any_of(evaluations.begin(), evaluations.end(),
-                                   [](const auto& e) { return e.normals.has_value(); });
+  const auto any = [&](auto has) {
+    return std::any_of(evaluations.begin(), evaluations.end(), has);
+  };
+  const bool normals = any([](const auto& e) { return e.normals.has_value(); });
+  const bool psnr = any([](const auto& e) { return e.psnr_prediction.has_value(); });
+  const bool ssim = any([](const auto& e) { return e.ssim_prediction.has_value(); });
+  const bool colour = any([](const auto& e) { return e.delta_e2000_prediction.has_value(); });
+  const auto cell = [](const std::optional<double>& value, int width, int decimals) {
+    return fmt::format(" {:>{}}", value ? fmt::format("{:.{}f}", *value, decimals) : "-", width);
+  };
   std::string table =
       fmt::format("{:<10} {:>14} {:>14}", "method", "eta_reconstr.", "eta_predict.");
+  if (psnr) table += fmt::format(" {:>8}", "psnr_dB");
+  if (ssim) table += fmt::format(" {:>7}", "ssim");
+  if (colour) table += fmt::format(" {:>7}", "dE2000");
   if (normals)
     table += fmt::format(" {:>10} {:>10} {:>7} {:>7}", "mean_deg", "median_deg", "<5deg", "<10deg");
   table += "\n";
   for (const MethodEvaluation& e : evaluations) {
-    table += fmt::format("{:<10} {:>14.6f} {:>14}", e.method.Name(), e.eta_reconstruction,
-                         e.eta_prediction ? fmt::format("{:.6f}", *e.eta_prediction) : "-");
+    table += fmt::format("{:<10} {:>14.6f}{}", e.method.Name(), e.eta_reconstruction,
+                         cell(e.eta_prediction, 14, 6));
+    if (psnr) table += cell(e.psnr_prediction, 8, 2);
+    if (ssim) table += cell(e.ssim_prediction, 7, 4);
+    if (colour) table += cell(e.delta_e2000_prediction, 7, 3);
     if (e.normals) {
       table += fmt::format(" {:>10.3f} {:>10.3f} {:>6.1f}% {:>6.1f}%", e.normals->mean_degrees,
                            e.normals->median_degrees, 100 * e.normals->fraction_below_5_degrees,

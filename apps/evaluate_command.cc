@@ -214,16 +214,16 @@ EvaluationReportOptions ReportOptions(const std::filesystem::path& input,
   return report;
 }
 
-// Prints `heading` and the table of `results` (and, with `compare`, the ranking of the methods
-// over their predicted images), and writes them to `json` unless it is empty. Returns the
-// ranking.
+// Prints `heading` and the table of `results` (and, with `ranking`, the ranking of the methods
+// over their predicted images by that measure), and writes them to `json` unless it is empty.
+// Returns the ranking.
 std::optional<MethodComparison> PrintAndSaveEvaluations(
-    const std::string& heading, const std::vector<MethodEvaluation>& results, bool compare,
-    const std::filesystem::path& json) {
+    const std::string& heading, const std::vector<MethodEvaluation>& results,
+    std::optional<RankingMeasure> ranking, const std::filesystem::path& json) {
   fmt::print("{}\n{}", heading, FormatEvaluationTable(results));
   std::optional<MethodComparison> comparison;
-  if (compare) {
-    comparison = CompareMethods(results);
+  if (ranking) {
+    comparison = CompareMethods(results, *ranking);
     fmt::print("\n{}", FormatComparisonTable(*comparison));
   }
   if (!json.empty()) {
@@ -246,6 +246,8 @@ void AddEvaluateCommand(CLI::App& app) {
     std::string report_images;
     bool no_prediction = false;
     bool compare = false;
+    std::string rank_by = "eta";
+    bool appearance = false;
     int hold_out_every = 0;
     bool literal_rms = false;
     bool raw_intensities = false;
@@ -285,6 +287,15 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Rank the methods over the predicted images: Friedman test, Kendall's W and "
                     "Nemenyi pairwise p-values (printed, in --json as \"comparison\", and in the "
                     "--report)");
+  command
+      ->add_option("--rank-by", options->rank_by,
+                   "With --compare: rank by eta (e_k/sigma_k, the thesis's; PSNR ranks alike), "
+                   "ssim or delta-e2000 (of the sRGB renderings; in memory only)")
+      ->capture_default_str();
+  command->add_flag("--appearance", options->appearance,
+                    "Also measure the SSIM and colour difference of leave-one-out predictions "
+                    "(of held-out ones they always are; in memory only; leave-one-out then "
+                    "takes about twice as long)");
   command->add_flag("--literal-rms", options->literal_rms,
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
@@ -317,9 +328,9 @@ void AddEvaluateCommand(CLI::App& app) {
   command->add_flag("--stream", options->stream,
                     "Fit the methods to INPUT in bands into scratch stacks beside --json or "
                     "--report (or in the current folder) and evaluate those streamed, and fit "
-                    "the prediction's folds band by band: the same numbers in memory for a "
-                    "band, whatever the set's size; a --report's pictures are drawn band by "
-                    "band");
+                    "the prediction's folds band by band: the same eta and PSNR in memory for "
+                    "a band, whatever the set's size (not the SSIM and colour difference, which "
+                    "need whole images); a --report's pictures are drawn band by band");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -365,15 +376,38 @@ void AddEvaluateCommand(CLI::App& app) {
           "--compare ranks two or more methods by their prediction errors: it needs --methods "
           "with at least two methods and does not go with --no-prediction");
     }
+    const RankingMeasure measure = ParseRankingMeasure(options->rank_by);
+    if (!options->compare && measure != RankingMeasure::kEta) {
+      throw Error("--rank-by chooses the measure of --compare's ranking: add --compare");
+    }
+    std::optional<RankingMeasure> ranking;
+    if (options->compare) ranking = measure;
     const std::vector<int> report_images = ParseIndexList(options->report_images);
     StreamedSet set = OpenStreamedSet(options->input, load);
     CheckReportImages(report_images, set.size());
+    if (measure == RankingMeasure::kDeltaE2000 && set.channels() != 1 && set.channels() != 3) {
+      throw Error(set.source(), fmt::format("--rank-by delta-e2000 needs grey or RGB images, "
+                                            "these have {} channels",
+                                            set.channels()));
+    }
     const std::size_t budget = options->memory_mb > 0
                                    ? options->memory_mb << 20
                                    : DefaultMemoryBudget(kMinimumEvaluationMemory);
     // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
     // held whole would not fit the budget.
     if (options->stream || HoldingSetExceeds(set, budget)) {
+      // Checked before the evaluation, which can take hours at this size.
+      if (measure != RankingMeasure::kEta || options->appearance) {
+        throw Error(
+            set.source(),
+            fmt::format("{}: the streamed evaluation ({}) measures eta and PSNR only; "
+                        "evaluate in memory (--memory MB) for the SSIM and colour "
+                        "difference",
+                        options->appearance
+                            ? std::string("--appearance")
+                            : fmt::format("--rank-by {}", RankingMeasureName(measure)),
+                        options->stream ? "--stream" : "the set exceeds the memory budget"));
+      }
       StreamedEvaluationOptions streamed;
       streamed.memory_bytes = options->memory_mb << 20;
       streamed.literal_thesis_rms = options->literal_rms;
@@ -400,7 +434,7 @@ void AddEvaluateCommand(CLI::App& app) {
                 streamed.ground_truth_normals
                     ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
                     : ""),
-            results, options->compare, options->json);
+            results, ranking, options->json);
         if (options->report.empty()) return;
         TerminalProgressBar bar;
         StreamedReportOptions bands;
@@ -437,6 +471,10 @@ void AddEvaluateCommand(CLI::App& app) {
     evaluation.prediction = !options->no_prediction;
     evaluation.literal_thesis_rms = options->literal_rms;
     evaluation.hold_out_every = options->hold_out_every;
+    // IMPLEMENTER CHOICE: the SSIM and colour difference where few images are predicted (held
+    // out), where asked for, and where the ranking needs them (EvaluationOptions::appearance).
+    evaluation.appearance =
+        options->hold_out_every > 0 || options->appearance || measure != RankingMeasure::kEta;
     evaluation.progress = &bar;
     if (options->robust) {
       evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
@@ -453,7 +491,7 @@ void AddEvaluateCommand(CLI::App& app) {
     const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
         fmt::format("{} images, {} pixels{}", loaded.set.size(), observations.pixels(),
                     truth ? fmt::format(", ground truth {}", truth_path->string()) : ""),
-        results, options->compare, options->json);
+        results, ranking, options->json);
     if (!options->report.empty()) {
       WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
                             ReportOptions(options->input, report_images, evaluation.robust,

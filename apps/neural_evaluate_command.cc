@@ -59,20 +59,16 @@ void AddNeuralEvaluateCommand(CLI::App& app) {
       evaluation.reconstruction_per_image.push_back(NormalisedRmsError(
           observations, i, RelightObservedPixels(r, observations, set.lights()[i])));
     }
+    std::vector<PredictionScores> scores;
     for (int i : evaluation.prediction_images) {
-      const Eigen::VectorXf relit = RelightObservedPixels(r, observations, set.lights()[i]);
-      evaluation.prediction_per_image.push_back(NormalisedRmsError(observations, i, relit));
-      evaluation.psnr_prediction_per_image.push_back(
-          PeakSignalToNoiseRatio(observations, i, relit));
+      scores.push_back(ScorePrediction(observations, i,
+                                       RelightObservedPixels(r, observations, set.lights()[i])));
     }
-    auto mean = [](const std::vector<double>& values) {
-      double sum = 0.0;
-      for (double v : values) sum += v;
-      return sum / static_cast<double>(values.size());
-    };
-    evaluation.eta_reconstruction = mean(evaluation.reconstruction_per_image);
-    evaluation.eta_prediction = mean(evaluation.prediction_per_image);
-    evaluation.psnr_prediction = mean(evaluation.psnr_prediction_per_image);
+    SetPredictionScores(evaluation, scores);
+    double reconstruction = 0.0;
+    for (double eta : evaluation.reconstruction_per_image) reconstruction += eta;
+    evaluation.eta_reconstruction =
+        reconstruction / static_cast<double>(evaluation.reconstruction_per_image.size());
     fmt::print("{}", FormatEvaluationTable({evaluation}));
     fmt::print(
         "neural: held out every {} ({} images), PSNR {:.2f} dB; trained {} epochs (best {}) "

@@ -280,6 +280,11 @@ TEST(PhotomatCliTest, NeuralFitsAndRelightsOrSaysWhatThisBuildLacks) {
   const nlohmann::json e = ReadJsonFile(dir / "e.json");
   EXPECT_EQ(e["neural"]["prediction_images"].size(), 6u);
   EXPECT_GT(e["neural"]["eta_prediction"].get<double>(), 0.0);
+  // How the predictions look, as for every method in memory (a two-epoch training: far from 1).
+  EXPECT_EQ(e["neural"]["ssim_prediction_per_image"].size(), 6u);
+  EXPECT_EQ(e["neural"]["delta_e2000_prediction_per_image"].size(), 6u);
+  EXPECT_LT(e["neural"]["ssim_prediction"].get<double>(), 1.0);
+  EXPECT_GT(e["neural"]["delta_e2000_prediction"].get<double>(), 0.0);
   // The training's options and summary travel with the score.
   EXPECT_EQ(e["neural"]["neural"]["max_epochs"], 2);
   EXPECT_EQ(e["neural"]["neural_training"]["epochs"], 2);

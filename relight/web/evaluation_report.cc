@@ -375,18 +375,19 @@ std::string RankingSection(const MethodComparison& c) {
   const FriedmanTest& f = c.friedman;
   std::string html = fmt::format(
       "<section id=\"ranking\">\n<h2>Ranking of methods</h2>\n<p class=\"note\">Each of the {} "
-      "predicted images ranks the methods by its prediction error e<sub>k</sub>/&#963;<sub>k</sub> "
-      "(1 = lowest; ties share their mean rank). The Friedman test asks whether the methods differ "
-      "at all; the Nemenyi test compares every pair (p-values adjusted for the {} pairs); methods "
-      "joined by a bar in the diagram differ by less than the critical difference.</p>\n"
+      "predicted images ranks the methods ({} ranks 1; ties share their mean rank). The "
+      "Friedman test asks whether the methods differ at all; the Nemenyi test compares every "
+      "pair (p-values adjusted for the {} pairs); methods joined by a bar in the diagram differ "
+      "by less than the critical difference.</p>\n"
       "<table class=\"ranking\">\n<thead><tr><th>rank</th><th>method</th><th>mean rank</th>"
-      "<th>mean eta prediction</th></tr></thead>\n<tbody>\n",
-      c.images.size(), c.methods.size() * (c.methods.size() - 1) / 2);
+      "<th>mean {}</th></tr></thead>\n<tbody>\n",
+      c.images.size(), RankingMeasureBest(c.measure, /*html=*/true),
+      c.methods.size() * (c.methods.size() - 1) / 2, RankingMeasureLabel(c.measure, /*html=*/true));
   const std::vector<int> order = c.RankOrder();
   for (std::size_t r = 0; r < order.size(); ++r) {
     const int m = order[r];
     html += fmt::format("<tr><td>{}</td><td>{}</td><td>{:.2f}</td><td>{:.5f}</td></tr>\n", r + 1,
-                        EscapeMarkup(c.methods[m]), f.mean_ranks[m], c.mean_errors[m]);
+                        EscapeMarkup(c.methods[m]), f.mean_ranks[m], c.mean_values[m]);
   }
   html += fmt::format(
       "</tbody>\n</table>\n<p class=\"friedman\">Friedman &#967;&#178; = {:.2f} ({} degrees of "
@@ -602,7 +603,7 @@ void WriteReportFolder(const fs::path& folder, const ReportSet& info,
 
     // The table.
     html +=
-        "<h2>Normalised RMS error (eta) per method</h2>\n<p class=\"note\">Dong's eta "
+        "<h2>Errors per method</h2>\n<p class=\"note\">Dong's eta "
         "(thesis eq. 4.5.1): the mean over images of the RMS of relit minus captured, over "
         "the standard deviation of the captured image. Reconstruction: the fit of all images "
         "relit at each; prediction: " +
@@ -612,9 +613,25 @@ void WriteReportFolder(const fs::path& folder, const ReportSet& info,
                            "other {}",
                            plan.held_out.size(), plan.kept_images.size())) +
         ".</p>\n";
+    const auto any = [&](auto has) {
+      return std::any_of(evaluations.begin(), evaluations.end(), has);
+    };
+    const bool psnr = any([](const MethodEvaluation& e) { return e.psnr_prediction.has_value(); });
+    const bool ssim = any([](const MethodEvaluation& e) { return e.ssim_prediction.has_value(); });
+    const bool colour =
+        any([](const MethodEvaluation& e) { return e.delta_e2000_prediction.has_value(); });
+    if (ssim || colour) {
+      html +=
+          "<p class=\"note\">PSNR, SSIM and mean CIEDE2000 colour difference of the predicted "
+          "images against the captured ones over the mask, with the captured image's largest "
+          "value as white (SSIM and colour difference of the sRGB renderings).</p>\n";
+    }
     html +=
         "<table class=\"eta\">\n<thead><tr><th>method</th><th>eta reconstruction</th>"
         "<th>eta prediction</th>";
+    if (psnr) html += "<th>PSNR (dB)</th>";
+    if (ssim) html += "<th>SSIM</th>";
+    if (colour) html += "<th>&#916;E 2000</th>";
     if (plan.any_normals) {
       html +=
           "<th>normal mean (&#176;)</th><th>median (&#176;)</th><th>&lt; 5&#176;</th>"
@@ -625,6 +642,13 @@ void WriteReportFolder(const fs::path& folder, const ReportSet& info,
       html += fmt::format("<tr><td>{}</td><td>{:.5f}</td><td>{}</td>",
                           EscapeMarkup(e.method.Name()), e.eta_reconstruction,
                           e.eta_prediction ? fmt::format("{:.5f}", *e.eta_prediction) : "–");
+      const auto cell = [](const std::optional<double>& value, int decimals) {
+        return fmt::format("<td>{}</td>",
+                           value ? fmt::format("{:.{}f}", *value, decimals) : std::string("–"));
+      };
+      if (psnr) html += cell(e.psnr_prediction, 2);
+      if (ssim) html += cell(e.ssim_prediction, 4);
+      if (colour) html += cell(e.delta_e2000_prediction, 3);
       if (plan.any_normals) {
         if (e.normals) {
           html += fmt::format("<td>{:.2f}</td><td>{:.2f}</td><td>{:.1f} %</td><td>{:.1f} %</td>",
@@ -758,11 +782,20 @@ void WriteReportFolder(const fs::path& folder, const ReportSet& info,
         }
         const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
         WriteDisplayImage(temp / predicted, Scaled(*prediction, gain));
+        const MethodEvaluation& e = evaluations[m];
+        const auto position = static_cast<std::size_t>(PredictionPosition(e, index));
+        // The in-memory evaluation's appearance measures of this image, when it has them.
+        std::string appearance;
+        if (!e.ssim_prediction_per_image.empty()) {
+          appearance += fmt::format(", SSIM {:.3f}", e.ssim_prediction_per_image[position]);
+        }
+        if (!e.delta_e2000_prediction_per_image.empty()) {
+          appearance +=
+              fmt::format(", &#916;E {:.2f}", e.delta_e2000_prediction_per_image[position]);
+        }
         predicted_cells.push_back(fmt::format(
-            "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}</td>",
-            predicted, EscapeMarkup(name),
-            Number(
-                evaluations[m].prediction_per_image[PredictionPosition(evaluations[m], index)])));
+            "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}{}</td>",
+            predicted, EscapeMarkup(name), Number(e.prediction_per_image[position]), appearance));
       }
       html += "</tr>\n";
       if (plan.prediction) {

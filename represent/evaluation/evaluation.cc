@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "represent/evaluation/image_comparison.h"
 #include "represent/fitting/fit.h"
 #include "represent/fitting/prediction_folds.h"
 
@@ -48,6 +49,89 @@ double PeakSignalToNoiseRatio(const Observations& observations, int image,
   const auto captured = observations.matrix().col(image).cast<double>();
   return PsnrDecibels(captured.maxCoeff(),
                       (relit.cast<double>() - captured).squaredNorm() / captured.size());
+}
+
+namespace {
+
+// Column `image` of `observations` and `relit` (rows in the observations' layout) as images of
+// the observations' size, 0 outside the selected pixels, and the mask of those.
+struct PredictedAndCaptured {
+  Image predicted, captured;
+  Mask selected;
+};
+PredictedAndCaptured AsImages(const Observations& observations, int image,
+                              const Eigen::VectorXf& relit) {
+  const int width = observations.width(), height = observations.height();
+  const int channels = observations.channels();
+  PredictedAndCaptured out{Image(width, height, channels), Image(width, height, channels),
+                           Mask(width, height, false)};
+  const std::vector<std::size_t>& pixels = observations.pixel_indices();
+  for (std::size_t p : pixels) out.selected.Set(p, true);
+  const auto column = observations.matrix().col(image);
+  const std::size_t m = pixels.size();
+  for (int c = 0; c < channels; ++c) {
+    const auto predicted = out.predicted.plane(c);
+    const auto captured = out.captured.plane(c);
+    for (std::size_t k = 0; k < m; ++k) {
+      const auto row = static_cast<Eigen::Index>(c * m + k);
+      predicted[pixels[k]] = relit[row];
+      captured[pixels[k]] = column[row];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+PredictionScores ScorePrediction(const Observations& observations, int image,
+                                 const Eigen::VectorXf& relit, bool literal_thesis_rms,
+                                 bool appearance) {
+  PredictionScores scores;
+  scores.eta = NormalisedRmsError(observations, image, relit, literal_thesis_rms);
+  scores.psnr = PeakSignalToNoiseRatio(observations, image, relit);
+  if (!appearance) return scores;
+  const double largest = observations.matrix().col(image).maxCoeff();
+  const double white = largest > 0.0 ? largest : 1.0;
+  const PredictedAndCaptured images = AsImages(observations, image, relit);
+  scores.ssim = MaskedSsim(images.predicted, images.captured, images.selected, white);
+  if (observations.channels() == 1 || observations.channels() == 3) {
+    scores.delta_e2000 =
+        MaskedMeanDeltaE2000(images.predicted, images.captured, images.selected, white);
+  }
+  return scores;
+}
+
+void SetPredictionScores(MethodEvaluation& evaluation,
+                         const std::vector<PredictionScores>& scores) {
+  if (scores.size() != evaluation.prediction_images.size()) {
+    throw Error(fmt::format("{} prediction scores for {} predicted images", scores.size(),
+                            evaluation.prediction_images.size()));
+  }
+  evaluation.prediction_per_image.clear();
+  evaluation.psnr_prediction_per_image.clear();
+  evaluation.ssim_prediction_per_image.clear();
+  evaluation.delta_e2000_prediction_per_image.clear();
+  for (const PredictionScores& image : scores) {
+    evaluation.prediction_per_image.push_back(image.eta);
+    evaluation.psnr_prediction_per_image.push_back(image.psnr);
+    if (image.ssim) evaluation.ssim_prediction_per_image.push_back(*image.ssim);
+    if (image.delta_e2000) {
+      evaluation.delta_e2000_prediction_per_image.push_back(*image.delta_e2000);
+    }
+  }
+  evaluation.eta_prediction = Mean(evaluation.prediction_per_image);
+  evaluation.psnr_prediction = Mean(evaluation.psnr_prediction_per_image);
+  // A measure some images lack is left out whole.
+  const auto set_mean = [&](std::vector<double>& per_image, std::optional<double>& mean) {
+    mean.reset();
+    if (per_image.size() == scores.size() && !scores.empty()) {
+      mean = Mean(per_image);
+    } else {
+      per_image.clear();
+    }
+  };
+  set_mean(evaluation.ssim_prediction_per_image, evaluation.ssim_prediction);
+  set_mean(evaluation.delta_e2000_prediction_per_image, evaluation.delta_e2000_prediction);
 }
 
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,
@@ -111,9 +195,7 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
     result.prediction_images.insert(result.prediction_images.end(), fold.predicted.begin(),
                                     fold.predicted.end());
   }
-  const std::size_t count = result.prediction_images.size();
-  result.prediction_per_image.resize(count);
-  result.psnr_prediction_per_image.resize(count);
+  std::vector<PredictionScores> scores(result.prediction_images.size());
   progress.Start(fmt::format("{} {}", options.hold_out_every > 0 ? "held-out" : "leave-one-out",
                              method.Name()),
                  folds.size());
@@ -123,16 +205,14 @@ MethodEvaluation EvaluateMethod(const PhotometricSet& set, const Observations& o
     const std::size_t first = offsets[f];
     tbb::parallel_for(std::size_t{0}, fold.predicted.size(), [&](std::size_t j) {
       const int k = fold.predicted[j];
-      const Eigen::VectorXf relit = RelightObservedPixels(fold_fit, observations, set.light(k));
-      result.prediction_per_image[first + j] =
-          NormalisedRmsError(observations, k, relit, options.literal_thesis_rms);
-      result.psnr_prediction_per_image[first + j] = PeakSignalToNoiseRatio(observations, k, relit);
+      scores[first + j] = ScorePrediction(
+          observations, k, RelightObservedPixels(fold_fit, observations, set.light(k)),
+          options.literal_thesis_rms, options.appearance);
     });
     progress.Advance();
   });
   progress.Finish();
-  result.eta_prediction = Mean(result.prediction_per_image);
-  result.psnr_prediction = Mean(result.psnr_prediction_per_image);
+  SetPredictionScores(result, scores);
   return result;
 }
 
@@ -146,6 +226,14 @@ nlohmann::json MethodEvaluation::ToJson() const {
     if (psnr_prediction) {
       json["psnr_prediction"] = *psnr_prediction;
       json["psnr_prediction_per_image"] = psnr_prediction_per_image;
+    }
+    if (ssim_prediction) {
+      json["ssim_prediction"] = *ssim_prediction;
+      json["ssim_prediction_per_image"] = ssim_prediction_per_image;
+    }
+    if (delta_e2000_prediction) {
+      json["delta_e2000_prediction"] = *delta_e2000_prediction;
+      json["delta_e2000_prediction_per_image"] = delta_e2000_prediction_per_image;
     }
   }
   if (normals) json["normals"] = normals->ToJson();

@@ -30,6 +30,11 @@ struct EvaluationOptions {
   // Set: every fit (the full one and each leave-one-out fold) is the robust fit with these
   // options (represent/robust_fit.h); the errors are still measured against every observation.
   std::optional<RobustFitOptions> robust;
+  // The predictions' SSIM and colour difference (PredictionScores) too. They cost about as much
+  // as the folds' fits of a cheap method (DiLiGenT cat, leave-one-out of Gradient, PTM and HSH9:
+  // 4 s without, 10 s with), so `evaluate` asks for them where few images are predicted
+  // (--hold-out-every) or where they are asked for (README, "Evaluation").
+  bool appearance = true;
 };
 
 struct MethodEvaluation {
@@ -49,6 +54,15 @@ struct MethodEvaluation {
   std::vector<int> prediction_images;
   std::vector<double> prediction_per_image;
   std::vector<double> psnr_prediction_per_image;
+  // How the predicted images look beside the captured ones (ScorePrediction): the mean over the
+  // predicted images of the SSIM of their sRGB renderings and of their CIEDE2000 colour
+  // difference (the latter for one- or three-channel sets only), and the per-image values in the
+  // order of prediction_images. Set by the in-memory evaluations (EvaluateMethod, the neural
+  // basis's); the streamed ones leave them unset (README, "Evaluation").
+  std::optional<double> ssim_prediction;
+  std::optional<double> delta_e2000_prediction;
+  std::vector<double> ssim_prediction_per_image;
+  std::vector<double> delta_e2000_prediction_per_image;
   std::optional<NormalErrorStats> normals;  // methods that give normals, when truth is given
   nlohmann::json ToJson() const;
 };
@@ -73,6 +87,28 @@ double NormalisedRmsError(const Observations& observations, int image, const Eig
 // MethodEvaluation::psnr_prediction); infinite for an exact prediction.
 double PeakSignalToNoiseRatio(const Observations& observations, int image,
                               const Eigen::VectorXf& relit);
+
+// Every score of one predicted image: `relit` values against column `image` of `observations`.
+struct PredictionScores {
+  double eta = 0.0;   // NormalisedRmsError
+  double psnr = 0.0;  // PeakSignalToNoiseRatio
+  // With `appearance`: MaskedSsim and MaskedMeanDeltaE2000 (image_comparison.h) of the two as
+  // images of the observations' size, over their selected pixels. IMPLEMENTER CHOICE: the white
+  // of the renderings is the PSNR's peak, the largest captured value of the image over the
+  // selected pixels (1 if that is not positive), so that all three measures use one white and
+  // none depends on the set's scale (8 or 16 bits, light intensities divided out or not). The
+  // colour difference is left unset for images of other than one (grey) or three (RGB) channels.
+  std::optional<double> ssim;
+  std::optional<double> delta_e2000;
+};
+PredictionScores ScorePrediction(const Observations& observations, int image,
+                                 const Eigen::VectorXf& relit, bool literal_thesis_rms = false,
+                                 bool appearance = true);
+
+// Sets the prediction's per-image lists of `evaluation` from `scores` (in the order of
+// prediction_images, which must have their count) and their means: eta, PSNR and, when every
+// image has them, the SSIM and the colour difference.
+void SetPredictionScores(MethodEvaluation& evaluation, const std::vector<PredictionScores>& scores);
 
 // Relit values of `representation` under `light` at the observations' pixels, in their row order.
 Eigen::VectorXf RelightObservedPixels(const Representation& representation,

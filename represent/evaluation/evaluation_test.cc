@@ -11,6 +11,7 @@
 #include "capture/synthetic/synthetic_capture.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "represent/evaluation/image_comparison.h"
 #include "represent/fitting/fit.h"
 #include "represent/fitting/robust_fit.h"
 #include "tests/support/synthetic_sets.h"
@@ -92,6 +93,107 @@ TEST(EvaluationTest, PsnrIsPeakOverRootMeanSquareInDecibels) {
   EXPECT_TRUE(std::isinf(PeakSignalToNoiseRatio(observations, 0, relit)));
 }
 
+// A w x h image of `channels` channels with values in [0, scale): a smooth pattern and a
+// checkerboard, so that the SSIM's windows see structure.
+Image PatternImage(int width, int height, int channels, float scale) {
+  Image image(width, height, channels);
+  for (int c = 0; c < channels; ++c) {
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        const float smooth = 0.5f + 0.3f * std::sin(0.4f * x + 0.7f * y + c);
+        image.at(x, y, c) = scale * (((x / 3 + y / 3) % 2 ? 0.15f : 0.0f) + 0.8f * smooth);
+      }
+    }
+  }
+  return image;
+}
+
+// A one-image set of `captured` with a disc mask, and `predicted` at its masked pixels in the
+// observations' row order.
+struct OneImageCase {
+  PhotometricSet set;
+  Eigen::VectorXf relit;
+};
+OneImageCase DiscMaskedCase(const Image& captured, const Image& predicted) {
+  OneImageCase out{PhotometricSet({captured}, {LightDirection::FromSlantTilt(0, 0)}), {}};
+  Mask disc(captured.width(), captured.height(), false);
+  for (int y = 0; y < captured.height(); ++y) {
+    for (int x = 0; x < captured.width(); ++x) {
+      const double dx = x - 0.5 * captured.width(), dy = y - 0.5 * captured.height();
+      disc.Set(x, y, dx * dx + dy * dy < 0.16 * captured.width() * captured.width());
+    }
+  }
+  out.set.set_mask(disc);
+  const std::vector<std::size_t> pixels = disc.SetIndices();
+  out.relit.resize(static_cast<Eigen::Index>(pixels.size()) * captured.channels());
+  for (int c = 0; c < captured.channels(); ++c) {
+    for (std::size_t k = 0; k < pixels.size(); ++k) {
+      out.relit[static_cast<Eigen::Index>(c * pixels.size() + k)] = predicted.plane(c)[pixels[k]];
+    }
+  }
+  return out;
+}
+
+TEST(EvaluationTest, PredictionScoresAreTheDisplayedComparisonsOverTheMask) {
+  const Image captured = PatternImage(40, 32, 3, 0.6f);
+  Image predicted = captured;
+  for (int c = 0; c < 3; ++c) {
+    auto plane = predicted.plane(c);
+    for (std::size_t p = 0; p < plane.size(); ++p) plane[p] *= 1.0f + 0.05f * ((p * 7 + c) % 5);
+  }
+  const OneImageCase one = DiscMaskedCase(captured, predicted);
+  const Observations observations(one.set);
+  const PredictionScores scores = ScorePrediction(observations, 0, one.relit);
+  // The same comparisons of the whole images over the mask, white at the captured maximum
+  // inside it (pixels outside the mask differ between these images and those ScorePrediction
+  // makes, which hold 0 there: the comparisons must not see them).
+  const Mask& mask = *one.set.mask();
+  float white = 0.0f;
+  for (int c = 0; c < 3; ++c) {
+    for (std::size_t p : mask.SetIndices()) white = std::max(white, captured.plane(c)[p]);
+  }
+  EXPECT_NEAR(*scores.ssim, MaskedSsim(predicted, captured, mask, white), 1e-12);
+  ASSERT_TRUE(scores.delta_e2000);
+  EXPECT_NEAR(*scores.delta_e2000, MaskedMeanDeltaE2000(predicted, captured, mask, white), 1e-12);
+  EXPECT_NEAR(scores.eta, NormalisedRmsError(observations, 0, one.relit), 1e-15);
+  EXPECT_NEAR(scores.psnr, PeakSignalToNoiseRatio(observations, 0, one.relit), 1e-12);
+  EXPECT_LT(*scores.ssim, 0.999);
+  EXPECT_GT(*scores.delta_e2000, 0.1);
+
+  // The white follows the captured image: scaling both images (light intensities divided out,
+  // another bit depth) changes no score.
+  Image captured_3 = captured, predicted_3 = predicted;
+  for (float& v : captured_3.values()) v *= 3.0f;
+  for (float& v : predicted_3.values()) v *= 3.0f;
+  const OneImageCase scaled = DiscMaskedCase(captured_3, predicted_3);
+  const PredictionScores scaled_scores = ScorePrediction(Observations(scaled.set), 0, scaled.relit);
+  EXPECT_NEAR(*scaled_scores.ssim, *scores.ssim, 1e-6);
+  EXPECT_NEAR(*scaled_scores.delta_e2000, *scores.delta_e2000, 1e-4);
+  EXPECT_NEAR(scaled_scores.psnr, scores.psnr, 1e-5);
+
+  // Without the appearance measures: eta and PSNR alone, the same.
+  const PredictionScores cheap = ScorePrediction(observations, 0, one.relit, false, false);
+  EXPECT_EQ(cheap.eta, scores.eta);
+  EXPECT_EQ(cheap.psnr, scores.psnr);
+  EXPECT_FALSE(cheap.ssim || cheap.delta_e2000);
+
+  // An exact prediction: SSIM 1, no colour difference.
+  const OneImageCase exact = DiscMaskedCase(captured, captured);
+  const PredictionScores perfect = ScorePrediction(Observations(exact.set), 0, exact.relit);
+  EXPECT_NEAR(*perfect.ssim, 1.0, 1e-12);
+  EXPECT_EQ(*perfect.delta_e2000, 0.0);
+}
+
+TEST(EvaluationTest, TwoChannelPredictionsHaveSsimButNoColourDifference) {
+  const Image captured = PatternImage(24, 24, 2, 1.0f);
+  const OneImageCase one = DiscMaskedCase(captured, PatternImage(24, 24, 2, 0.9f));
+  const PredictionScores scores = ScorePrediction(Observations(one.set), 0, one.relit);
+  ASSERT_TRUE(scores.ssim);
+  EXPECT_GT(*scores.ssim, 0.5);
+  EXPECT_LT(*scores.ssim, 1.0);
+  EXPECT_FALSE(scores.delta_e2000.has_value());
+}
+
 TEST(EvaluationTest, HoldingOutEveryKthImagePredictsThoseFromOneFit) {
   // The thesis grid's 36 lights, every 4th held out: images 0, 4, ..., 32 are predicted by a fit
   // of the other 27. A Lambertian sample is an exact 3-term model, so gradient predicts them as
@@ -109,6 +211,9 @@ TEST(EvaluationTest, HoldingOutEveryKthImagePredictsThoseFromOneFit) {
   ASSERT_TRUE(gradient.eta_prediction && gradient.psnr_prediction);
   EXPECT_LT(*gradient.eta_prediction, 1e-3);
   EXPECT_GT(*gradient.psnr_prediction, 60.0);  // float round-off only
+  ASSERT_TRUE(gradient.ssim_prediction && gradient.delta_e2000_prediction);
+  EXPECT_GT(*gradient.ssim_prediction, 1.0 - 1e-6);
+  EXPECT_LT(*gradient.delta_e2000_prediction, 1e-2);
 
   const auto glossy = testing::ShadowedSpecularSet(32);
   const Observations observations(glossy.set);
@@ -126,12 +231,27 @@ TEST(EvaluationTest, HoldingOutEveryKthImagePredictsThoseFromOneFit) {
       FitObservations(observations, glossy.set.lights(), Method::Parse("ptm"), kept);
   for (std::size_t j = 0; j < ptm.prediction_images.size(); ++j) {
     const int k = ptm.prediction_images[j];
-    EXPECT_NEAR(ptm.prediction_per_image[j],
-                NormalisedRmsError(observations, k,
-                                   RelightObservedPixels(fit, observations, glossy.set.light(k))),
-                1e-9)
-        << k;
+    const PredictionScores scores = ScorePrediction(
+        observations, k, RelightObservedPixels(fit, observations, glossy.set.light(k)));
+    EXPECT_NEAR(ptm.prediction_per_image[j], scores.eta, 1e-9) << k;
+    EXPECT_NEAR(ptm.psnr_prediction_per_image[j], scores.psnr, 1e-9) << k;
+    EXPECT_NEAR(ptm.ssim_prediction_per_image[j], *scores.ssim, 1e-9) << k;
+    EXPECT_NEAR(ptm.delta_e2000_prediction_per_image[j], *scores.delta_e2000, 1e-9) << k;
   }
+  // Without the appearance measures: the same eta and PSNR, and no SSIM or colour difference.
+  EvaluationOptions cheap = options;
+  cheap.appearance = false;
+  const MethodEvaluation ptm_cheap =
+      EvaluateMethod(glossy.set, observations, Method::Parse("ptm"), nullptr, cheap);
+  EXPECT_EQ(ptm_cheap.prediction_per_image, ptm.prediction_per_image);
+  EXPECT_EQ(ptm_cheap.psnr_prediction_per_image, ptm.psnr_prediction_per_image);
+  EXPECT_FALSE(ptm_cheap.ssim_prediction || ptm_cheap.delta_e2000_prediction);
+  EXPECT_TRUE(ptm_cheap.ssim_prediction_per_image.empty());
+  EXPECT_FALSE(ptm_cheap.ToJson().contains("ssim_prediction"));
+  // PTM cannot predict the shadows and highlights of a light it did not see exactly.
+  ASSERT_TRUE(ptm.ssim_prediction && ptm.delta_e2000_prediction);
+  EXPECT_LT(*ptm.ssim_prediction, *gradient.ssim_prediction);
+  EXPECT_GT(*ptm.delta_e2000_prediction, *gradient.delta_e2000_prediction);
 }
 
 TEST(HshTest, EvaluateScoresEveryOrder) {

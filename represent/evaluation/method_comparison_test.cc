@@ -41,14 +41,16 @@ TEST(MethodComparisonTest, RanksMethodsImageByImage) {
   EXPECT_NEAR(c.friedman.chi_square, 8.4, 1e-12);
   EXPECT_NEAR(c.friedman.p_value, std::exp(-4.2), 1e-12);
   EXPECT_NEAR(c.friedman.kendalls_w, 0.84, 1e-12);
-  EXPECT_NEAR(c.mean_errors[1], 0.22, 1e-12);
+  EXPECT_NEAR(c.mean_values[1], 0.22, 1e-12);
   // Nemenyi at k = 3, n = 5: 2.343 * sqrt(12 / 30) (Demsar's q_0.05 for three).
   EXPECT_NEAR(c.critical_difference, 2.343 * std::sqrt(0.4), 1e-3);
   EXPECT_LT(c.pairwise_p(0, 1), 0.05);  // 1.8 mean ranks apart, above the difference
   EXPECT_GT(c.pairwise_p(1, 2), 0.05);
 
   const nlohmann::json json = c.ToJson();
-  EXPECT_EQ(json["measure"], "prediction_per_image");
+  EXPECT_EQ(json["measure"], "eta_prediction_per_image");
+  EXPECT_EQ(json["lower_is_better"], true);
+  EXPECT_NEAR(json["methods"][0]["mean_eta_prediction"].get<double>(), 0.22, 1e-12);
   EXPECT_EQ(json["images"].size(), 5u);
   ASSERT_EQ(json["methods"].size(), 3u);
   EXPECT_EQ(json["methods"][0]["method"], "ptm");
@@ -63,6 +65,61 @@ TEST(MethodComparisonTest, RanksMethodsImageByImage) {
   const std::string table = FormatComparisonTable(c);
   EXPECT_NE(table.find("Friedman chi-square 8.40 (2 df"), std::string::npos) << table;
   EXPECT_LT(table.find("ptm"), table.find("gradient")) << table;
+}
+
+TEST(MethodComparisonTest, RanksBySsimHighestFirstAndByColourDifferenceLowestFirst) {
+  // The eta ranking of the test above, with SSIM and Delta E 2000 that order the methods the
+  // other way round in every image: ranking by them reverses the mean ranks.
+  const std::vector<int> images = {0, 4, 8, 12, 16};
+  std::vector<MethodEvaluation> evaluations = {
+      Predicted("gradient", images, {0.9, 0.8, 0.95, 0.7, 0.85}),
+      Predicted("ptm", images, {0.1, 0.2, 0.15, 0.3, 0.35}),
+      Predicted("hsh9", images, {0.2, 0.3, 0.10, 0.4, 0.45})};
+  evaluations[0].ssim_prediction_per_image = {0.99, 0.98, 0.97, 0.99, 0.98};
+  evaluations[1].ssim_prediction_per_image = {0.50, 0.60, 0.55, 0.50, 0.40};
+  evaluations[2].ssim_prediction_per_image = {0.70, 0.70, 0.60, 0.80, 0.90};
+  evaluations[0].delta_e2000_prediction_per_image = {1.0, 1.5, 1.2, 1.1, 1.0};
+  evaluations[1].delta_e2000_prediction_per_image = {9.0, 8.0, 7.0, 9.5, 8.5};
+  evaluations[2].delta_e2000_prediction_per_image = {5.0, 4.0, 3.0, 2.0, 2.5};
+
+  const MethodComparison by_eta = CompareMethods(evaluations);
+  EXPECT_EQ(by_eta.RankOrder(), (std::vector<int>{1, 2, 0}));
+  for (RankingMeasure measure : {RankingMeasure::kSsim, RankingMeasure::kDeltaE2000}) {
+    const MethodComparison c = CompareMethods(evaluations, measure);
+    SCOPED_TRACE(std::string(RankingMeasureName(measure)));
+    EXPECT_EQ(c.measure, measure);
+    EXPECT_EQ(c.RankOrder(), (std::vector<int>{0, 2, 1}));
+    EXPECT_NEAR(c.friedman.mean_ranks[0], 1.0, 1e-12);
+    EXPECT_NEAR(c.friedman.mean_ranks[1], 3.0, 1e-12);
+    EXPECT_NEAR(c.friedman.mean_ranks[2], 2.0, 1e-12);
+    // Unanimous images: rank sums 5, 15, 10; 12/60 * 350 - 60 = 10.
+    EXPECT_NEAR(c.friedman.chi_square, 10.0, 1e-12);
+  }
+  const MethodComparison ssim = CompareMethods(evaluations, RankingMeasure::kSsim);
+  EXPECT_NEAR(ssim.mean_values[0], 0.982, 1e-12);  // the measure's own mean, not negated
+  const nlohmann::json json = ssim.ToJson();
+  EXPECT_EQ(json["measure"], "ssim_prediction_per_image");
+  EXPECT_EQ(json["lower_is_better"], false);
+  EXPECT_EQ(json["methods"][0]["method"], "gradient");
+  EXPECT_NEAR(json["methods"][0]["mean_ssim_prediction"].get<double>(), 0.982, 1e-12);
+  const std::string table = FormatComparisonTable(ssim);
+  EXPECT_NE(table.find("the highest SSIM ranks 1"), std::string::npos) << table;
+  EXPECT_NE(table.find("mean SSIM"), std::string::npos) << table;
+  EXPECT_EQ(CompareMethods(evaluations, RankingMeasure::kDeltaE2000)
+                .ToJson()["methods"][2]["mean_delta_e2000_prediction"],
+            8.4);
+
+  // A method without the measure (a streamed evaluation) cannot be ranked by it.
+  evaluations[2].ssim_prediction_per_image.clear();
+  try {
+    CompareMethods(evaluations, RankingMeasure::kSsim);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("hsh9 has none"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ParseRankingMeasure("delta-e2000"), RankingMeasure::kDeltaE2000);
+  EXPECT_EQ(ParseRankingMeasure(RankingMeasureName(RankingMeasure::kSsim)), RankingMeasure::kSsim);
+  EXPECT_THROW(ParseRankingMeasure("psnr"), Error);
 }
 
 TEST(MethodComparisonTest, UnanimousImagesHaveNoFiniteImanDavenportFInTheJson) {
