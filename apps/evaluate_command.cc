@@ -288,14 +288,15 @@ void AddEvaluateCommand(CLI::App& app) {
                     "Nemenyi pairwise p-values (printed, in --json as \"comparison\", and in the "
                     "--report)");
   command
-      ->add_option("--rank-by", options->rank_by,
-                   "With --compare: rank by eta (e_k/sigma_k, the thesis's; PSNR ranks alike), "
-                   "ssim or delta-e2000 (of the sRGB renderings; in memory only)")
+      ->add_option(
+          "--rank-by", options->rank_by,
+          "With --compare: rank by eta (e_k/sigma_k, the thesis's; PSNR ranks alike), "
+          "ssim or delta-e2000 (of the sRGB renderings; streamed, of held-out images only)")
       ->capture_default_str();
   command->add_flag("--appearance", options->appearance,
                     "Also measure the SSIM and colour difference of leave-one-out predictions "
-                    "(of held-out ones they always are; in memory only; leave-one-out then "
-                    "takes about twice as long)");
+                    "(of held-out ones they always are; leave-one-out then takes about twice "
+                    "as long, and is not streamed)");
   command->add_flag("--literal-rms", options->literal_rms,
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
@@ -328,9 +329,9 @@ void AddEvaluateCommand(CLI::App& app) {
   command->add_flag("--stream", options->stream,
                     "Fit the methods to INPUT in bands into scratch stacks beside --json or "
                     "--report (or in the current folder) and evaluate those streamed, and fit "
-                    "the prediction's folds band by band: the same eta and PSNR in memory for "
-                    "a band, whatever the set's size (not the SSIM and colour difference, which "
-                    "need whole images); a --report's pictures are drawn band by band");
+                    "the prediction's folds band by band: the same numbers in memory for a "
+                    "band, whatever the set's size (the SSIM and colour difference of held-out "
+                    "images only); a --report's pictures are drawn band by band");
   AddPbrOptions(*command, options->pbr);
   command->callback([options] {
     if (!options->stack.empty()) {
@@ -396,13 +397,16 @@ void AddEvaluateCommand(CLI::App& app) {
     // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
     // held whole would not fit the budget.
     if (options->stream || HoldingSetExceeds(set, budget)) {
-      // Checked before the evaluation, which can take hours at this size.
-      if (measure != RankingMeasure::kEta || options->appearance) {
+      // Checked before the evaluation, which can take hours at this size: streamed, the SSIM
+      // and colour difference are measured for held-out images only.
+      if (options->hold_out_every == 0 &&
+          (measure != RankingMeasure::kEta || options->appearance)) {
         throw Error(
             set.source(),
-            fmt::format("{}: the streamed evaluation ({}) measures eta and PSNR only; "
-                        "evaluate in memory (--memory MB) for the SSIM and colour "
-                        "difference",
+            fmt::format("{}: the streamed evaluation ({}) measures the SSIM and colour "
+                        "difference of held-out images only (--hold-out-every K); "
+                        "leave-one-out in memory (--memory MB) measures them for every "
+                        "image",
                         options->appearance
                             ? std::string("--appearance")
                             : fmt::format("--rank-by {}", RankingMeasureName(measure)),
@@ -425,6 +429,7 @@ void AddEvaluateCommand(CLI::App& app) {
         prediction->hold_out_every = options->hold_out_every;
         prediction->literal_thesis_rms = options->literal_rms;
         prediction->robust = robust;
+        prediction->appearance = options->hold_out_every > 0;
       }
       const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
                                         std::span<const std::filesystem::path> stacks) {

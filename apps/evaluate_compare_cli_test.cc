@@ -129,14 +129,16 @@ TEST(EvaluateCompareCliTest, RefusesARankingByAMeasureItCannotHave) {
   const RunResult without_compare = RunPhotomat(evaluate + "--rank-by ssim");
   EXPECT_EQ(without_compare.exit_code, 1);
   EXPECT_THAT(without_compare.output, HasSubstr("add --compare"));
-  // The streamed evaluation measures eta and PSNR only: refused before any fit, nothing written.
-  const RunResult streamed = RunPhotomat(evaluate + "--compare --rank-by ssim --stream --json " +
-                                         (dir / "out" / "e.json").string());
+  // Streamed, only held-out images are compared so: a streamed leave-one-out is refused before
+  // any fit, nothing written.
+  const std::string leave_one_out = "evaluate " + capture + " --methods gradient,ptm ";
+  const RunResult streamed = RunPhotomat(leave_one_out + "--compare --rank-by ssim --stream " +
+                                         "--json " + (dir / "out" / "e.json").string());
   EXPECT_EQ(streamed.exit_code, 1);
   EXPECT_THAT(streamed.output, HasSubstr("--rank-by ssim: the streamed evaluation (--stream)"));
   EXPECT_FALSE(fs::exists(dir / "out"));
-  const RunResult appearance =
-      RunPhotomat(evaluate + "--appearance --stream --json " + (dir / "out" / "e.json").string());
+  const RunResult appearance = RunPhotomat(leave_one_out + "--appearance --stream --json " +
+                                           (dir / "out" / "e.json").string());
   EXPECT_EQ(appearance.exit_code, 1);
   EXPECT_THAT(appearance.output, HasSubstr("--appearance: the streamed evaluation (--stream)"));
   EXPECT_FALSE(fs::exists(dir / "out"));

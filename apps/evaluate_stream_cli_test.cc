@@ -27,10 +27,11 @@ using testing::RunResult;
 using testing::TempDir;
 
 // The prediction's figures of two evaluations' JSON agree: the predicted images, eta and PSNR of
-// every method (mean and per image) within `relative` (eta) and `decibels` (PSNR).
+// every method (mean and per image) within `relative` (eta) and `decibels` (PSNR), and the SSIM
+// and colour difference per image, where measured, within `appearance`.
 void ExpectSamePrediction(const nlohmann::json& a, const nlohmann::json& b,
-                          const std::vector<std::string>& methods, double relative,
-                          double decibels) {
+                          const std::vector<std::string>& methods, double relative, double decibels,
+                          double appearance = 1e-9) {
   for (const std::string& method : methods) {
     ASSERT_TRUE(a[method].contains("eta_prediction")) << method;
     EXPECT_EQ(a[method]["prediction_images"], b[method]["prediction_images"]) << method;
@@ -50,6 +51,22 @@ void ExpectSamePrediction(const nlohmann::json& a, const nlohmann::json& b,
       EXPECT_NEAR(a[method]["eta_prediction_per_image"][j].get<double>(), expected,
                   relative * expected)
           << method << ", prediction " << j;
+    }
+    // The SSIM and colour difference: of held-out images both (streamed band by band,
+    // MaskedDisplayComparison), of leave-one-out neither (in memory only with --appearance).
+    // Measured: equal to the 12 digits printed (the fits are equal to float rounding).
+    for (const char* key : {"ssim_prediction", "delta_e2000_prediction"}) {
+      ASSERT_EQ(a[method].contains(key), b[method].contains(key)) << method << " " << key;
+      if (!b[method].contains(key)) continue;
+      const auto& streamed = a[method][std::string(key) + "_per_image"];
+      const auto& whole = b[method][std::string(key) + "_per_image"];
+      ASSERT_EQ(streamed.size(), whole.size()) << method << " " << key;
+      for (std::size_t j = 0; j < whole.size(); ++j) {
+        std::printf("%s %s %zu: %.12g streamed, %.12g in memory\n", method.c_str(), key, j,
+                    streamed[j].get<double>(), whole[j].get<double>());
+        EXPECT_NEAR(streamed[j].get<double>(), whole[j].get<double>(), appearance)
+            << method << " " << key << ", prediction " << j;
+      }
     }
   }
 }
@@ -126,7 +143,8 @@ TEST(EvaluateStreamCliTest, PredictionStreamedGivesTheInMemoryFiguresAndRanking)
   const TempDir dir;
   const std::string capture = WriteShadowedCapture(dir);
   const std::vector<std::string> methods = {"gradient", "ptm", "eigen6", "rbf"};
-  for (const std::string held_out : {"", " --hold-out-every 4"}) {
+  for (const std::string held_out :
+       {"", " --hold-out-every 4", " --hold-out-every 4 --rank-by delta-e2000"}) {
     SCOPED_TRACE(held_out.empty() ? "leave-one-out" : held_out);
     const auto [b, a] = EvaluateInMemoryAndStreamed(
         dir, capture, held_out + " --methods gradient,ptm,eigen6,rbf --compare");

@@ -51,20 +51,16 @@ double PeakSignalToNoiseRatio(const Observations& observations, int image,
                       (relit.cast<double>() - captured).squaredNorm() / captured.size());
 }
 
-namespace {
+double PredictionWhite(double largest_captured) {
+  return largest_captured > 0.0 ? largest_captured : 1.0;
+}
 
-// Column `image` of `observations` and `relit` (rows in the observations' layout) as images of
-// the observations' size, 0 outside the selected pixels, and the mask of those.
-struct PredictedAndCaptured {
-  Image predicted, captured;
-  Mask selected;
-};
-PredictedAndCaptured AsImages(const Observations& observations, int image,
-                              const Eigen::VectorXf& relit) {
+PredictionImages PredictionAsImages(const Observations& observations, int image,
+                                    const Eigen::VectorXf& relit) {
   const int width = observations.width(), height = observations.height();
   const int channels = observations.channels();
-  PredictedAndCaptured out{Image(width, height, channels), Image(width, height, channels),
-                           Mask(width, height, false)};
+  PredictionImages out{Image(width, height, channels), Image(width, height, channels),
+                       Mask(width, height, false)};
   const std::vector<std::size_t>& pixels = observations.pixel_indices();
   for (std::size_t p : pixels) out.selected.Set(p, true);
   const auto column = observations.matrix().col(image);
@@ -81,8 +77,6 @@ PredictedAndCaptured AsImages(const Observations& observations, int image,
   return out;
 }
 
-}  // namespace
-
 PredictionScores ScorePrediction(const Observations& observations, int image,
                                  const Eigen::VectorXf& relit, bool literal_thesis_rms,
                                  bool appearance) {
@@ -90,9 +84,8 @@ PredictionScores ScorePrediction(const Observations& observations, int image,
   scores.eta = NormalisedRmsError(observations, image, relit, literal_thesis_rms);
   scores.psnr = PeakSignalToNoiseRatio(observations, image, relit);
   if (!appearance) return scores;
-  const double largest = observations.matrix().col(image).maxCoeff();
-  const double white = largest > 0.0 ? largest : 1.0;
-  const PredictedAndCaptured images = AsImages(observations, image, relit);
+  const double white = PredictionWhite(observations.matrix().col(image).maxCoeff());
+  const PredictionImages images = PredictionAsImages(observations, image, relit);
   scores.ssim = MaskedSsim(images.predicted, images.captured, images.selected, white);
   if (observations.channels() == 1 || observations.channels() == 3) {
     scores.delta_e2000 =

@@ -101,6 +101,20 @@ struct PredictionScores {
   std::optional<double> ssim;
   std::optional<double> delta_e2000;
 };
+// The white of the renderings ScorePrediction compares: the largest captured value of the
+// image over the selected pixels, or 1 if that is not positive.
+double PredictionWhite(double largest_captured);
+
+// Column `image` of `observations` and `relit` (rows in the observations' layout) as images of
+// the observations' size, 0 outside the selected pixels, and the mask of those pixels: what the
+// comparisons of image_comparison.h take.
+struct PredictionImages {
+  Image predicted, captured;
+  Mask selected;
+};
+PredictionImages PredictionAsImages(const Observations& observations, int image,
+                                    const Eigen::VectorXf& relit);
+
 PredictionScores ScorePrediction(const Observations& observations, int image,
                                  const Eigen::VectorXf& relit, bool literal_thesis_rms = false,
                                  bool appearance = true);

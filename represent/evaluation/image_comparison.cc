@@ -58,22 +58,6 @@ cv::Rect SsimRegion(const Mask& mask) {
   return {left, top, right - left + 1, bottom - top + 1};
 }
 
-// Channel c of `image` as displayed (sRGB-encoded, [0, 1]) within `region`, 0 outside the mask.
-cv::Mat SrgbPlane(const Image& image, int c, const Mask& mask, const cv::Rect& region,
-                  double peak) {
-  cv::Mat plane(region.height, region.width, CV_64F);
-  const auto values = image.plane(c);
-  for (int y = 0; y < region.height; ++y) {
-    auto* out = plane.ptr<double>(y);
-    const std::size_t row = static_cast<std::size_t>(region.y + y) * image.width() + region.x;
-    for (int x = 0; x < region.width; ++x) {
-      const std::size_t p = row + x;
-      out[x] = mask[p] ? LinearToSrgb(Displayed(values[p], peak)) : 0.0;
-    }
-  }
-  return plane;
-}
-
 cv::Mat SsimWindowMean(const cv::Mat& values) {
   cv::Mat mean;
   cv::GaussianBlur(values, mean, cv::Size(2 * kSsimWindowRadius + 1, 2 * kSsimWindowRadius + 1),
@@ -81,9 +65,11 @@ cv::Mat SsimWindowMean(const cv::Mat& values) {
   return mean;
 }
 
-// The mean over the mask of one channel's SSIM map, `x` and `y` the planes of `region`.
-double MaskedChannelSsim(const cv::Mat& x, const cv::Mat& y, const Mask& mask,
-                         const cv::Rect& region, std::size_t count) {
+// Adds to `sum` the SSIM map of planes `x` and `y` (CV_64F, rows of one width) at the pixels of
+// rows [first_row, end_row) that `selected` (one byte per pixel of the planes) marks, in raster
+// order. Every window of those rows must lie within the planes or meet the image's own edges.
+void AddChannelSsim(const cv::Mat& x, const cv::Mat& y, const std::uint8_t* selected, int first_row,
+                    int end_row, double& sum) {
   constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03;  // (K L)^2 with L = 1
   const cv::Mat mu_x = SsimWindowMean(x), mu_y = SsimWindowMean(y);
   const cv::Mat xx = SsimWindowMean(x.mul(x)), yy = SsimWindowMean(y.mul(y)),
@@ -93,18 +79,14 @@ double MaskedChannelSsim(const cv::Mat& x, const cv::Mat& y, const Mask& mask,
   const auto* sxx = xx.ptr<double>();
   const auto* syy = yy.ptr<double>();
   const auto* sxy = xy.ptr<double>();
-  double sum = 0.0;
-  for (int row = 0; row < region.height; ++row) {
-    for (int column = 0; column < region.width; ++column) {
-      if (!mask(region.x + column, region.y + row)) continue;
-      const std::size_t p = static_cast<std::size_t>(row) * region.width + column;
-      const double variance_x = sxx[p] - mx[p] * mx[p], variance_y = syy[p] - my[p] * my[p];
-      const double covariance = sxy[p] - mx[p] * my[p];
-      sum += (2.0 * mx[p] * my[p] + kC1) * (2.0 * covariance + kC2) /
-             ((mx[p] * mx[p] + my[p] * my[p] + kC1) * (variance_x + variance_y + kC2));
-    }
+  const auto width = static_cast<std::size_t>(x.cols);
+  for (std::size_t p = first_row * width; p < end_row * width; ++p) {
+    if (!selected[p]) continue;
+    const double variance_x = sxx[p] - mx[p] * mx[p], variance_y = syy[p] - my[p] * my[p];
+    const double covariance = sxy[p] - mx[p] * my[p];
+    sum += (2.0 * mx[p] * my[p] + kC1) * (2.0 * covariance + kC2) /
+           ((mx[p] * mx[p] + my[p] * my[p] + kC1) * (variance_x + variance_y + kC2));
   }
-  return sum / static_cast<double>(count);
 }
 
 CieLab DisplayedLab(const Image& image, std::size_t p, double peak) {
@@ -135,14 +117,24 @@ double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, 
 }
 
 double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak) {
-  const std::size_t pixels = CheckComparable("SSIM", predicted, truth, mask, peak);
+  CheckComparable("SSIM", predicted, truth, mask, peak);
+  // The region the mask's windows see, as one band of a comparison of that size.
   const cv::Rect region = SsimRegion(mask);
-  double sum = 0.0;
-  for (int c = 0; c < truth.channels(); ++c) {
-    sum += MaskedChannelSsim(SrgbPlane(predicted, c, mask, region, peak),
-                             SrgbPlane(truth, c, mask, region, peak), mask, region, pixels);
+  Image predicted_part(region.width, region.height, truth.channels());
+  Image truth_part(region.width, region.height, truth.channels());
+  Mask mask_part(region.width, region.height, false);
+  for (int y = 0; y < region.height; ++y) {
+    for (int x = 0; x < region.width; ++x) {
+      mask_part.Set(x, y, mask(region.x + x, region.y + y));
+      for (int c = 0; c < truth.channels(); ++c) {
+        predicted_part.at(x, y, c) = predicted.at(region.x + x, region.y + y, c);
+        truth_part.at(x, y, c) = truth.at(region.x + x, region.y + y, c);
+      }
+    }
   }
-  return sum / truth.channels();
+  MaskedDisplayComparison comparison(region.width, region.height, truth.channels(), peak);
+  comparison.AddBand(0, predicted_part, truth_part, mask_part);
+  return comparison.Ssim();
 }
 
 double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Mask& mask,
@@ -157,6 +149,101 @@ double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Ma
     if (mask[p]) sum += CieDe2000(DisplayedLab(predicted, p, peak), DisplayedLab(truth, p, peak));
   }
   return sum / static_cast<double>(pixels);
+}
+
+MaskedDisplayComparison::MaskedDisplayComparison(int width, int height, int channels, double peak)
+    : width_(width),
+      height_(height),
+      channels_(channels),
+      peak_(peak),
+      predicted_(static_cast<std::size_t>(channels)),
+      truth_(static_cast<std::size_t>(channels)),
+      ssim_sums_(static_cast<std::size_t>(channels), 0.0) {
+  if (width <= 0 || height <= 0 || channels <= 0) {
+    throw Error(fmt::format("a comparison of {}x{}x{} images", width, height, channels));
+  }
+  if (!(peak > 0.0)) throw Error(fmt::format("comparison: peak {} is not positive", peak));
+}
+
+void MaskedDisplayComparison::AppendRows(int rows, const Image* predicted, const Image* truth,
+                                         const Mask* mask) {
+  const std::size_t count = static_cast<std::size_t>(rows) * width_;
+  const std::size_t start = selected_.size();
+  selected_.resize(start + count, 0);
+  for (std::vector<double>& plane : predicted_) plane.resize(start + count, 0.0);
+  for (std::vector<double>& plane : truth_) plane.resize(start + count, 0.0);
+  next_row_ += rows;
+  if (!mask) return;  // rows outside the mask: 0 in both images
+  const bool colour = channels_ == 1 || channels_ == 3;
+  for (std::size_t p = 0; p < count; ++p) {
+    if (!(*mask)[p]) continue;
+    selected_[start + p] = 1;
+    ++pixels_;
+    for (int c = 0; c < channels_; ++c) {
+      predicted_[c][start + p] = LinearToSrgb(Displayed(predicted->plane(c)[p], peak_));
+      truth_[c][start + p] = LinearToSrgb(Displayed(truth->plane(c)[p], peak_));
+    }
+    if (colour) {
+      delta_e_sum_ += CieDe2000(DisplayedLab(*predicted, p, peak_), DisplayedLab(*truth, p, peak_));
+    }
+  }
+}
+
+void MaskedDisplayComparison::AddBand(int first_row, const Image& predicted, const Image& truth,
+                                      const Mask& mask) {
+  if (predicted.width() != width_ || truth.width() != width_ || mask.width() != width_ ||
+      predicted.height() != truth.height() || mask.height() != truth.height() ||
+      predicted.channels() != channels_ || truth.channels() != channels_) {
+    throw Error(fmt::format("comparison of {}x{}x{} images: a band of {}x{}x{} against {}x{}x{}",
+                            width_, height_, channels_, predicted.width(), predicted.height(),
+                            predicted.channels(), truth.width(), truth.height(), truth.channels()));
+  }
+  if (first_row < next_row_ || first_row + truth.height() > height_) {
+    throw Error(fmt::format("comparison: rows {} to {} after row {} of {}", first_row,
+                            first_row + truth.height(), next_row_, height_));
+  }
+  AppendRows(first_row - next_row_, nullptr, nullptr, nullptr);
+  AppendRows(truth.height(), &predicted, &truth, &mask);
+  // Rows whose windows the rows held so far complete (all of them at the image's last row).
+  Finalise(next_row_ == height_ ? height_ : next_row_ - kSsimWindowRadius);
+}
+
+void MaskedDisplayComparison::Finalise(int end_row) {
+  if (end_row <= finalised_) return;
+  // The rows held start kSsimWindowRadius rows above the first row to finalise (or at row 0) and
+  // reach kSsimWindowRadius rows below the last (or the image's last row), so the windows of
+  // the rows finalised see the same values as in the whole image.
+  const int rows = next_row_ - held_first_;
+  for (int c = 0; c < channels_; ++c) {
+    const cv::Mat x(rows, width_, CV_64F, predicted_[c].data());
+    const cv::Mat y(rows, width_, CV_64F, truth_[c].data());
+    AddChannelSsim(x, y, selected_.data(), finalised_ - held_first_, end_row - held_first_,
+                   ssim_sums_[c]);
+  }
+  finalised_ = end_row;
+  // Keep the rows the next rows' windows reach up into.
+  const int drop = std::max(0, finalised_ - kSsimWindowRadius) - held_first_;
+  if (drop <= 0) return;
+  const auto values = static_cast<std::ptrdiff_t>(drop) * width_;
+  selected_.erase(selected_.begin(), selected_.begin() + values);
+  for (std::vector<double>& plane : predicted_) plane.erase(plane.begin(), plane.begin() + values);
+  for (std::vector<double>& plane : truth_) plane.erase(plane.begin(), plane.begin() + values);
+  held_first_ += drop;
+}
+
+double MaskedDisplayComparison::Ssim() {
+  AppendRows(height_ - next_row_, nullptr, nullptr, nullptr);
+  Finalise(height_);
+  if (pixels_ == 0) throw Error("SSIM: the mask selects no pixel");
+  double sum = 0.0;
+  for (double channel : ssim_sums_) sum += channel / static_cast<double>(pixels_);
+  return sum / channels_;
+}
+
+std::optional<double> MaskedDisplayComparison::MeanDeltaE2000() const {
+  if (channels_ != 1 && channels_ != 3) return std::nullopt;
+  if (pixels_ == 0) throw Error("Delta E 2000: the mask selects no pixel");
+  return delta_e_sum_ / static_cast<double>(pixels_);
 }
 
 }  // namespace photomat

@@ -1,5 +1,10 @@
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
 #include "core/image.h"
 
 namespace photomat {
@@ -36,5 +41,42 @@ double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, 
 // channel count than 1 or 3 throw Error.
 double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Mask& mask,
                             double peak);
+
+// MaskedSsim and MaskedMeanDeltaE2000 of two images given band by band in row order, as a
+// streamed evaluation predicts them: the same values as of the whole images, bit for bit
+// (MaskedSsim is this with one band), holding at most a band and 2 x 5 rows of each plane as
+// doubles (the SSIM window reaches 5 rows above and below). Rows no band gives (bands the mask
+// leaves empty) lie outside the mask.
+class MaskedDisplayComparison {
+ public:
+  // Images of width x height and `channels`, shown with `peak` as white. Throws Error for an
+  // empty size or a peak that is not positive.
+  MaskedDisplayComparison(int width, int height, int channels, double peak);
+  // Rows [first_row, first_row + the band's height) of both images and of the mask. Throws Error
+  // for bands of another width or channel count, or rows before those given already.
+  void AddBand(int first_row, const Image& predicted, const Image& truth, const Mask& mask);
+  // After the last band: the SSIM. Throws Error if the mask selected no pixel.
+  double Ssim();
+  // The mean colour difference; none for images of other than one or three channels.
+  std::optional<double> MeanDeltaE2000() const;
+
+ private:
+  // Appends `rows` rows to the planes held: the bands' (or, for null pointers, outside the mask).
+  void AppendRows(int rows, const Image* predicted, const Image* truth, const Mask* mask);
+  // Adds the SSIM of the rows up to `end_row`, then drops the rows no later window reaches.
+  void Finalise(int end_row);
+
+  int width_, height_, channels_;
+  double peak_;
+  int next_row_ = 0;    // rows given so far
+  int finalised_ = 0;   // rows whose SSIM is summed
+  int held_first_ = 0;  // the first row of the planes held
+  // Rows [held_first_, next_row_) of each channel as displayed (0 outside the mask), and the mask.
+  std::vector<std::vector<double>> predicted_, truth_;
+  std::vector<std::uint8_t> selected_;
+  std::vector<double> ssim_sums_;  // per channel, over the rows finalised
+  double delta_e_sum_ = 0.0;
+  std::size_t pixels_ = 0;
+};
 
 }  // namespace photomat

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/quality/qualityssim.hpp>
@@ -120,6 +121,65 @@ TEST(ImageComparisonTest, MaskedSsimIsTheWholeImagesMapAveragedOverTheMask) {
     EXPECT_NEAR(MaskedSsim(predicted, truth, mask, 1.0), expected, 1e-8)
         << box.left << "," << box.top;
   }
+}
+
+// Rows [first, first + rows) of `image`.
+Image Rows(const Image& image, int first, int rows) {
+  Image band(image.width(), rows, image.channels());
+  for (int c = 0; c < image.channels(); ++c) {
+    for (int y = 0; y < rows; ++y) {
+      for (int x = 0; x < image.width(); ++x) band.at(x, y, c) = image.at(x, first + y, c);
+    }
+  }
+  return band;
+}
+
+Mask Rows(const Mask& mask, int first, int rows) {
+  Mask band(mask.width(), rows, false);
+  for (int y = 0; y < rows; ++y) {
+    for (int x = 0; x < mask.width(); ++x) band.Set(x, y, mask(x, first + y));
+  }
+  return band;
+}
+
+TEST(ImageComparisonTest, BandsGiveTheWholeImagesSsimAndColourDifference) {
+  // A disc mask on 40 x 37 images, given in bands of 1, 2, 3, 7 and 37 rows, and with the bands
+  // the mask leaves empty (its first and last rows) not given at all, as a streamed evaluation
+  // skips them.
+  const Image truth = Pattern(40, 37, 0.0, 1);
+  const Image predicted = Pattern(40, 37, 0.08, 4);
+  Mask disc(40, 37, false);
+  for (int y = 0; y < 37; ++y) {
+    for (int x = 0; x < 40; ++x) disc.Set(x, y, (x - 20) * (x - 20) + (y - 18) * (y - 18) < 150);
+  }
+  const double ssim = MaskedSsim(predicted, truth, disc, 0.9);
+  const double delta_e = MaskedMeanDeltaE2000(predicted, truth, disc, 0.9);
+  for (const int band : {1, 2, 3, 7, 37}) {
+    for (const bool skip_empty : {false, true}) {
+      MaskedDisplayComparison comparison(40, 37, 3, 0.9);
+      for (int first = 0; first < 37; first += band) {
+        const int rows = std::min(band, 37 - first);
+        const Mask mask = Rows(disc, first, rows);
+        if (skip_empty && mask.CountSet() == 0) continue;
+        comparison.AddBand(first, Rows(predicted, first, rows), Rows(truth, first, rows), mask);
+      }
+      // The whole images' SSIM is taken over the mask's region, these over every column: the
+      // same windows and sums in the same order, so the same bits.
+      EXPECT_EQ(comparison.Ssim(), ssim) << band << (skip_empty ? " skipping" : "");
+      EXPECT_EQ(*comparison.MeanDeltaE2000(), delta_e) << band;
+    }
+  }
+  EXPECT_LT(ssim, 0.99);
+  EXPECT_GT(delta_e, 0.5);
+
+  MaskedDisplayComparison comparison(40, 37, 3, 1.0);
+  comparison.AddBand(5, Rows(predicted, 5, 3), Rows(truth, 5, 3), Rows(disc, 5, 3));
+  EXPECT_THROW(comparison.AddBand(6, Rows(predicted, 6, 3), Rows(truth, 6, 3), Rows(disc, 6, 3)),
+               Error);  // rows given already
+  EXPECT_THROW(comparison.AddBand(35, Rows(predicted, 0, 3), Rows(truth, 0, 3), Rows(disc, 0, 3)),
+               Error);  // beyond the last row
+  EXPECT_FALSE(MaskedDisplayComparison(4, 4, 2, 1.0).MeanDeltaE2000().has_value());
+  EXPECT_THROW(MaskedDisplayComparison(4, 4, 3, 1.0).Ssim(), Error);  // no pixel selected
 }
 
 TEST(ImageComparisonTest, SsimOfConstantImagesIsTheLuminanceTerm) {

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/image_band_io.h"
 #include "core/memory_limits.h"
+#include "represent/evaluation/image_comparison.h"
 #include "represent/fitting/observations.h"
 #include "represent/fitting/prediction_folds.h"
 #include "represent/model/normal_error.h"
@@ -83,6 +84,34 @@ struct StackSums {
   NormalErrors normal_errors;
   bool gives_normals = false;
 };
+
+// Per image of `images` (indices into `set`), the white of its renderings (PredictionWhite): the
+// largest value over the mask, intensities applied, as the fit's observations hold it. One pass
+// over those images alone.
+std::vector<double> HeldOutWhites(const StreamedSet& set, const std::vector<int>& images,
+                                  const StreamedPredictionOptions& options) {
+  StreamedSet held_out = set.Subset(images);
+  const std::size_t pixel =
+      8 * static_cast<std::size_t>(images.size()) * static_cast<std::size_t>(set.channels());
+  const int band_rows =
+      BudgetedBandRows(options.band_rows, options.memory_bytes, kMinimumEvaluationMemory,
+                       pixel * static_cast<std::size_t>(set.width()), set.height());
+  std::vector<double> largest(images.size(), -INFINITY);
+  while (held_out.next_row() < held_out.height()) {
+    const int first = held_out.next_row();
+    const int rows = std::min(band_rows, held_out.height() - first);
+    const PhotometricSet band = held_out.ReadBand(rows);
+    // A band set without the mask's rows selects nothing (ReadBand).
+    if (held_out.SelectedPixels(first, rows) == 0) continue;
+    const Observations observations(band);
+    for (std::size_t j = 0; j < images.size(); ++j) {
+      largest[j] = std::max(largest[j], double{observations.matrix().col(j).maxCoeff()});
+    }
+  }
+  std::vector<double> whites;
+  for (double value : largest) whites.push_back(PredictionWhite(value));
+  return whites;
+}
 
 }  // namespace
 
@@ -186,8 +215,25 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
     fitted_folds.push_back(std::move(all));
   }
   // Per method, per image of the set: each image is predicted by one fold only, so the folds
-  // fitted in parallel write to different sums.
+  // fitted in parallel write to different sums (and comparisons).
   std::vector<std::vector<ImageSums>> sums(methods.size(), std::vector<ImageSums>(set.size()));
+  std::vector<std::vector<std::optional<MaskedDisplayComparison>>> looks(
+      methods.size(), std::vector<std::optional<MaskedDisplayComparison>>(set.size()));
+  if (options.appearance) {
+    if (options.hold_out_every <= 0) {
+      throw Error(set.source(),
+                  "the SSIM and colour difference of a streamed prediction are measured for "
+                  "held-out images only (--hold-out-every), not for every image of leave-one-out");
+    }
+    const std::vector<int>& held_out = folds.front().predicted;
+    const std::vector<double> whites = HeldOutWhites(set, held_out, options);
+    for (auto& method : looks) {
+      for (std::size_t j = 0; j < held_out.size(); ++j) {
+        method[static_cast<std::size_t>(held_out[j])].emplace(set.width(), set.height(),
+                                                              set.channels(), whites[j]);
+      }
+    }
+  }
   FoldFitOptions fits;
   fits.memory_bytes = options.memory_bytes;
   fits.band_rows = options.band_rows;
@@ -207,6 +253,10 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
               band.fit, band.observations, set.lights()[static_cast<std::size_t>(k)]);
           sums[band.method][static_cast<std::size_t>(k)].Add(
               band.observations.matrix().col(k).cast<double>(), relit);
+          if (auto& look = looks[band.method][static_cast<std::size_t>(k)]) {
+            const PredictionImages images = PredictionAsImages(band.observations, k, relit);
+            look->AddBand(band.first_row, images.predicted, images.captured, images.selected);
+          }
         });
       },
       fits);
@@ -214,23 +264,22 @@ void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
     MethodEvaluation& result = evaluations[i];
     result.method = methods[i];
     result.prediction_images.clear();
-    result.prediction_per_image.clear();
-    result.psnr_prediction_per_image.clear();
-    double eta = 0.0, psnr = 0.0;
+    std::vector<PredictionScores> scores;
     for (const PredictionFold& fold : folds) {
       for (int k : fold.predicted) {
         const ImageSums& image = sums[i][static_cast<std::size_t>(k)];
         if (image.count == 0.0) throw Error(set.source(), "the mask selects no pixel to evaluate");
         result.prediction_images.push_back(k);
-        result.prediction_per_image.push_back(image.NormalisedError(options.literal_thesis_rms));
-        result.psnr_prediction_per_image.push_back(image.Psnr());
-        eta += result.prediction_per_image.back();
-        psnr += result.psnr_prediction_per_image.back();
+        PredictionScores& score = scores.emplace_back();
+        score.eta = image.NormalisedError(options.literal_thesis_rms);
+        score.psnr = image.Psnr();
+        if (auto& look = looks[i][static_cast<std::size_t>(k)]) {
+          score.ssim = look->Ssim();
+          score.delta_e2000 = look->MeanDeltaE2000();
+        }
       }
     }
-    const auto count = static_cast<double>(result.prediction_images.size());
-    result.eta_prediction = eta / count;
-    result.psnr_prediction = psnr / count;
+    SetPredictionScores(result, scores);
   }
 }
 

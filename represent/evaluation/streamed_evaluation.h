@@ -66,6 +66,12 @@ struct StreamedPredictionOptions {
   bool literal_thesis_rms = false;
   // As EvaluationOptions::robust (`measured` ignored: found per band).
   std::optional<RobustFitOptions> robust;
+  // With hold_out_every > 0: also the SSIM and colour difference of every held-out image, as in
+  // memory (ScorePrediction): each prediction is compared band by band
+  // (MaskedDisplayComparison: about 10 rows x width x channels x 16 bytes held per held-out image
+  // and method), its white, the largest captured value, found first by a pass over the held-out
+  // images alone. Not for leave-one-out, where that would be every image of the set.
+  bool appearance = false;
   Progress* progress = nullptr;
   // Set: every method is also fitted to all the images in the same passes (a fold more, fitting
   // every image and predicting none), and each band's fit handed here: the method's index, the
@@ -77,9 +83,10 @@ struct StreamedPredictionOptions {
 };
 
 // Sets the method and prediction of `evaluations[i]` (prediction_images, eta_prediction,
-// psnr_prediction and their per-image values) for `methods[i]` fitted to `set`. Throws Error naming
-// the set's source when the sizes differ, for a method that cannot be streamed (the neural
-// basis) or a fold too small for a method, and naming the image at fault for a truncated or
+// psnr_prediction, with `appearance` ssim_prediction and delta_e2000_prediction, and their
+// per-image values) for `methods[i]` fitted to `set`. Throws Error naming the set's source when
+// the sizes differ, for a method that cannot be streamed (the neural basis), a fold too small for
+// a method or `appearance` with leave-one-out, and naming the image at fault for a truncated or
 // corrupt one.
 void PredictStreamed(StreamedSet& set, std::span<const Method> methods,
                      std::span<MethodEvaluation> evaluations,

@@ -165,7 +165,8 @@ TEST(StreamedEvaluationTest, StacksEvaluatedInOnePassGiveEachStacksEvaluation) {
 
 // `methods` predicted on the capture at `input` streamed, in bands of 5 rows, and in memory with
 // `in_memory`'s folds and robust options: the same predicted images, and eta and PSNR within
-// 1e-12 relative and 1e-11 dB (mean and per image). Returns the in-memory evaluations.
+// 1e-12 relative and 1e-11 dB (mean and per image), and for held-out images the SSIM and colour
+// difference within 1e-12 and 1e-11. Returns the in-memory evaluations.
 std::vector<MethodEvaluation> ExpectStreamedPredictionMatches(const fs::path& input,
                                                               const std::vector<Method>& methods,
                                                               const EvaluationOptions& in_memory) {
@@ -177,6 +178,7 @@ std::vector<MethodEvaluation> ExpectStreamedPredictionMatches(const fs::path& in
   options.band_rows = 5;
   options.hold_out_every = in_memory.hold_out_every;
   options.robust = in_memory.robust;
+  options.appearance = in_memory.hold_out_every > 0;  // held-out images only
   PredictStreamed(set, methods, streamed, options);
   std::vector<MethodEvaluation> wholes;
   for (std::size_t i = 0; i < methods.size(); ++i) {
@@ -200,6 +202,25 @@ std::vector<MethodEvaluation> ExpectStreamedPredictionMatches(const fs::path& in
           << label << ", image " << whole.prediction_images[j];
       EXPECT_NEAR(streamed[i].psnr_prediction_per_image[j], whole.psnr_prediction_per_image[j],
                   1e-11)
+          << label << ", image " << whole.prediction_images[j];
+    }
+    // The SSIM and colour difference of held-out images, compared band by band: measured equal
+    // to the in-memory ones bit for bit (least squares, robust, pbr); the bounds are the eta's.
+    if (!options.appearance) {
+      EXPECT_FALSE(streamed[i].ssim_prediction || streamed[i].delta_e2000_prediction) << label;
+      continue;
+    }
+    if (streamed[i].ssim_prediction_per_image.size() != whole.prediction_images.size() ||
+        streamed[i].delta_e2000_prediction_per_image.size() != whole.prediction_images.size()) {
+      ADD_FAILURE() << label << ": no SSIM or colour difference of every held-out image";
+      continue;
+    }
+    for (std::size_t j = 0; j < whole.prediction_images.size(); ++j) {
+      EXPECT_NEAR(streamed[i].ssim_prediction_per_image[j], whole.ssim_prediction_per_image[j],
+                  1e-12)
+          << label << ", image " << whole.prediction_images[j];
+      EXPECT_NEAR(streamed[i].delta_e2000_prediction_per_image[j],
+                  whole.delta_e2000_prediction_per_image[j], 1e-11)
           << label << ", image " << whole.prediction_images[j];
     }
   }
@@ -352,6 +373,11 @@ TEST(StreamedEvaluationTest, PredictionRefusesWhatItCannotStream) {
   every.hold_out_every = 1;
   EXPECT_THAT([&] { PredictStreamed(set, gradient, one, every); },
               ThrowsMessage<Error>(HasSubstr("a prediction fold fits 0 images; gradient needs 3")));
+  // The SSIM and colour difference are compared band by band for held-out images only.
+  StreamedPredictionOptions leave_one_out;
+  leave_one_out.appearance = true;
+  EXPECT_THAT([&] { PredictStreamed(set, gradient, one, leave_one_out); },
+              ThrowsMessage<Error>(HasSubstr("held-out images only")));
 }
 
 TEST(StreamedEvaluationTest, AStackOfAnotherSizeIsRefused) {
