@@ -247,7 +247,7 @@ void AddEvaluateCommand(CLI::App& app) {
     bool no_prediction = false;
     bool compare = false;
     std::string rank_by = "eta";
-    bool appearance = false;
+    std::string appearance = "auto";
     int hold_out_every = 0;
     bool literal_rms = false;
     bool raw_intensities = false;
@@ -293,10 +293,13 @@ void AddEvaluateCommand(CLI::App& app) {
           "With --compare: rank by eta (e_k/sigma_k, the thesis's; PSNR ranks alike), "
           "ssim or delta-e2000 (of the sRGB renderings; streamed, of held-out images only)")
       ->capture_default_str();
-  command->add_flag("--appearance", options->appearance,
-                    "Also measure the SSIM and colour difference of leave-one-out predictions "
-                    "(of held-out ones they always are; leave-one-out then takes about twice "
-                    "as long, and is not streamed)");
+  command
+      ->add_option("--appearance", options->appearance,
+                   "The SSIM and colour difference of the predictions: auto (of held-out images, "
+                   "and when --rank-by needs them), always (leave-one-out too, in memory only; "
+                   "it then takes about twice as long) or never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
   command->add_flag("--literal-rms", options->literal_rms,
                     "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
   command->add_flag("--ignore-intensities", options->raw_intensities,
@@ -383,6 +386,18 @@ void AddEvaluateCommand(CLI::App& app) {
     }
     std::optional<RankingMeasure> ranking;
     if (options->compare) ranking = measure;
+    // IMPLEMENTER CHOICE: by default the SSIM and colour difference where few images are
+    // predicted (held out) and where the ranking needs them; they cost about as much as a cheap
+    // method's folds (EvaluationOptions::appearance).
+    if (options->appearance == "never" && measure != RankingMeasure::kEta) {
+      throw Error(
+          fmt::format("--rank-by {} needs the SSIM and colour difference: not with "
+                      "--appearance never",
+                      RankingMeasureName(measure)));
+    }
+    const bool appearance = options->appearance == "always" ||
+                            (options->appearance == "auto" &&
+                             (options->hold_out_every > 0 || measure != RankingMeasure::kEta));
     const std::vector<int> report_images = ParseIndexList(options->report_images);
     StreamedSet set = OpenStreamedSet(options->input, load);
     CheckReportImages(report_images, set.size());
@@ -399,17 +414,16 @@ void AddEvaluateCommand(CLI::App& app) {
     if (options->stream || HoldingSetExceeds(set, budget)) {
       // Checked before the evaluation, which can take hours at this size: streamed, the SSIM
       // and colour difference are measured for held-out images only.
-      if (options->hold_out_every == 0 &&
-          (measure != RankingMeasure::kEta || options->appearance)) {
+      if (options->hold_out_every == 0 && appearance) {
         throw Error(
             set.source(),
             fmt::format("{}: the streamed evaluation ({}) measures the SSIM and colour "
                         "difference of held-out images only (--hold-out-every K); "
                         "leave-one-out in memory (--memory MB) measures them for every "
                         "image",
-                        options->appearance
-                            ? std::string("--appearance")
-                            : fmt::format("--rank-by {}", RankingMeasureName(measure)),
+                        measure != RankingMeasure::kEta
+                            ? fmt::format("--rank-by {}", RankingMeasureName(measure))
+                            : std::string("--appearance always"),
                         options->stream ? "--stream" : "the set exceeds the memory budget"));
       }
       StreamedEvaluationOptions streamed;
@@ -429,7 +443,7 @@ void AddEvaluateCommand(CLI::App& app) {
         prediction->hold_out_every = options->hold_out_every;
         prediction->literal_thesis_rms = options->literal_rms;
         prediction->robust = robust;
-        prediction->appearance = options->hold_out_every > 0;
+        prediction->appearance = appearance;
       }
       const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
                                         std::span<const std::filesystem::path> stacks) {
@@ -476,10 +490,7 @@ void AddEvaluateCommand(CLI::App& app) {
     evaluation.prediction = !options->no_prediction;
     evaluation.literal_thesis_rms = options->literal_rms;
     evaluation.hold_out_every = options->hold_out_every;
-    // IMPLEMENTER CHOICE: the SSIM and colour difference where few images are predicted (held
-    // out), where asked for, and where the ranking needs them (EvaluationOptions::appearance).
-    evaluation.appearance =
-        options->hold_out_every > 0 || options->appearance || measure != RankingMeasure::kEta;
+    evaluation.appearance = appearance;
     evaluation.progress = &bar;
     if (options->robust) {
       evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);

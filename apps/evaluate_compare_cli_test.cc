@@ -137,21 +137,25 @@ TEST(EvaluateCompareCliTest, RefusesARankingByAMeasureItCannotHave) {
   EXPECT_EQ(streamed.exit_code, 1);
   EXPECT_THAT(streamed.output, HasSubstr("--rank-by ssim: the streamed evaluation (--stream)"));
   EXPECT_FALSE(fs::exists(dir / "out"));
-  const RunResult appearance = RunPhotomat(leave_one_out + "--appearance --stream --json " +
+  const RunResult appearance = RunPhotomat(leave_one_out + "--appearance always --stream --json " +
                                            (dir / "out" / "e.json").string());
   EXPECT_EQ(appearance.exit_code, 1);
-  EXPECT_THAT(appearance.output, HasSubstr("--appearance: the streamed evaluation (--stream)"));
+  EXPECT_THAT(appearance.output,
+              HasSubstr("--appearance always: the streamed evaluation (--stream)"));
   EXPECT_FALSE(fs::exists(dir / "out"));
+  const RunResult never = RunPhotomat(evaluate + "--compare --rank-by ssim --appearance never");
+  EXPECT_EQ(never.exit_code, 1);
+  EXPECT_THAT(never.output, HasSubstr("not with --appearance never"));
 }
 
-// Leave-one-out measures the SSIM and colour difference when asked (--appearance) or when the
-// ranking needs them; held-out predictions always have them (the test above).
+// Leave-one-out measures the SSIM and colour difference when asked (--appearance always) or when
+// the ranking needs them; held-out predictions have them unless --appearance never.
 TEST(EvaluateCompareCliTest, LeaveOneOutMeasuresAppearanceWhenAskedOrRankedByIt) {
   TempDir dir;
   const std::string capture = (dir / "capture").string();
   testing::GenerateCapture(capture, "--size 12x10 --seed 1");
   const std::string evaluate = "evaluate " + capture + " --methods gradient,ptm --json ";
-  for (const std::string extra : {"", " --appearance", " --compare --rank-by delta-e2000"}) {
+  for (const std::string extra : {"", " --appearance always", " --compare --rank-by delta-e2000"}) {
     SCOPED_TRACE(extra);
     const fs::path json_file = dir / "e.json";
     const RunResult run = RunPhotomat(evaluate + json_file.string() + extra);
@@ -163,6 +167,15 @@ TEST(EvaluateCompareCliTest, LeaveOneOutMeasuresAppearanceWhenAskedOrRankedByIt)
     if (!extra.empty()) {
       EXPECT_EQ(json["ptm"]["ssim_prediction_per_image"].size(), 36u);
     }
+  }
+  for (const std::string appearance : {"auto", "never"}) {
+    const fs::path json_file = dir / (appearance + ".json");
+    const RunResult run = RunPhotomat(evaluate + json_file.string() + " --hold-out-every 4 " +
+                                      "--appearance " + appearance);
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    const nlohmann::json json = ReadJsonFile(json_file);
+    EXPECT_EQ(json["ptm"]["eta_prediction_per_image"].size(), 9u);
+    EXPECT_EQ(json["ptm"].contains("ssim_prediction"), appearance == "auto") << appearance;
   }
 }
 
