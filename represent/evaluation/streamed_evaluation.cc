@@ -97,10 +97,15 @@ std::vector<double> HeldOutWhites(const StreamedSet& set, const std::vector<int>
       BudgetedBandRows(options.band_rows, options.memory_bytes, kMinimumEvaluationMemory,
                        pixel * static_cast<std::size_t>(set.width()), set.height());
   std::vector<double> largest(images.size(), -INFINITY);
+  NullProgress none;
+  Progress& progress = OrNull(options.progress, none);
+  progress.Start("held-out whites",
+                 static_cast<std::size_t>((set.height() + band_rows - 1) / band_rows));
   while (held_out.next_row() < held_out.height()) {
     const int first = held_out.next_row();
     const int rows = std::min(band_rows, held_out.height() - first);
     const PhotometricSet band = held_out.ReadBand(rows);
+    progress.Advance();
     // A band set without the mask's rows selects nothing (ReadBand).
     if (held_out.SelectedPixels(first, rows) == 0) continue;
     const Observations observations(band);
@@ -108,6 +113,7 @@ std::vector<double> HeldOutWhites(const StreamedSet& set, const std::vector<int>
       largest[j] = std::max(largest[j], double{observations.matrix().col(j).maxCoeff()});
     }
   }
+  progress.Finish();
   std::vector<double> whites;
   for (double value : largest) whites.push_back(PredictionWhite(value));
   return whites;
