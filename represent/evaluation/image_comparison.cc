@@ -118,22 +118,28 @@ double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, 
 
 double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak) {
   CheckComparable("SSIM", predicted, truth, mask, peak);
-  // The region the mask's windows see, as one band of a comparison of that size.
+  // The region the mask's windows see, compared in bands of kSsimBandRows rows (so that the
+  // planes held as doubles follow the band, not the image).
+  constexpr int kSsimBandRows = 64;
   const cv::Rect region = SsimRegion(mask);
-  Image predicted_part(region.width, region.height, truth.channels());
-  Image truth_part(region.width, region.height, truth.channels());
-  Mask mask_part(region.width, region.height, false);
-  for (int y = 0; y < region.height; ++y) {
-    for (int x = 0; x < region.width; ++x) {
-      mask_part.Set(x, y, mask(region.x + x, region.y + y));
-      for (int c = 0; c < truth.channels(); ++c) {
-        predicted_part.at(x, y, c) = predicted.at(region.x + x, region.y + y, c);
-        truth_part.at(x, y, c) = truth.at(region.x + x, region.y + y, c);
+  MaskedDisplayComparison comparison(region.width, region.height, truth.channels(), peak);
+  for (int first = 0; first < region.height; first += kSsimBandRows) {
+    const int rows = std::min(kSsimBandRows, region.height - first);
+    Image predicted_band(region.width, rows, truth.channels());
+    Image truth_band(region.width, rows, truth.channels());
+    Mask mask_band(region.width, rows, false);
+    for (int y = 0; y < rows; ++y) {
+      const int image_y = region.y + first + y;
+      for (int x = 0; x < region.width; ++x) {
+        mask_band.Set(x, y, mask(region.x + x, image_y));
+        for (int c = 0; c < truth.channels(); ++c) {
+          predicted_band.at(x, y, c) = predicted.at(region.x + x, image_y, c);
+          truth_band.at(x, y, c) = truth.at(region.x + x, image_y, c);
+        }
       }
     }
+    comparison.AddBand(first, predicted_band, truth_band, mask_band);
   }
-  MaskedDisplayComparison comparison(region.width, region.height, truth.channels(), peak);
-  comparison.AddBand(0, predicted_part, truth_part, mask_part);
   return comparison.Ssim();
 }
 
