@@ -86,11 +86,10 @@ PredictionScores ScorePrediction(const Observations& observations, int image,
   if (!appearance) return scores;
   const double white = PredictionWhite(observations.matrix().col(image).maxCoeff());
   const PredictionImages images = PredictionAsImages(observations, image, relit);
-  scores.ssim = MaskedSsim(images.predicted, images.captured, images.selected, white);
-  if (observations.channels() == 1 || observations.channels() == 3) {
-    scores.delta_e2000 =
-        MaskedMeanDeltaE2000(images.predicted, images.captured, images.selected, white);
-  }
+  const DisplayedComparison displayed =
+      CompareDisplayed(images.predicted, images.captured, images.selected, white);
+  scores.ssim = displayed.ssim;
+  scores.delta_e2000 = displayed.mean_delta_e2000;
   return scores;
 }
 

@@ -116,15 +116,18 @@ double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, 
   return PsnrDecibels(peak, sum / static_cast<double>(pixels * truth.channels()));
 }
 
-double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak) {
-  CheckComparable("SSIM", predicted, truth, mask, peak);
-  // The region the mask's windows see, compared in bands of kSsimBandRows rows (so that the
-  // planes held as doubles follow the band, not the image).
-  constexpr int kSsimBandRows = 64;
+namespace {
+
+// The comparison of the mask's region, in bands of kBandRows rows (so that the planes held as
+// doubles follow the band, not the image).
+MaskedDisplayComparison CompareRegion(const Image& predicted, const Image& truth, const Mask& mask,
+                                      double peak, bool colour_difference) {
+  constexpr int kBandRows = 64;
   const cv::Rect region = SsimRegion(mask);
-  MaskedDisplayComparison comparison(region.width, region.height, truth.channels(), peak);
-  for (int first = 0; first < region.height; first += kSsimBandRows) {
-    const int rows = std::min(kSsimBandRows, region.height - first);
+  MaskedDisplayComparison comparison(region.width, region.height, truth.channels(), peak,
+                                     colour_difference);
+  for (int first = 0; first < region.height; first += kBandRows) {
+    const int rows = std::min(kBandRows, region.height - first);
     Image predicted_band(region.width, rows, truth.channels());
     Image truth_band(region.width, rows, truth.channels());
     Mask mask_band(region.width, rows, false);
@@ -140,7 +143,23 @@ double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, 
     }
     comparison.AddBand(first, predicted_band, truth_band, mask_band);
   }
-  return comparison.Ssim();
+  return comparison;
+}
+
+}  // namespace
+
+double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak) {
+  CheckComparable("SSIM", predicted, truth, mask, peak);
+  return CompareRegion(predicted, truth, mask, peak, /*colour_difference=*/false).Ssim();
+}
+
+DisplayedComparison CompareDisplayed(const Image& predicted, const Image& truth, const Mask& mask,
+                                     double peak) {
+  CheckComparable("SSIM and Delta E 2000", predicted, truth, mask, peak);
+  MaskedDisplayComparison comparison =
+      CompareRegion(predicted, truth, mask, peak, /*colour_difference=*/true);
+  const double ssim = comparison.Ssim();
+  return {ssim, comparison.MeanDeltaE2000()};
 }
 
 double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Mask& mask,
@@ -157,11 +176,13 @@ double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Ma
   return sum / static_cast<double>(pixels);
 }
 
-MaskedDisplayComparison::MaskedDisplayComparison(int width, int height, int channels, double peak)
+MaskedDisplayComparison::MaskedDisplayComparison(int width, int height, int channels, double peak,
+                                                 bool colour_difference)
     : width_(width),
       height_(height),
       channels_(channels),
       peak_(peak),
+      colour_difference_(colour_difference && (channels == 1 || channels == 3)),
       predicted_(static_cast<std::size_t>(channels)),
       truth_(static_cast<std::size_t>(channels)),
       ssim_sums_(static_cast<std::size_t>(channels), 0.0) {
@@ -180,7 +201,6 @@ void MaskedDisplayComparison::AppendRows(int rows, const Image* predicted, const
   for (std::vector<double>& plane : truth_) plane.resize(start + count, 0.0);
   next_row_ += rows;
   if (!mask) return;  // rows outside the mask: 0 in both images
-  const bool colour = channels_ == 1 || channels_ == 3;
   for (std::size_t p = 0; p < count; ++p) {
     if (!(*mask)[p]) continue;
     selected_[start + p] = 1;
@@ -189,7 +209,7 @@ void MaskedDisplayComparison::AppendRows(int rows, const Image* predicted, const
       predicted_[c][start + p] = LinearToSrgb(Displayed(predicted->plane(c)[p], peak_));
       truth_[c][start + p] = LinearToSrgb(Displayed(truth->plane(c)[p], peak_));
     }
-    if (colour) {
+    if (colour_difference_) {
       delta_e_sum_ += CieDe2000(DisplayedLab(*predicted, p, peak_), DisplayedLab(*truth, p, peak_));
     }
   }
@@ -247,7 +267,7 @@ double MaskedDisplayComparison::Ssim() {
 }
 
 std::optional<double> MaskedDisplayComparison::MeanDeltaE2000() const {
-  if (channels_ != 1 && channels_ != 3) return std::nullopt;
+  if (!colour_difference_) return std::nullopt;
   if (pixels_ == 0) throw Error("Delta E 2000: the mask selects no pixel");
   return delta_e_sum_ / static_cast<double>(pixels_);
 }

@@ -32,6 +32,15 @@ double MaskedPsnr(const Image& predicted, const Image& truth, const Mask& mask, 
 // gives the whole map's values there.
 double MaskedSsim(const Image& predicted, const Image& truth, const Mask& mask, double peak);
 
+// MaskedSsim and, for one- or three-channel images, MaskedMeanDeltaE2000 in one pass over the
+// mask's region: what an evaluation reports of each predicted image.
+struct DisplayedComparison {
+  double ssim = 0.0;
+  std::optional<double> mean_delta_e2000;
+};
+DisplayedComparison CompareDisplayed(const Image& predicted, const Image& truth, const Mask& mask,
+                                     double peak);
+
 // The mean CIEDE2000 colour difference over the mask (CieDe2000, core/colour.h) between the
 // images' renderings: every value clamped and divided by `peak`, read as linear Rec.709 / sRGB
 // RGB, converted to CIELAB under D65 (CieLabOfLinearRec709). The sRGB rendering's transfer curve
@@ -49,9 +58,11 @@ double MaskedMeanDeltaE2000(const Image& predicted, const Image& truth, const Ma
 // leaves empty) lie outside the mask.
 class MaskedDisplayComparison {
  public:
-  // Images of width x height and `channels`, shown with `peak` as white. Throws Error for an
-  // empty size or a peak that is not positive.
-  MaskedDisplayComparison(int width, int height, int channels, double peak);
+  // Images of width x height and `channels`, shown with `peak` as white; without
+  // `colour_difference` the SSIM alone (MeanDeltaE2000 gives none). Throws Error for an empty
+  // size or a peak that is not positive.
+  MaskedDisplayComparison(int width, int height, int channels, double peak,
+                          bool colour_difference = true);
   // Rows [first_row, first_row + the band's height) of both images and of the mask. Throws Error
   // for bands of another width or channel count, or rows before those given already.
   void AddBand(int first_row, const Image& predicted, const Image& truth, const Mask& mask);
@@ -68,9 +79,10 @@ class MaskedDisplayComparison {
 
   int width_, height_, channels_;
   double peak_;
-  int next_row_ = 0;    // rows given so far
-  int finalised_ = 0;   // rows whose SSIM is summed
-  int held_first_ = 0;  // the first row of the planes held
+  bool colour_difference_;  // asked for, and the images have one or three channels
+  int next_row_ = 0;        // rows given so far
+  int finalised_ = 0;       // rows whose SSIM is summed
+  int held_first_ = 0;      // the first row of the planes held
   // Rows [held_first_, next_row_) of each channel as displayed (0 outside the mask), and the mask.
   std::vector<std::vector<double>> predicted_, truth_;
   std::vector<std::uint8_t> selected_;

@@ -171,6 +171,14 @@ TEST(ImageComparisonTest, BandsGiveTheWholeImagesSsimAndColourDifference) {
   }
   EXPECT_LT(ssim, 0.99);
   EXPECT_GT(delta_e, 0.5);
+  // Both in one pass, as an evaluation takes them: the same bits.
+  const DisplayedComparison both = CompareDisplayed(predicted, truth, disc, 0.9);
+  EXPECT_EQ(both.ssim, ssim);
+  ASSERT_TRUE(both.mean_delta_e2000);
+  EXPECT_EQ(*both.mean_delta_e2000, delta_e);
+  EXPECT_FALSE(MaskedDisplayComparison(4, 4, 3, 1.0, /*colour_difference=*/false)
+                   .MeanDeltaE2000()
+                   .has_value());
 
   MaskedDisplayComparison comparison(40, 37, 3, 1.0);
   comparison.AddBand(5, Rows(predicted, 5, 3), Rows(truth, 5, 3), Rows(disc, 5, 3));
