@@ -239,22 +239,25 @@ void MaskedDisplayComparison::Finalise(int end_row) {
   // The rows held start kSsimWindowRadius rows above the first row to finalise (or at row 0) and
   // reach kSsimWindowRadius rows below the last (or the image's last row), so the windows of
   // the rows finalised see the same values as in the whole image.
-  const int rows = next_row_ - held_first_;
+  const int first = HeldFirstRow();
+  const int rows = next_row_ - first;
   for (int c = 0; c < channels_; ++c) {
     const cv::Mat x(rows, width_, CV_64F, predicted_[c].data());
     const cv::Mat y(rows, width_, CV_64F, truth_[c].data());
-    AddChannelSsim(x, y, selected_.data(), finalised_ - held_first_, end_row - held_first_,
-                   ssim_sums_[c]);
+    AddChannelSsim(x, y, selected_.data(), finalised_ - first, end_row - first, ssim_sums_[c]);
   }
   finalised_ = end_row;
   // Keep the rows the next rows' windows reach up into.
-  const int drop = std::max(0, finalised_ - kSsimWindowRadius) - held_first_;
+  const int drop = HeldFirstRow() - first;
   if (drop <= 0) return;
   const auto values = static_cast<std::ptrdiff_t>(drop) * width_;
   selected_.erase(selected_.begin(), selected_.begin() + values);
   for (std::vector<double>& plane : predicted_) plane.erase(plane.begin(), plane.begin() + values);
   for (std::vector<double>& plane : truth_) plane.erase(plane.begin(), plane.begin() + values);
-  held_first_ += drop;
+}
+
+int MaskedDisplayComparison::HeldFirstRow() const {
+  return std::max(0, finalised_ - kSsimWindowRadius);
 }
 
 double MaskedDisplayComparison::Ssim() {

@@ -76,14 +76,16 @@ class MaskedDisplayComparison {
   void AppendRows(int rows, const Image* predicted, const Image* truth, const Mask* mask);
   // Adds the SSIM of the rows up to `end_row`, then drops the rows no later window reaches.
   void Finalise(int end_row);
+  // The first row held: the window's radius above the first row not yet finalised (or row 0).
+  int HeldFirstRow() const;
 
   int width_, height_, channels_;
   double peak_;
   bool colour_difference_;  // asked for, and the images have one or three channels
   int next_row_ = 0;        // rows given so far
   int finalised_ = 0;       // rows whose SSIM is summed
-  int held_first_ = 0;      // the first row of the planes held
-  // Rows [held_first_, next_row_) of each channel as displayed (0 outside the mask), and the mask.
+  // Rows [HeldFirstRow(), next_row_) of each channel as displayed (0 outside the mask), and the
+  // mask.
   std::vector<std::vector<double>> predicted_, truth_;
   std::vector<std::uint8_t> selected_;
   std::vector<double> ssim_sums_;  // per channel, over the rows finalised
