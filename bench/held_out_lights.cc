@@ -32,6 +32,7 @@
 //                   [--float] [--relight-cli PATH|none] [--planes N] [--grid-size G]
 //                   [--rbf-width DEG] [--rbf-regularisation R] [--rbf-tail affine|quadratic]
 //                   [--leave-out one|block|edge|side] [--calibrated]
+//                   [--neural-options "--neural-epochs 150 ..."]
 //   held_out_lights SET --oracle [--residual-of METHOD] | --clamped-score | --blend [--planes -1]
 //                   | --polyharmonic (diagnoses: bench/held_out_diagnoses.h)
 //
@@ -100,6 +101,8 @@ struct Arguments {
   std::optional<std::string> residual_of;
   std::optional<fs::path> relight_cli;
   LightProfileOptions profile;
+  // Appended to `photomat fit --method neural` (its own options; empty: the defaults).
+  std::string neural_options;
 };
 
 Arguments Parse(int argc, char** argv) {
@@ -129,6 +132,8 @@ Arguments Parse(int argc, char** argv) {
       arguments.residual_of = value();
     } else if (a == "--calibrated") {
       arguments.calibrated = true;
+    } else if (a == "--neural-options") {
+      arguments.neural_options = value();
     } else if (a == "--float") {
       arguments.linear_jpeg = false;
     } else if (a == "--relight-cli") {
@@ -452,27 +457,29 @@ std::vector<Row> RelightCliRows(const fs::path& relight_cli, const PhotometricSe
 }
 
 // The neural basis, trained by `photomat fit --method neural` (photomat-neural, the one program
-// that loads libtorch; PHOTOMAT_BINARY, else the photomat beside this program) with its defaults,
-// on the training lights' images written as a photomat capture (float EXR: the values the other
-// methods fit, the set's mask), its stack loaded back here. Its time is the whole command's (the
-// images read, libtorch loaded, the training, the stack written). Nothing when the fit fails (a
-// build without libtorch): a row that says why.
+// that loads libtorch; PHOTOMAT_BINARY, else the photomat beside this program) with its defaults
+// and `options` (--neural-options), on the training lights' images written as a photomat capture
+// (float EXR: the values the other methods fit, the set's mask), its stack loaded back here. Its
+// time is the whole command's (the images read, libtorch loaded, the training, the stack written).
+// Nothing when the fit fails (a build without libtorch): a row that says why.
 Row NeuralRow(const PhotometricSet& set, const HoldOut& hold_out, double peak,
-              const fs::path& work) {
+              const std::string& options, const fs::path& work) {
   const fs::path training = work / "neural-training", out = work / "neural-fit";
   fs::remove_all(training);
   fs::remove_all(out);
-  SaveSetOptions options;
-  options.sample_type = SampleType::kFloat;
-  SavePhotometricSet(training, set.Subset(hold_out.selected), options);
+  SaveSetOptions save;
+  save.sample_type = SampleType::kFloat;
+  SavePhotometricSet(training, set.Subset(hold_out.selected), save);
   const char* binary = std::getenv("PHOTOMAT_BINARY");
   const fs::path photomat =
       binary ? fs::path(binary) : fs::read_symlink("/proc/self/exe").parent_path() / "photomat";
-  const CommandRun run = RunLogged(fmt::format("{} fit {} --method neural --out {}",
-                                               photomat.string(), training.string(), out.string()),
-                                   work / "neural.log");
+  const CommandRun run =
+      RunLogged(fmt::format("{} fit {} --method neural --out {} {}", photomat.string(),
+                            training.string(), out.string(), options),
+                work / "neural.log");
+  const std::string label = options.empty() ? "neural" : fmt::format("neural {}", options);
   if (!run.failure.empty()) {
-    Row row{"photomat", "neural", 0, {}, {}, {}};
+    Row row{"photomat", label, 0, {}, {}, {}};
     row.failure = run.failure;
     return row;
   }
@@ -480,7 +487,7 @@ Row NeuralRow(const PhotometricSet& set, const HoldOut& hold_out, double peak,
   const LoadedStack loaded = LoadStackFile(stack);
   const nlohmann::json& report = loaded.representation.details()["neural_training"];
   Row row{"photomat",
-          fmt::format("neural [{} epochs, best {}, training {:.0f} s]", report["epochs"].dump(),
+          fmt::format("{} [{} epochs, best {}, training {:.0f} s]", label, report["epochs"].dump(),
                       report["best_epoch"].dump(), report["seconds"].get<double>()),
           loaded.representation.maps().channels(),
           MeanScores(loaded.representation, set, hold_out.held_out, peak),
@@ -738,7 +745,7 @@ void RunSet(const fs::path& path, const Arguments& arguments, const fs::path& wo
     std::vector<Row> rows;
     for (const Method& method : methods) {
       if (method.kind == Method::Kind::kNeural) {
-        rows.push_back(NeuralRow(set, hold_out, peak, work));
+        rows.push_back(NeuralRow(set, hold_out, peak, arguments.neural_options, work));
         continue;
       }
       rows.push_back(PhotomatRow(observations, set, method, hold_out, peak, work, path));
