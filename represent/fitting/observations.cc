@@ -20,6 +20,24 @@ namespace {
 // float sums of one block stay accurate (2^12 terms).
 constexpr Eigen::Index kRowBlock = 4096;
 
+// The sum of `count` floats in double, in kSumLanes interleaved partial sums added at the end.
+// Why lanes: one running sum waits on the adder's latency at every term (a 4096 x 50 block of
+// the Gram pass: 200 us, a third of its rank update's time); independent lanes vectorise without
+// reordering any lane's terms, so both clones of the loop give the same bits (16 lanes: 24 us
+// with AVX2, 54 us with SSE2).
+constexpr int kSumLanes = 16;
+PHOTOMAT_HOT_LOOP double SumInDouble(const float* values, Eigen::Index count) {
+  double lanes[kSumLanes] = {};
+  Eigen::Index i = 0;
+  for (; i + kSumLanes <= count; i += kSumLanes) {
+    for (int lane = 0; lane < kSumLanes; ++lane) lanes[lane] += values[i + lane];
+  }
+  for (; i < count; ++i) lanes[0] += values[i];
+  double total = 0.0;
+  for (const double lane : lanes) total += lane;
+  return total;
+}
+
 // Columns up to which ParallelProduct uses its own kernel instead of Eigen's GEMM, the rows of
 // the result it keeps in the L1 cache (256 x 16 floats: 16 KiB at most) and the images it adds
 // per pass over them.
@@ -220,7 +238,7 @@ void RowGram::Add(const Eigen::MatrixXf& matrix, std::span<const std::size_t> pi
           partial.setZero();
           partial.selfadjointView<Eigen::Lower>().rankUpdate(block.transpose());
           total += partial.selfadjointView<Eigen::Lower>().toDenseMatrix().cast<double>();
-          sum += block.cast<double>().colwise().sum().transpose();
+          for (Eigen::Index j = 0; j < n; ++j) sum(j) += SumInDouble(block.col(j).data(), length);
         }
       }
     });
