@@ -19,6 +19,7 @@
 #include "relight/render/display_image.h"
 #include "relight/render/output_folder.h"
 #include "relight/web/published_name.h"
+#include "relight/web/report_charts.h"
 #include "relight/web/report_pictures.h"
 #include "represent/fitting/fit.h"
 #include "represent/model/method.h"
@@ -32,37 +33,6 @@ namespace fs = std::filesystem;
 
 constexpr const char* kReportFormat = "photomat-report";
 constexpr const char* kReportManifest = "report.json";
-constexpr std::array<const char*, 4> kSeriesColours = {"#4e79a7", "#f28e2b", "#59a14f", "#e15759"};
-
-// Anchors of the heat colour scale, evenly spaced over [0, 1], linear in between.
-constexpr std::array<std::array<float, 3>, 5> kHeatAnchors = {{{0.05f, 0.05f, 0.35f},
-                                                               {0.10f, 0.45f, 0.85f},
-                                                               {0.25f, 0.80f, 0.55f},
-                                                               {0.95f, 0.85f, 0.20f},
-                                                               {0.85f, 0.15f, 0.10f}}};
-constexpr float kUndefinedGrey = 0.18f;
-
-std::string Number(double value) {
-  if (!std::isfinite(value)) return "–";
-  return fmt::format("{:.4g}", value);
-}
-
-// 1, 2 or 5 times a power of ten, so that about `ticks` steps cover `top`.
-double NiceStep(double top, int ticks) {
-  const double raw = top / ticks;
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0}) {
-    if (m * power >= raw) return m * power;
-  }
-  return 10.0 * power;
-}
-
-std::string HexColour(const std::array<float, 3>& rgb) {
-  const auto code = [](float v) {
-    return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255));
-  };
-  return fmt::format("#{:02x}{:02x}{:02x}", code(rgb[0]), code(rgb[1]), code(rgb[2]));
-}
 
 double Percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
@@ -95,35 +65,6 @@ void WriteDisplayImage(const fs::path& path, const Image& linear) {
   WriteImage(path, linear, options);
 }
 
-std::string ColourBarSvg(double max_degrees) {
-  std::string svg = fmt::format(
-      "<svg class=\"colour-bar\" viewBox=\"0 0 320 44\" width=\"320\" height=\"44\" role=\"img\" "
-      "aria-label=\"colour scale from 0 to {} degrees\">\n<defs><linearGradient id=\"heat\">",
-      Number(max_degrees));
-  for (std::size_t i = 0; i < kHeatAnchors.size(); ++i) {
-    svg +=
-        fmt::format("<stop offset=\"{}\" stop-color=\"{}\"/>",
-                    static_cast<double>(i) / (kHeatAnchors.size() - 1), HexColour(kHeatAnchors[i]));
-  }
-  svg +=
-      "</linearGradient></defs>\n<rect x=\"10\" y=\"4\" width=\"300\" height=\"16\" "
-      "fill=\"url(#heat)\"/>\n";
-  const double step = NiceStep(max_degrees, 5);
-  for (double tick = 0.0; tick <= max_degrees + 1e-9; tick += step) {
-    const double x = 10.0 + 300.0 * tick / max_degrees;
-    svg += fmt::format(
-        "<line x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"20\" y2=\"25\" stroke=\"#333\"/>"
-        "<text x=\"{0:.1f}\" y=\"38\" text-anchor=\"middle\">{1}&#176;</text>\n",
-        x, Number(tick));
-  }
-  return svg + "</svg>";
-}
-
-struct ReportImage {
-  int index;
-  double gain;
-};
-
 std::string LightText(const LightDirection& l) {
   return fmt::format("slant {:.1f}&#176;, tilt {:.1f}&#176;", l.SlantDegrees(), l.TiltDegrees());
 }
@@ -154,47 +95,6 @@ img.pixels { image-rendering: pixelated; min-width: 200px; max-width: 280px; hei
 
 }  // namespace
 
-std::array<float, 3> HeatColour(double fraction) {
-  const double f = std::clamp(std::isfinite(fraction) ? fraction : 1.0, 0.0, 1.0);
-  const double position = f * (kHeatAnchors.size() - 1);
-  const auto i = std::min(static_cast<std::size_t>(position), kHeatAnchors.size() - 2);
-  const auto t = static_cast<float>(position - i);
-  std::array<float, 3> rgb;
-  for (int c = 0; c < 3; ++c) rgb[c] = (1 - t) * kHeatAnchors[i][c] + t * kHeatAnchors[i + 1][c];
-  return rgb;
-}
-
-Image AngularErrorMap(const Image& estimated, const Image& truth, const Mask& mask) {
-  if (estimated.width() != truth.width() || estimated.height() != truth.height() ||
-      estimated.channels() < 3 || truth.channels() < 3) {
-    throw Error(fmt::format("normals {}x{}x{} and truth {}x{}x{} do not match", estimated.width(),
-                            estimated.height(), estimated.channels(), truth.width(), truth.height(),
-                            truth.channels()));
-  }
-  Image errors(truth.width(), truth.height(), std::vector<std::string>{"error_deg"});
-  for (std::size_t p = 0; p < truth.pixel_count(); ++p) {
-    const auto t = truth.pixel(p);
-    const auto e = estimated.pixel(p);
-    const Eigen::Vector3d tv(t[0], t[1], t[2]), ev(e[0], e[1], e[2]);
-    const bool valid = (mask.width() != truth.width() || mask[p]) && tv.squaredNorm() >= 0.25 &&
-                       ev.squaredNorm() != 0.0;
-    errors.pixel(p)[0] = valid ? static_cast<float>(AngleBetweenDegrees(tv, ev)) : -1.0f;
-  }
-  return errors;
-}
-
-Image HeatMap(const Image& errors, double max_degrees) {
-  Image colours(errors.width(), errors.height(), 3);
-  for (std::size_t p = 0; p < errors.pixel_count(); ++p) {
-    const float e = errors.pixel(p)[0];
-    const std::array<float, 3> rgb =
-        e < 0.0f ? std::array{kUndefinedGrey, kUndefinedGrey, kUndefinedGrey}
-                 : HeatColour(e / max_degrees);
-    std::copy(rgb.begin(), rgb.end(), colours.pixel(p).begin());
-  }
-  return colours;
-}
-
 std::vector<int> ChooseReportImages(const std::vector<LightDirection>& lights, int count) {
   const int n = static_cast<int>(lights.size());
   count = std::min(count, n);
@@ -215,157 +115,6 @@ std::vector<int> ChooseReportImages(const std::vector<LightDirection>& lights, i
   }
   std::sort(chosen.begin(), chosen.end());
   return chosen;
-}
-
-std::string BarChartSvg(const BarChart& chart) {
-  constexpr double kWidth = 760, kHeight = 290;
-  constexpr double kLeft = 60, kRight = 16, kTop = 40, kBottom = 46;
-  const double plot_width = kWidth - kLeft - kRight, plot_height = kHeight - kTop - kBottom;
-  double top = 0.0;
-  for (const auto& s : chart.series) {
-    for (double v : s.values) {
-      if (std::isfinite(v)) top = std::max(top, v);
-    }
-  }
-  const double step = NiceStep(top > 0.0 ? top : 1.0, 5);
-  top = step * std::ceil((top > 0.0 ? top : 1.0) / step - 1e-9);
-  const auto y_of = [&](double v) { return kTop + plot_height * (1.0 - v / top); };
-
-  std::string svg = fmt::format(
-      "<svg class=\"{}\" viewBox=\"0 0 {} {}\" width=\"{}\" height=\"{}\" role=\"img\" "
-      "aria-label=\"{}\"{}>\n",
-      EscapeMarkup(chart.css_class), kWidth, kHeight, kWidth, kHeight, EscapeMarkup(chart.title),
-      chart.method.empty() ? "" : fmt::format(" data-method=\"{}\"", EscapeMarkup(chart.method)));
-  svg += fmt::format("<text class=\"title\" x=\"{}\" y=\"20\">{}</text>\n", kLeft,
-                     EscapeMarkup(chart.title));
-  // Legend, right-aligned in the title row.
-  double legend_x = kWidth - kRight;
-  for (std::size_t s = chart.series.size(); s-- > 0;) {
-    legend_x -= 14.0 + 7.5 * chart.series[s].name.size() + 16.0;
-    svg += fmt::format(
-        "<rect x=\"{:.1f}\" y=\"10\" width=\"12\" height=\"12\" fill=\"{}\"/>"
-        "<text x=\"{:.1f}\" y=\"20\">{}</text>\n",
-        legend_x, kSeriesColours[s % kSeriesColours.size()], legend_x + 16,
-        EscapeMarkup(chart.series[s].name));
-  }
-  // Axes and grid.
-  for (double tick = 0.0; tick <= top + 1e-9 * top; tick += step) {
-    const double y = y_of(tick);
-    svg += fmt::format(
-        "<line x1=\"{}\" x2=\"{}\" y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#e3e3e3\"/>"
-        "<text x=\"{}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n",
-        kLeft, kWidth - kRight, y, y, kLeft - 6, y + 4, Number(tick));
-  }
-  svg += fmt::format(
-      "<text x=\"14\" y=\"{:.1f}\" transform=\"rotate(-90 14 {:.1f})\" "
-      "text-anchor=\"middle\">{}</text>\n",
-      kTop + plot_height / 2, kTop + plot_height / 2, EscapeMarkup(chart.y_label));
-  svg +=
-      fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2:.1f}\" y2=\"{2:.1f}\" stroke=\"#333\"/>\n",
-                  kLeft, kWidth - kRight, kTop + plot_height);
-  // Bars.
-  const std::size_t categories = std::max<std::size_t>(chart.categories.size(), 1);
-  const double group = plot_width / categories;
-  const double bar = group * 0.8 / std::max<std::size_t>(chart.series.size(), 1);
-  const std::size_t label_every = (chart.categories.size() + 39) / 40;
-  for (std::size_t c = 0; c < chart.categories.size(); ++c) {
-    const double group_x = kLeft + c * group + group * 0.1;
-    for (std::size_t s = 0; s < chart.series.size(); ++s) {
-      if (c >= chart.series[s].values.size()) continue;
-      const double v = chart.series[s].values[c];
-      if (!std::isfinite(v)) continue;
-      const double y = y_of(std::max(v, 0.0));
-      svg += fmt::format(
-          "<rect class=\"bar\" x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" "
-          "fill=\"{}\" data-value=\"{}\"><title>{}, {}: {}</title></rect>\n",
-          group_x + s * bar, y, std::max(bar - 0.5, 0.5), kTop + plot_height - y,
-          kSeriesColours[s % kSeriesColours.size()], v, EscapeMarkup(chart.categories[c]),
-          EscapeMarkup(chart.series[s].name), Number(v));
-    }
-    if (c % label_every == 0) {
-      svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>\n",
-                         kLeft + (c + 0.5) * group, kTop + plot_height + 16,
-                         EscapeMarkup(chart.categories[c]));
-    }
-  }
-  return svg + "</svg>";
-}
-
-std::vector<std::pair<int, int>> IndistinguishableRuns(const MethodComparison& comparison) {
-  const std::vector<int> order = comparison.RankOrder();
-  const auto rank = [&](int position) { return comparison.friedman.mean_ranks[order[position]]; };
-  std::vector<std::pair<int, int>> runs;
-  const int k = static_cast<int>(order.size());
-  int covered = 0;  // the last position a run already reaches
-  for (int first = 0; first < k; ++first) {
-    int last = first;
-    while (last + 1 < k && rank(last + 1) - rank(first) < comparison.critical_difference) ++last;
-    if (last > first && last > covered) {
-      runs.emplace_back(first, last);
-      covered = last;
-    }
-  }
-  return runs;
-}
-
-std::string CriticalDifferenceDiagramSvg(const MethodComparison& comparison) {
-  const std::vector<int> order = comparison.RankOrder();
-  const int k = static_cast<int>(order.size());
-  const std::vector<double>& ranks = comparison.friedman.mean_ranks;
-  constexpr double kWidth = 760, kAxisLeft = 190, kAxisRight = 570, kAxisY = 64, kRowStep = 22;
-  const double unit = (kAxisRight - kAxisLeft) / std::max(k - 1, 1);
-  // Rank 1 (best) on the right, as Demsar draws it.
-  const auto x_of = [&](double rank) { return kAxisRight - (rank - 1.0) * unit; };
-  const std::vector<std::pair<int, int>> runs = IndistinguishableRuns(comparison);
-  const double first_row = kAxisY + 20 + 8.0 * runs.size();
-  const int right_count = (k + 1) / 2;  // the better half is labelled on the right
-  const double height = first_row + kRowStep * std::max(right_count, k - right_count) + 8;
-
-  std::string svg = fmt::format(
-      "<svg class=\"cd-diagram\" viewBox=\"0 0 {0} {1:.0f}\" width=\"{0}\" height=\"{1:.0f}\" "
-      "role=\"img\" aria-label=\"critical difference diagram: mean ranks of the methods, "
-      "critical difference {2:.2f}\" data-critical-difference=\"{2}\">\n",
-      kWidth, height, comparison.critical_difference);
-  // The critical difference, above the axis from its left end.
-  const double cd_end = std::min(kAxisLeft + comparison.critical_difference * unit, kWidth - 10);
-  svg += fmt::format(
-      "<g class=\"cd-bar\"><line x1=\"{0}\" x2=\"{1:.1f}\" y1=\"18\" y2=\"18\" stroke=\"#333\" "
-      "stroke-width=\"2\"/><line x1=\"{0}\" x2=\"{0}\" y1=\"13\" y2=\"23\" stroke=\"#333\"/>"
-      "<line x1=\"{1:.1f}\" x2=\"{1:.1f}\" y1=\"13\" y2=\"23\" stroke=\"#333\"/>"
-      "<text x=\"{2:.1f}\" y=\"10\" text-anchor=\"middle\">CD = {3:.2f}</text></g>\n",
-      kAxisLeft, cd_end, 0.5 * (kAxisLeft + cd_end), comparison.critical_difference);
-  svg += fmt::format(
-      "<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#333\" stroke-width=\"1.5\"/>\n",
-      kAxisLeft, kAxisRight, kAxisY);
-  for (int tick = 1; tick <= k; ++tick) {
-    svg += fmt::format(
-        "<line x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#333\"/>"
-        "<text x=\"{0:.1f}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>\n",
-        x_of(tick), kAxisY - 6, kAxisY, kAxisY - 10, tick);
-  }
-  for (std::size_t g = 0; g < runs.size(); ++g) {
-    const double y = kAxisY + 12 + 8.0 * g;
-    svg += fmt::format(
-        "<line class=\"cd-group\" x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.1f}\" y2=\"{:.1f}\" "
-        "stroke=\"#111\" stroke-width=\"4\" stroke-linecap=\"round\"/>\n",
-        x_of(ranks[order[runs[g].first]]) + 3, x_of(ranks[order[runs[g].second]]) - 3, y, y);
-  }
-  for (int position = 0; position < k; ++position) {
-    const int m = order[position];
-    const bool right = position < right_count;
-    // Rows from the top: the best method on the right, the worst on the left.
-    const int row = right ? position : k - 1 - position;
-    const double x = x_of(ranks[m]), y = first_row + kRowStep * row;
-    const double end = right ? kAxisRight + 24 : kAxisLeft - 24;
-    svg += fmt::format(
-        "<g class=\"cd-method\" data-cd-method=\"{0}\" data-mean-rank=\"{1}\">"
-        "<polyline points=\"{2:.1f},{3} {2:.1f},{4:.1f} {5:.1f},{4:.1f}\" fill=\"none\" "
-        "stroke=\"#4e79a7\"/><circle cx=\"{2:.1f}\" cy=\"{3}\" r=\"3\" fill=\"#4e79a7\"/>"
-        "<text x=\"{6:.1f}\" y=\"{7:.1f}\" text-anchor=\"{8}\">{0} ({1:.2f})</text></g>\n",
-        EscapeMarkup(comparison.methods[m]), ranks[m], x, kAxisY, y, end, end + (right ? 4 : -4),
-        y + 4, right ? "start" : "end");
-  }
-  return svg + "</svg>";
 }
 
 namespace {
@@ -583,6 +332,245 @@ void AddNormalErrors(ReportPictures& pictures, std::size_t method, int first,
   }
 }
 
+// The page's head and its first line: the set and the kind of fits.
+std::string PageHead(const ReportSet& info, const EvaluationReportOptions& options) {
+  return fmt::format(
+      "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
+      "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
+      "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
+      EscapeMarkup(options.title), kStyle, EscapeMarkup(PublishedName(info.source)), info.images,
+      info.width, info.height, info.channels, info.pixels,
+      options.robust ? "robust" : "least-squares");
+}
+
+// Whether any evaluation has the value `has` looks for.
+template <typename Has>
+bool AnyEvaluation(const std::vector<MethodEvaluation>& evaluations, Has has) {
+  return std::any_of(evaluations.begin(), evaluations.end(), has);
+}
+
+// The table of errors per method: eta, the predictions' PSNR, SSIM and colour difference where
+// the evaluation measured them, and the normal errors where truth exists.
+std::string ErrorTable(const std::vector<MethodEvaluation>& evaluations, const ReportPlan& plan) {
+  std::string html =
+      "<h2>Errors per method</h2>\n<p class=\"note\">Dong's eta "
+      "(thesis eq. 4.5.1): the mean over images of the RMS of relit minus captured, over "
+      "the standard deviation of the captured image. Reconstruction: the fit of all images "
+      "relit at each; prediction: " +
+      (plan.held_out.empty()
+           ? std::string("each image relit by a fit that left it out")
+           : fmt::format("each of the {} held-out images relit by the fit of the other {}",
+                         plan.held_out.size(), plan.kept_images.size())) +
+      ".</p>\n";
+  const bool psnr =
+      AnyEvaluation(evaluations, [](const auto& e) { return e.psnr_prediction.has_value(); });
+  const bool ssim =
+      AnyEvaluation(evaluations, [](const auto& e) { return e.ssim_prediction.has_value(); });
+  const bool colour = AnyEvaluation(
+      evaluations, [](const auto& e) { return e.delta_e2000_prediction.has_value(); });
+  if (ssim || colour) {
+    html +=
+        "<p class=\"note\">PSNR, SSIM and mean CIEDE2000 colour difference of the predicted "
+        "images against the captured ones over the mask, with the captured image's largest "
+        "value as white (SSIM and colour difference of the sRGB renderings).</p>\n";
+  }
+  html +=
+      "<table class=\"eta\">\n<thead><tr><th>method</th><th>eta reconstruction</th>"
+      "<th>eta prediction</th>";
+  if (psnr) html += "<th>PSNR (dB)</th>";
+  if (ssim) html += "<th>SSIM</th>";
+  if (colour) html += "<th>&#916;E 2000</th>";
+  if (plan.any_normals) {
+    html +=
+        "<th>normal mean (&#176;)</th><th>median (&#176;)</th><th>&lt; 5&#176;</th>"
+        "<th>&lt; 10&#176;</th>";
+  }
+  html += "</tr></thead>\n<tbody>\n";
+  const auto cell = [](const std::optional<double>& value, int decimals) {
+    return fmt::format("<td>{}</td>",
+                       value ? fmt::format("{:.{}f}", *value, decimals) : std::string("–"));
+  };
+  for (const MethodEvaluation& e : evaluations) {
+    html += fmt::format("<tr><td>{}</td><td>{:.5f}</td>{}", EscapeMarkup(e.method.Name()),
+                        e.eta_reconstruction, cell(e.eta_prediction, 5));
+    if (psnr) html += cell(e.psnr_prediction, 2);
+    if (ssim) html += cell(e.ssim_prediction, 4);
+    if (colour) html += cell(e.delta_e2000_prediction, 3);
+    if (plan.any_normals) {
+      html += e.normals
+                  ? fmt::format("<td>{:.2f}</td><td>{:.2f}</td><td>{:.1f} %</td><td>{:.1f} %</td>",
+                                e.normals->mean_degrees, e.normals->median_degrees,
+                                100 * e.normals->fraction_below_5_degrees,
+                                100 * e.normals->fraction_below_10_degrees)
+                  : "<td>–</td><td>–</td><td>–</td><td>–</td>";
+    }
+    html += "</tr>\n";
+  }
+  return html + "</tbody>\n</table>\n";
+}
+
+// The charts: eta per method, the normal errors per method, and each method's error per image.
+std::string Charts(const std::vector<MethodEvaluation>& evaluations, const ReportPlan& plan,
+                   int images) {
+  BarChart summary{"eta per method",      "eta", {}, {{"reconstruction", {}}},
+                   "chart summary-chart", ""};
+  if (plan.prediction) summary.series.push_back({"prediction", {}});
+  for (const MethodEvaluation& e : evaluations) {
+    summary.categories.push_back(e.method.Name());
+    summary.series[0].values.push_back(e.eta_reconstruction);
+    if (plan.prediction) summary.series[1].values.push_back(*e.eta_prediction);
+  }
+  std::string html = "<h2>Charts</h2>\n" + BarChartSvg(summary) + "\n";
+  if (plan.any_normals) {
+    BarChart normal_chart{"normal angular error", "degrees", {}, {{"mean", {}}, {"median", {}}},
+                          "chart normal-chart",   ""};
+    for (const MethodEvaluation& e : evaluations) {
+      if (!e.normals) continue;
+      normal_chart.categories.push_back(e.method.Name());
+      normal_chart.series[0].values.push_back(e.normals->mean_degrees);
+      normal_chart.series[1].values.push_back(e.normals->median_degrees);
+    }
+    html += BarChartSvg(normal_chart) + "\n";
+  }
+  html += "<h2>Per-image error of each method</h2>\n";
+  for (const MethodEvaluation& e : evaluations) {
+    BarChart chart{
+        fmt::format("{}: eta per image", e.method.Name()), "e_k / sigma_k",      {},
+        {{"reconstruction", e.reconstruction_per_image}},  "chart method-chart", e.method.Name()};
+    if (!e.prediction_per_image.empty()) {
+      // By image index: images that were not predicted draw no bar.
+      std::vector<double> predicted(images, std::numeric_limits<double>::quiet_NaN());
+      for (std::size_t i = 0; i < e.prediction_images.size(); ++i) {
+        predicted[e.prediction_images[i]] = e.prediction_per_image[i];
+      }
+      chart.series.push_back({"prediction", predicted});
+    }
+    for (int i = 0; i < images; ++i) chart.categories.push_back(std::to_string(i));
+    html += BarChartSvg(chart) + "\n";
+  }
+  return html;
+}
+
+// The normal error heat maps, on one scale for every method (written into `temp`/images); empty
+// when no method has them.
+std::string NormalErrorSection(const fs::path& temp,
+                               const std::vector<MethodEvaluation>& evaluations,
+                               const std::vector<std::optional<Image>>& errors) {
+  if (std::none_of(errors.begin(), errors.end(), [](const auto& e) { return e.has_value(); })) {
+    return {};
+  }
+  std::vector<double> all;
+  for (const auto& map : errors) {
+    if (!map) continue;
+    for (float v : map->values()) {
+      if (v >= 0.0f) all.push_back(v);
+    }
+  }
+  const double scale = std::max(5.0, 5.0 * std::ceil(Percentile(all, 0.95) / 5.0));
+  std::string html = fmt::format(
+      "<h2>Normal angular error</h2>\n<p class=\"note\">Angle between each "
+      "method's normals and the ground truth, per pixel, on one scale for all "
+      "methods (0 to {} degrees; larger errors show as red, pixels without "
+      "truth grey).</p>\n{}\n<div class=\"grid\">\n",
+      ReportNumber(scale), ColourBarSvg(scale));
+  for (std::size_t m = 0; m < evaluations.size(); ++m) {
+    if (!errors[m]) continue;
+    const std::string name = evaluations[m].method.Name();
+    const std::string file = fmt::format("images/normal-error-{}.png", name);
+    WriteDisplayCodes(temp / file, HeatMap(*errors[m], scale));
+    html += fmt::format(
+        "<figure><img class=\"pixels heat-map\" src=\"{}\" alt=\"normal error "
+        "of {}\"><figcaption>{}: mean {:.2f}&#176;, median {:.2f}&#176;"
+        "</figcaption></figure>\n",
+        file, EscapeMarkup(name), EscapeMarkup(name), evaluations[m].normals->mean_degrees,
+        evaluations[m].normals->median_degrees);
+  }
+  return html + "</div>\n";
+}
+
+// The cell of a method's prediction of shown image `index` (its picture written into
+// `temp`/images), or a note where the image was not predicted.
+std::string PredictedCell(const fs::path& temp, const MethodEvaluation& e, int index,
+                          const std::optional<Image>& prediction, double gain) {
+  if (!prediction) return "<td class=\"note\">not held out</td>";
+  const std::string name = e.method.Name();
+  const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
+  WriteDisplayImage(temp / predicted, Scaled(*prediction, gain));
+  const auto position = static_cast<std::size_t>(PredictionPosition(e, index));
+  // The in-memory evaluation's appearance measures of this image, when it has them.
+  std::string appearance;
+  if (!e.ssim_prediction_per_image.empty()) {
+    appearance += fmt::format(", SSIM {:.3f}", e.ssim_prediction_per_image[position]);
+  }
+  if (!e.delta_e2000_prediction_per_image.empty()) {
+    appearance += fmt::format(", &#916;E {:.2f}", e.delta_e2000_prediction_per_image[position]);
+  }
+  return fmt::format(
+      "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}{}</td>", predicted,
+      EscapeMarkup(name), ReportNumber(e.prediction_per_image[position]), appearance);
+}
+
+// The note above the table of captured and relit pictures.
+std::string CapturedAndRelitNote(const ReportPlan& plan, int factor) {
+  return "<h2>Captured and relit</h2>\n<p class=\"note\">Each row: a captured image and every "
+         "method's relighting of its light by the fit of all images" +
+         std::string(!plan.prediction ? ""
+                     : plan.held_out.empty()
+                         ? ", and below it the prediction by a fit without that image"
+                         : ", and below it, for a held-out image, its prediction by "
+                           "the fit without the held-out images") +
+         ". Values shown through the sRGB curve; a dark row is brightened by the stated "
+         "factor, the same for every image in it." +
+         (factor > 1 ? fmt::format(" Pictures are shown at 1/{} of the images' size, each pixel "
+                                   "the mean of a {}&#215;{} block.",
+                                   factor, factor, factor)
+                     : std::string()) +
+         "</p>\n";
+}
+
+// The table of each shown image beside every method's relighting of its light and, below, their
+// predictions (the pictures written into `temp`/images).
+std::string CapturedAndRelitSection(const fs::path& temp, const ReportSet& info,
+                                    const std::vector<MethodEvaluation>& evaluations,
+                                    const ReportPlan& plan, ReportPictures& pictures,
+                                    const Mask& mask) {
+  std::string html = CapturedAndRelitNote(plan, pictures.factor()) +
+                     "<table class=\"compare\">\n<tr><th></th><th>captured</th>";
+  for (const MethodEvaluation& e : evaluations) {
+    html += "<th>" + EscapeMarkup(e.method.Name()) + "</th>";
+  }
+  html += "</tr>\n";
+  for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+    const int index = plan.shown[s];
+    const Image captured_image = pictures.Captured(s);
+    const double gain = DisplayGain(captured_image, mask);
+    const std::string captured = fmt::format("images/captured-{}.png", index);
+    WriteDisplayImage(temp / captured, Scaled(captured_image, gain));
+    html += fmt::format(
+        "<tr class=\"relit-row\"><th>image {}<br>{}<br>{}{}</th><td><img "
+        "class=\"pixels\" src=\"{}\" alt=\"captured image {}\"></td>",
+        index, EscapeMarkup(fs::path(info.names[index]).filename().string()),
+        LightText(info.lights[index]),
+        gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured, index);
+    std::string predicted_row = "<tr class=\"predicted-row\"><th>predicted</th><td></td>";
+    for (std::size_t m = 0; m < evaluations.size(); ++m) {
+      const std::string name = evaluations[m].method.Name();
+      const std::string relit = fmt::format("images/relit-{}-{}.png", name, index);
+      WriteDisplayImage(temp / relit, Scaled(pictures.Relit(m, s), gain));
+      html += fmt::format(
+          "<td><img class=\"pixels\" src=\"{}\" alt=\"{} relit\"><br>e/&#963; {}</td>", relit,
+          EscapeMarkup(name), ReportNumber(evaluations[m].reconstruction_per_image[index]));
+      if (plan.prediction) {
+        predicted_row += PredictedCell(temp, evaluations[m], index, pictures.Predicted(m, s), gain);
+      }
+    }
+    html += "</tr>\n";
+    if (plan.prediction) html += predicted_row + "</tr>\n";
+  }
+  return html + "</table>\n";
+}
+
 // Writes the page, its pictures and report.json into `folder`, whole or not at all.
 void WriteReportFolder(const fs::path& folder, const ReportSet& info,
                        const std::vector<MethodEvaluation>& evaluations, const ReportPlan& plan,
@@ -592,221 +580,12 @@ void WriteReportFolder(const fs::path& folder, const ReportSet& info,
   for (std::size_t m = 0; m < evaluations.size(); ++m) errors.push_back(pictures.Errors(m));
   WriteFolderAtomically(folder, kReportManifest, kReportFormat, [&](const fs::path& temp) {
     fs::create_directories(temp / "images");
-    std::string html = fmt::format(
-        "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-        "<title>{0}</title>\n<link rel=\"icon\" href=\"data:,\">\n<style>{1}</style>\n</head>\n"
-        "<body>\n<h1>{0}</h1>\n<p class=\"meta\">{2}: {3} images of {4}&#215;{5} pixels, {6} "
-        "channel(s), {7} pixels evaluated; {8} fits.</p>\n",
-        EscapeMarkup(options.title), kStyle, EscapeMarkup(PublishedName(info.source)), info.images,
-        info.width, info.height, info.channels, info.pixels,
-        options.robust ? "robust" : "least-squares");
-
-    // The table.
-    html +=
-        "<h2>Errors per method</h2>\n<p class=\"note\">Dong's eta "
-        "(thesis eq. 4.5.1): the mean over images of the RMS of relit minus captured, over "
-        "the standard deviation of the captured image. Reconstruction: the fit of all images "
-        "relit at each; prediction: " +
-        (plan.held_out.empty()
-             ? std::string("each image relit by a fit that left it out")
-             : fmt::format("each of the {} held-out images relit by the fit of the "
-                           "other {}",
-                           plan.held_out.size(), plan.kept_images.size())) +
-        ".</p>\n";
-    const auto any = [&](auto has) {
-      return std::any_of(evaluations.begin(), evaluations.end(), has);
-    };
-    const bool psnr = any([](const MethodEvaluation& e) { return e.psnr_prediction.has_value(); });
-    const bool ssim = any([](const MethodEvaluation& e) { return e.ssim_prediction.has_value(); });
-    const bool colour =
-        any([](const MethodEvaluation& e) { return e.delta_e2000_prediction.has_value(); });
-    if (ssim || colour) {
-      html +=
-          "<p class=\"note\">PSNR, SSIM and mean CIEDE2000 colour difference of the predicted "
-          "images against the captured ones over the mask, with the captured image's largest "
-          "value as white (SSIM and colour difference of the sRGB renderings).</p>\n";
-    }
-    html +=
-        "<table class=\"eta\">\n<thead><tr><th>method</th><th>eta reconstruction</th>"
-        "<th>eta prediction</th>";
-    if (psnr) html += "<th>PSNR (dB)</th>";
-    if (ssim) html += "<th>SSIM</th>";
-    if (colour) html += "<th>&#916;E 2000</th>";
-    if (plan.any_normals) {
-      html +=
-          "<th>normal mean (&#176;)</th><th>median (&#176;)</th><th>&lt; 5&#176;</th>"
-          "<th>&lt; 10&#176;</th>";
-    }
-    html += "</tr></thead>\n<tbody>\n";
-    for (const MethodEvaluation& e : evaluations) {
-      html += fmt::format("<tr><td>{}</td><td>{:.5f}</td><td>{}</td>",
-                          EscapeMarkup(e.method.Name()), e.eta_reconstruction,
-                          e.eta_prediction ? fmt::format("{:.5f}", *e.eta_prediction) : "–");
-      const auto cell = [](const std::optional<double>& value, int decimals) {
-        return fmt::format("<td>{}</td>",
-                           value ? fmt::format("{:.{}f}", *value, decimals) : std::string("–"));
-      };
-      if (psnr) html += cell(e.psnr_prediction, 2);
-      if (ssim) html += cell(e.ssim_prediction, 4);
-      if (colour) html += cell(e.delta_e2000_prediction, 3);
-      if (plan.any_normals) {
-        if (e.normals) {
-          html += fmt::format("<td>{:.2f}</td><td>{:.2f}</td><td>{:.1f} %</td><td>{:.1f} %</td>",
-                              e.normals->mean_degrees, e.normals->median_degrees,
-                              100 * e.normals->fraction_below_5_degrees,
-                              100 * e.normals->fraction_below_10_degrees);
-        } else {
-          html += "<td>–</td><td>–</td><td>–</td><td>–</td>";
-        }
-      }
-      html += "</tr>\n";
-    }
-    html += "</tbody>\n</table>\n";
+    std::string html = PageHead(info, options) + ErrorTable(evaluations, plan);
     if (options.comparison) html += RankingSection(*options.comparison);
-
-    // The charts.
-    BarChart summary{"eta per method",      "eta", {}, {{"reconstruction", {}}},
-                     "chart summary-chart", ""};
-    if (plan.prediction) summary.series.push_back({"prediction", {}});
-    for (const MethodEvaluation& e : evaluations) {
-      summary.categories.push_back(e.method.Name());
-      summary.series[0].values.push_back(e.eta_reconstruction);
-      if (plan.prediction) summary.series[1].values.push_back(*e.eta_prediction);
-    }
-    html += "<h2>Charts</h2>\n" + BarChartSvg(summary) + "\n";
-    if (plan.any_normals) {
-      BarChart normal_chart{"normal angular error", "degrees", {}, {{"mean", {}}, {"median", {}}},
-                            "chart normal-chart",   ""};
-      for (const MethodEvaluation& e : evaluations) {
-        if (!e.normals) continue;
-        normal_chart.categories.push_back(e.method.Name());
-        normal_chart.series[0].values.push_back(e.normals->mean_degrees);
-        normal_chart.series[1].values.push_back(e.normals->median_degrees);
-      }
-      html += BarChartSvg(normal_chart) + "\n";
-    }
-    html += "<h2>Per-image error of each method</h2>\n";
-    for (const MethodEvaluation& e : evaluations) {
-      BarChart chart{
-          fmt::format("{}: eta per image", e.method.Name()), "e_k / sigma_k",      {},
-          {{"reconstruction", e.reconstruction_per_image}},  "chart method-chart", e.method.Name()};
-      if (!e.prediction_per_image.empty()) {
-        // By image index: images that were not predicted draw no bar.
-        std::vector<double> predicted(info.images, std::numeric_limits<double>::quiet_NaN());
-        for (std::size_t i = 0; i < e.prediction_images.size(); ++i) {
-          predicted[e.prediction_images[i]] = e.prediction_per_image[i];
-        }
-        chart.series.push_back({"prediction", predicted});
-      }
-      for (int i = 0; i < info.images; ++i) chart.categories.push_back(std::to_string(i));
-      html += BarChartSvg(chart) + "\n";
-    }
-
-    // Normal error heat maps.
-    if (std::any_of(errors.begin(), errors.end(), [](const auto& e) { return e.has_value(); })) {
-      std::vector<double> all;
-      for (const auto& map : errors) {
-        if (!map) continue;
-        for (float v : map->values()) {
-          if (v >= 0.0f) all.push_back(v);
-        }
-      }
-      const double scale = std::max(5.0, 5.0 * std::ceil(Percentile(all, 0.95) / 5.0));
-      html += fmt::format(
-          "<h2>Normal angular error</h2>\n<p class=\"note\">Angle between each "
-          "method's normals and the ground truth, per pixel, on one scale for all "
-          "methods (0 to {} degrees; larger errors show as red, pixels without "
-          "truth grey).</p>\n{}\n<div class=\"grid\">\n",
-          Number(scale), ColourBarSvg(scale));
-      for (std::size_t m = 0; m < evaluations.size(); ++m) {
-        if (!errors[m]) continue;
-        const std::string name = evaluations[m].method.Name();
-        const std::string file = fmt::format("images/normal-error-{}.png", name);
-        WriteDisplayCodes(temp / file, HeatMap(*errors[m], scale));
-        html += fmt::format(
-            "<figure><img class=\"pixels heat-map\" src=\"{}\" alt=\"normal error "
-            "of {}\"><figcaption>{}: mean {:.2f}&#176;, median {:.2f}&#176;"
-            "</figcaption></figure>\n",
-            file, EscapeMarkup(name), EscapeMarkup(name), evaluations[m].normals->mean_degrees,
-            evaluations[m].normals->median_degrees);
-      }
-      html += "</div>\n";
-    }
-
-    // Captured beside relit.
-    html +=
-        "<h2>Captured and relit</h2>\n<p class=\"note\">Each row: a captured image and every "
-        "method's relighting of its light by the fit of all images" +
-        std::string(!plan.prediction ? ""
-                    : plan.held_out.empty()
-                        ? ", and below it the prediction by a fit without that image"
-                        : ", and below it, for a held-out image, its prediction by "
-                          "the fit without the held-out images") +
-        ". Values shown through the sRGB curve; a dark row is brightened by the stated "
-        "factor, the same for every image in it." +
-        (pictures.factor() > 1
-             ? fmt::format(" Pictures are shown at 1/{} of the images' size, each pixel the mean "
-                           "of a {}&#215;{} block.",
-                           pictures.factor(), pictures.factor(), pictures.factor())
-             : std::string()) +
-        "</p>\n<table class=\"compare\">\n<tr><th></th><th>captured</th>";
-    for (const MethodEvaluation& e : evaluations)
-      html += "<th>" + EscapeMarkup(e.method.Name()) + "</th>";
-    html += "</tr>\n";
-    for (std::size_t s = 0; s < plan.shown.size(); ++s) {
-      const int index = plan.shown[s];
-      const LightDirection& light = info.lights[index];
-      const Image captured_image = pictures.Captured(s);
-      const double gain = DisplayGain(captured_image, mask);
-      const std::string captured = fmt::format("images/captured-{}.png", index);
-      WriteDisplayImage(temp / captured, Scaled(captured_image, gain));
-      html += fmt::format(
-          "<tr class=\"relit-row\"><th>image {}<br>{}<br>{}{}</th><td><img "
-          "class=\"pixels\" src=\"{}\" alt=\"captured image {}\"></td>",
-          index, EscapeMarkup(fs::path(info.names[index]).filename().string()), LightText(light),
-          gain > 1.0 ? fmt::format("<br>shown &#215;{:.2g}", gain) : "", captured, index);
-      std::vector<std::string> predicted_cells;
-      for (std::size_t m = 0; m < evaluations.size(); ++m) {
-        const std::string name = evaluations[m].method.Name();
-        const std::string relit = fmt::format("images/relit-{}-{}.png", name, index);
-        WriteDisplayImage(temp / relit, Scaled(pictures.Relit(m, s), gain));
-        html += fmt::format(
-            "<td><img class=\"pixels\" src=\"{}\" alt=\"{} relit\"><br>"
-            "e/&#963; {}</td>",
-            relit, EscapeMarkup(name), Number(evaluations[m].reconstruction_per_image[index]));
-        if (!plan.prediction) continue;
-        const std::optional<Image> prediction = pictures.Predicted(m, s);
-        if (!prediction) {
-          predicted_cells.push_back("<td class=\"note\">not held out</td>");
-          continue;
-        }
-        const std::string predicted = fmt::format("images/predicted-{}-{}.png", name, index);
-        WriteDisplayImage(temp / predicted, Scaled(*prediction, gain));
-        const MethodEvaluation& e = evaluations[m];
-        const auto position = static_cast<std::size_t>(PredictionPosition(e, index));
-        // The in-memory evaluation's appearance measures of this image, when it has them.
-        std::string appearance;
-        if (!e.ssim_prediction_per_image.empty()) {
-          appearance += fmt::format(", SSIM {:.3f}", e.ssim_prediction_per_image[position]);
-        }
-        if (!e.delta_e2000_prediction_per_image.empty()) {
-          appearance +=
-              fmt::format(", &#916;E {:.2f}", e.delta_e2000_prediction_per_image[position]);
-        }
-        predicted_cells.push_back(fmt::format(
-            "<td><img class=\"pixels\" src=\"{}\" alt=\"{} predicted\"><br>e/&#963; {}{}</td>",
-            predicted, EscapeMarkup(name), Number(e.prediction_per_image[position]), appearance));
-      }
-      html += "</tr>\n";
-      if (plan.prediction) {
-        html += "<tr class=\"predicted-row\"><th>predicted</th><td></td>";
-        for (const std::string& cell : predicted_cells) html += cell;
-        html += "</tr>\n";
-      }
-    }
-    html +=
-        "</table>\n<p class=\"note\">Written by photomat. report.json holds the numbers.</p>\n"
-        "</body>\n</html>\n";
+    html += Charts(evaluations, plan, info.images) + NormalErrorSection(temp, evaluations, errors) +
+            CapturedAndRelitSection(temp, info, evaluations, plan, pictures, mask) +
+            "<p class=\"note\">Written by photomat. report.json holds the numbers.</p>\n"
+            "</body>\n</html>\n";
     WriteTextFileAtomically(temp / "index.html", html);
     WriteJsonFile(temp / kReportManifest,
                   {{"format", kReportFormat},

@@ -1,12 +1,10 @@
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <span>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "capture/io/streamed_set.h"
@@ -67,13 +65,13 @@ void WriteEvaluationReport(const std::filesystem::path& folder, const Photometri
 // The same report from a set and its fits read band by band (`evaluate --stream --report`, README
 // "Streamed relighting and export"), for sets too large to hold: `stacks[m]` is the fit of every
 // image for evaluations[m] (a map stack, as the evaluation made it: least squares, or robust with
-// options.robust, pbr with options.pbr_robust), the photographs are read from `set` in bands, the shown images' predictions are
-// fitted band by band (VisitFoldFits, their folds only: a fold per shown image for leave-one-out,
-// the one held-out fit otherwise) and `truth` (ground-truth normals) is read in bands. The pictures
-// are gathered at display size as they stream (report_pictures.h), so memory follows the band.
-// The same page and pictures as WriteEvaluationReport, to the fits' float rounding (a displayed
-// code may step by one). Throws Error naming the stack or truth whose size differs from the set's,
-// and as WriteEvaluationReport.
+// options.robust, pbr with options.pbr_robust), the photographs are read from `set` in bands, the
+// shown images' predictions are fitted band by band (VisitFoldFits, their folds only: a fold per
+// shown image for leave-one-out, the one held-out fit otherwise) and `truth` (ground-truth normals)
+// is read in bands. The pictures are gathered at display size as they stream (report_pictures.h),
+// so memory follows the band. The same page and pictures as WriteEvaluationReport, to the fits'
+// float rounding (a displayed code may step by one). Throws Error naming the stack or truth whose
+// size differs from the set's, and as WriteEvaluationReport.
 struct StreamedReportOptions {
   // Bytes the bands may hold; 0: DefaultBandBudget(kMinimumReportMemory).
   std::size_t memory_bytes = 0;
@@ -88,43 +86,8 @@ void WriteEvaluationReportStreamed(const std::filesystem::path& folder, Streamed
                                    const EvaluationReportOptions& options = {},
                                    const StreamedReportOptions& bands = {});
 
-// Demsar's critical-difference diagram as inline SVG (<svg class="cd-diagram">): the mean-rank axis
-// with the best rank on the right, each method's mean rank marked and labelled, the critical
-// difference as a bar above the axis, and a thick line joining each largest run of methods (in
-// rank order) whose mean ranks differ by less than it: methods the Nemenyi test cannot tell apart.
-std::string CriticalDifferenceDiagramSvg(const MethodComparison& comparison);
-
-// The runs the diagram joins: [first, last] positions in rank order (MethodComparison::RankOrder),
-// each a largest run of two or more methods spanning less than the critical difference.
-std::vector<std::pair<int, int>> IndistinguishableRuns(const MethodComparison& comparison);
-
 // `count` images whose lights are far apart (farthest-point order, starting from the light
 // nearest slant 45, tilt 0, the thesis's first 3I light), in the set's order.
 std::vector<int> ChooseReportImages(const std::vector<LightDirection>& lights, int count = 3);
-
-// Per-pixel angle in degrees between estimated and true normals (one channel), where the mask is
-// set and the truth is a normal (as CompareNormals counts pixels); -1 elsewhere.
-Image AngularErrorMap(const Image& estimated, const Image& truth, const Mask& mask);
-
-// The report's colour scale: dark blue (0) through cyan, green and yellow to red (1 and above).
-std::array<float, 3> HeatColour(double fraction);
-// Display colours (RGB in [0, 1], to be stored as 8-bit codes) of an AngularErrorMap; grey where
-// the error is undefined.
-Image HeatMap(const Image& errors, double max_degrees);
-
-// A grouped bar chart as inline SVG: one group of bars per category, one bar per series.
-struct BarChart {
-  struct Series {
-    std::string name;
-    std::vector<double> values;  // one per category; non-finite values draw no bar
-  };
-  std::string title;
-  std::string y_label;
-  std::vector<std::string> categories;
-  std::vector<Series> series;
-  std::string css_class = "chart";
-  std::string method;  // data-method attribute, for per-method charts
-};
-std::string BarChartSvg(const BarChart& chart);
 
 }  // namespace photomat

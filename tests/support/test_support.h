@@ -42,6 +42,10 @@ double LargestDifferenceOverLargestValue(const Image& a, const Image& b);
 // command left there.
 std::vector<std::string> EntriesOf(const std::filesystem::path& folder);
 
+// How many times the regular expression `pattern` matches in `text` (non-overlapping): for
+// counting elements of generated HTML or SVG.
+std::size_t CountMatches(const std::string& text, const std::string& pattern);
+
 // A fresh folder under the system temp folder, removed with its contents on destruction.
 class TempDir {
  public:
