@@ -234,287 +234,324 @@ std::optional<MethodComparison> PrintAndSaveEvaluations(
   return comparison;
 }
 
-}  // namespace
+struct EvaluateCommandOptions {
+  std::filesystem::path input;
+  std::string methods = "all";
+  std::filesystem::path gt_normals;
+  std::filesystem::path json;
+  std::filesystem::path report;
+  std::string report_images;
+  bool no_prediction = false;
+  bool compare = false;
+  std::string rank_by = "eta";
+  std::string appearance = "auto";
+  int hold_out_every = 0;
+  bool literal_rms = false;
+  bool raw_intensities = false;
+  bool robust = false;
+  std::string loss = "cauchy";
+  SynthesisEvaluationOptions synthesis;
+  LightProfileCli profile;
+  std::filesystem::path stack;
+  std::size_t memory_mb = 0;
+  bool stream = false;
+  PbrFitOptions pbr;
+};
 
-void AddEvaluateCommand(CLI::App& app) {
-  struct Options {
-    std::filesystem::path input;
-    std::string methods = "all";
-    std::filesystem::path gt_normals;
-    std::filesystem::path json;
-    std::filesystem::path report;
-    std::string report_images;
-    bool no_prediction = false;
-    bool compare = false;
-    std::string rank_by = "eta";
-    std::string appearance = "auto";
-    int hold_out_every = 0;
-    bool literal_rms = false;
-    bool raw_intensities = false;
-    bool robust = false;
-    std::string loss = "cauchy";
-    SynthesisEvaluationOptions synthesis;
-    LightProfileCli profile;
-    std::filesystem::path stack;
-    std::size_t memory_mb = 0;
-    bool stream = false;
-    PbrFitOptions pbr;
-  };
-  auto options = std::make_shared<Options>();
-  CLI::App* command = AddListedCommand(app, "evaluate");
-  command->add_option("input", options->input, "Photometric set (folder, .lp, manifest, DiLiGenT)")
+void AddEvaluateOptions(CLI::App& command, EvaluateCommandOptions& options) {
+  command.add_option("input", options.input, "Photometric set (folder, .lp, manifest, DiLiGenT)")
       ->required();
-  command->add_option("--methods", options->methods, "Comma-separated methods, or all")
+  command.add_option("--methods", options.methods, "Comma-separated methods, or all")
       ->capture_default_str();
-  command->add_option("--gt-normals", options->gt_normals,
-                      "Float EXR of unit normals (x right, y up, z to camera); default: the one "
-                      "the input names (manifest ground_truth, DiLiGenT gt_normals.exr)");
-  command->add_option("--json", options->json, "Also write the results as JSON");
-  command->add_option("--report", options->report,
-                      "Also write an HTML report (table, charts, normal error maps, captured "
-                      "beside relit images) into this folder");
-  command->add_option("--report-images", options->report_images,
-                      "Comma-separated indices of the captured images the report shows beside "
-                      "their relighting (default: three spread-out lights)");
-  command->add_flag("--no-prediction", options->no_prediction,
-                    "Skip leave-one-out prediction (one fit per image)");
+  command.add_option("--gt-normals", options.gt_normals,
+                     "Float EXR of unit normals (x right, y up, z to camera); default: the one "
+                     "the input names (manifest ground_truth, DiLiGenT gt_normals.exr)");
+  command.add_option("--json", options.json, "Also write the results as JSON");
+  command.add_option("--report", options.report,
+                     "Also write an HTML report (table, charts, normal error maps, captured "
+                     "beside relit images) into this folder");
+  command.add_option("--report-images", options.report_images,
+                     "Comma-separated indices of the captured images the report shows beside "
+                     "their relighting (default: three spread-out lights)");
+  command.add_flag("--no-prediction", options.no_prediction,
+                   "Skip leave-one-out prediction (one fit per image)");
   command
-      ->add_option("--hold-out-every", options->hold_out_every,
-                   "Prediction from one fit without every K-th image (0, K, 2K, ...) instead of "
-                   "leave-one-out")
+      .add_option("--hold-out-every", options.hold_out_every,
+                  "Prediction from one fit without every K-th image (0, K, 2K, ...) instead of "
+                  "leave-one-out")
       ->check(CLI::PositiveNumber);
-  command->add_flag("--compare", options->compare,
-                    "Rank the methods over the predicted images: Friedman test, Kendall's W and "
-                    "Nemenyi pairwise p-values (printed, in --json as \"comparison\", and in the "
-                    "--report)");
+  command.add_flag("--compare", options.compare,
+                   "Rank the methods over the predicted images: Friedman test, Kendall's W and "
+                   "Nemenyi pairwise p-values (printed, in --json as \"comparison\", and in the "
+                   "--report)");
   command
-      ->add_option(
-          "--rank-by", options->rank_by,
-          "With --compare: rank by eta (e_k/sigma_k, the thesis's; PSNR ranks alike), "
-          "ssim or delta-e2000 (of the sRGB renderings; streamed, of held-out images only)")
+      .add_option("--rank-by", options.rank_by,
+                  "With --compare: rank by eta (e_k/sigma_k, the thesis's; PSNR ranks alike), "
+                  "ssim or delta-e2000 (of the sRGB renderings; streamed, of held-out images only)")
       ->capture_default_str();
   command
-      ->add_option("--appearance", options->appearance,
-                   "The SSIM and colour difference of the predictions: auto (of held-out images, "
-                   "and when --rank-by needs them), always (leave-one-out too, in memory only; "
-                   "it then takes about twice as long) or never")
+      .add_option("--appearance", options.appearance,
+                  "The SSIM and colour difference of the predictions: auto (of held-out images, "
+                  "and when --rank-by needs them), always (leave-one-out too, in memory only; "
+                  "it then takes about twice as long) or never")
       ->check(CLI::IsMember({"auto", "always", "never"}))
       ->capture_default_str();
-  command->add_flag("--literal-rms", options->literal_rms,
-                    "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "Do not divide the images by the light intensities the input gives");
-  command->add_flag("--robust", options->robust,
-                    "Evaluate the robust fits (fit --robust) instead of the least-squares ones");
-  command->add_option("--loss", options->loss, "Robust loss: huber, cauchy or tukey")
+  command.add_flag("--literal-rms", options.literal_rms,
+                   "Use eq. 4.5.1 as printed, (1/NM) sqrt(sum), instead of the RMS");
+  command.add_flag("--ignore-intensities", options.raw_intensities,
+                   "Do not divide the images by the light intensities the input gives");
+  command.add_flag("--robust", options.robust,
+                   "Evaluate the robust fits (fit --robust) instead of the least-squares ones");
+  command.add_option("--loss", options.loss, "Robust loss: huber, cauchy or tukey")
       ->capture_default_str();
   // Synthesis quality (issue 4): INPUT is then the sample the synthesis was grown from.
-  command->add_option("--synthesised", options->synthesis.synthesised,
-                      "Score this synthesised stack or image against INPUT, the sample it was "
-                      "grown from (a map stack, fit folder or image): nearest-patch distance, "
-                      "roughness, wrap and (with --source-map) seam scores");
-  command->add_option("--source-map", options->synthesis.source_map,
-                      "With --synthesised: the source map `synthesize --save-source-map` wrote");
+  command.add_option("--synthesised", options.synthesis.synthesised,
+                     "Score this synthesised stack or image against INPUT, the sample it was "
+                     "grown from (a map stack, fit folder or image): nearest-patch distance, "
+                     "roughness, wrap and (with --source-map) seam scores");
+  command.add_option("--source-map", options.synthesis.source_map,
+                     "With --synthesised: the source map `synthesize --save-source-map` wrote");
   command
-      ->add_option("--patch", options->synthesis.patch_size,
-                   "With --synthesised: side of the compared patches")
+      .add_option("--patch", options.synthesis.patch_size,
+                  "With --synthesised: side of the compared patches")
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
-  AddLightProfileOptions(*command, options->profile);
-  command->add_option(
-      "--stack", options->stack,
-      "Evaluate this fitted stack (.exr, or a fit folder with --methods naming one) "
-      "against INPUT, both streamed in bands: the eta of reconstruction only");
-  AddBandMemoryOption(*command, options->memory_mb,
+  AddLightProfileOptions(command, options.profile);
+  command.add_option("--stack", options.stack,
+                     "Evaluate this fitted stack (.exr, or a fit folder with --methods naming one) "
+                     "against INPUT, both streamed in bands: the eta of reconstruction only");
+  AddBandMemoryOption(command, options.memory_mb,
                       "the bands (with --stack or --stream; a set held whole beyond it is "
                       "evaluated streamed when it can be)",
                       kMinimumEvaluationMemory);
-  command->add_flag("--stream", options->stream,
-                    "Fit the methods to INPUT in bands into scratch stacks beside --json or "
-                    "--report (or in the current folder) and evaluate those streamed, and fit "
-                    "the prediction's folds band by band: the same numbers in memory for a "
-                    "band, whatever the set's size (the SSIM and colour difference of held-out "
-                    "images only); a --report's pictures are drawn band by band");
-  AddPbrOptions(*command, options->pbr);
-  command->callback([options] {
-    if (!options->stack.empty()) {
-      // A fitted stack against its set, streamed (README, "Streamed relighting and export").
-      LoadOptions load;
-      load.apply_intensities = !options->raw_intensities;
-      StreamedSet set = OpenStreamedSet(options->input, load);
-      const std::optional<std::string> method =
-          options->methods == "all" ? std::nullopt : std::optional(options->methods);
-      StackBandReader stack(ResolveStack(options->stack, method));
-      TerminalProgressBar bar;
-      StreamedEvaluationOptions streamed;
-      streamed.memory_bytes = options->memory_mb << 20;
-      streamed.literal_thesis_rms = options->literal_rms;
-      streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
-      streamed.progress = &bar;
-      const std::vector<MethodEvaluation> results = {EvaluateStackStreamed(set, stack, streamed)};
-      fmt::print("{} images, stack {} (streamed)\n{}", set.size(), stack.path().string(),
-                 FormatEvaluationTable(results));
-      if (!options->json.empty()) WriteJsonFile(options->json, EvaluationsToJson(results));
-      return;
-    }
-    if (!options->synthesis.synthesised.empty()) {
-      options->synthesis.sample = options->input;
-      options->synthesis.json = options->json;
-      EvaluateSynthesis(options->synthesis);
-      return;
-    }
-    std::vector<Method> methods = ParseMethodList(options->methods);
-    ApplyLightProfileOptions(options->profile, methods);
-    LoadOptions load;
-    load.apply_intensities = !options->raw_intensities;
-    const bool pbr_asked = std::any_of(methods.begin(), methods.end(), [](const Method& m) {
-      return m.kind == Method::Kind::kPbr;
-    });
-    // Checked before the evaluation, which can take minutes.
-    if (options->hold_out_every > 0 && options->no_prediction) {
-      throw Error(
-          "--hold-out-every chooses the predicted images: it does not go with --no-prediction");
-    }
-    if (options->compare && (options->no_prediction || methods.size() < 2)) {
-      throw Error(
-          "--compare ranks two or more methods by their prediction errors: it needs --methods "
-          "with at least two methods and does not go with --no-prediction");
-    }
-    const RankingMeasure measure = ParseRankingMeasure(options->rank_by);
-    if (!options->compare && measure != RankingMeasure::kEta) {
-      throw Error("--rank-by chooses the measure of --compare's ranking: add --compare");
-    }
-    std::optional<RankingMeasure> ranking;
-    if (options->compare) ranking = measure;
-    // IMPLEMENTER CHOICE: by default the SSIM and colour difference where few images are
-    // predicted (held out) and where the ranking needs them; they cost about as much as a cheap
-    // method's folds (EvaluationOptions::appearance).
-    if (options->appearance == "never" && measure != RankingMeasure::kEta) {
-      throw Error(
-          fmt::format("--rank-by {} needs the SSIM and colour difference: not with "
-                      "--appearance never",
-                      RankingMeasureName(measure)));
-    }
-    const bool appearance = options->appearance == "always" ||
-                            (options->appearance == "auto" &&
-                             (options->hold_out_every > 0 || measure != RankingMeasure::kEta));
-    const std::vector<int> report_images = ParseIndexList(options->report_images);
-    StreamedSet set = OpenStreamedSet(options->input, load);
-    CheckReportImages(report_images, set.size());
-    if (measure == RankingMeasure::kDeltaE2000 && set.channels() != 1 && set.channels() != 3) {
-      throw Error(set.source(), fmt::format("--rank-by delta-e2000 needs grey or RGB images, "
-                                            "these have {} channels",
-                                            set.channels()));
-    }
-    const std::size_t budget = options->memory_mb > 0
-                                   ? options->memory_mb << 20
-                                   : DefaultMemoryBudget(kMinimumEvaluationMemory);
-    // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set
-    // held whole would not fit the budget.
-    if (options->stream || HoldingSetExceeds(set, budget)) {
-      // Checked before the evaluation, which can take hours at this size: streamed, the SSIM
-      // and colour difference are measured for held-out images only.
-      if (options->hold_out_every == 0 && appearance) {
-        throw Error(
-            set.source(),
-            fmt::format("{}: the streamed evaluation ({}) measures the SSIM and colour "
-                        "difference of held-out images only (--hold-out-every K); "
-                        "leave-one-out in memory (--memory MB) measures them for every "
-                        "image",
-                        measure != RankingMeasure::kEta
-                            ? fmt::format("--rank-by {}", RankingMeasureName(measure))
-                            : std::string("--appearance always"),
-                        options->stream ? "--stream" : "the set exceeds the memory budget"));
-      }
-      StreamedEvaluationOptions streamed;
-      streamed.memory_bytes = options->memory_mb << 20;
-      streamed.literal_thesis_rms = options->literal_rms;
-      streamed.ground_truth_normals = TruthPath(options->gt_normals, set.ground_truth_normals());
-      // The measured masks are found per band (StreamedFitOptions, FoldFitOptions).
-      const std::vector<Mask> found_per_band;
-      std::optional<RobustFitOptions> robust;
-      if (options->robust) robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
-      RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options->loss, found_per_band);
-      pbr_robust.pbr = options->pbr;
-      std::optional<StreamedPredictionOptions> prediction;
-      if (!options->no_prediction) {
-        prediction.emplace();
-        prediction->memory_bytes = streamed.memory_bytes;
-        prediction->hold_out_every = options->hold_out_every;
-        prediction->literal_thesis_rms = options->literal_rms;
-        prediction->robust = robust;
-        prediction->appearance = appearance;
-      }
-      const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
-                                        std::span<const std::filesystem::path> stacks) {
-        const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
-            fmt::format(
-                "{} images (streamed){}", set.size(),
-                streamed.ground_truth_normals
-                    ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
-                    : ""),
-            results, ranking, options->json);
-        if (options->report.empty()) return;
-        TerminalProgressBar bar;
-        StreamedReportOptions bands;
-        bands.memory_bytes = streamed.memory_bytes;
-        WriteEvaluationReportStreamed(
-            options->report, set, stacks, results, streamed.ground_truth_normals,
-            ReportOptions(options->input, report_images, robust, pbr_robust, comparison, bar),
-            bands);
-        fmt::print("report: {}\n", (options->report / "index.html").string());
-      };
-      EvaluateSetStreamed(set, methods, streamed, FitGroups(methods, robust, pbr_robust),
-                          prediction, options->json.empty() ? options->report : options->json,
-                          print_and_report);
-      return;
-    }
-    // pbr is fitted as `fit --method pbr` fits it, robustly (its start, the measured masks and
-    // the --pbr-* options), with or without --robust.
-    const RobustInput input = options->robust || pbr_asked
-                                  ? LoadSetForRobustFit(options->input, load)
-                                  : RobustInput{LoadSetForCommand(options->input, load), {}};
-    const LoadedSet& loaded = input.loaded;
-    std::optional<Image> truth;
-    const auto truth_path = TruthPath(options->gt_normals, loaded.ground_truth_normals);
-    if (truth_path) truth = ReadImage(*truth_path).image;
-    if (truth && (truth->width() != loaded.set.width() || truth->height() != loaded.set.height())) {
-      throw Error(*truth_path,
-                  fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
-                              truth->height(), loaded.set.width(), loaded.set.height()));
-    }
-    CheckReportImages(report_images, loaded.set.size());
-    const Observations observations(loaded.set);
-    TerminalProgressBar bar;
-    EvaluationOptions evaluation;
-    evaluation.prediction = !options->no_prediction;
-    evaluation.literal_thesis_rms = options->literal_rms;
-    evaluation.hold_out_every = options->hold_out_every;
-    evaluation.appearance = appearance;
-    evaluation.progress = &bar;
-    if (options->robust) {
-      evaluation.robust = RobustOptionsFromCommandLine(options->loss, input.measured);
-    }
-    RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options->loss, input.measured);
-    pbr_robust.pbr = options->pbr;
-    std::vector<MethodEvaluation> results;
-    for (const Method& method : methods) {
-      EvaluationOptions method_evaluation = evaluation;
-      if (method.kind == Method::Kind::kPbr) method_evaluation.robust = pbr_robust;
-      results.push_back(EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr,
-                                       method_evaluation));
-    }
+  command.add_flag("--stream", options.stream,
+                   "Fit the methods to INPUT in bands into scratch stacks beside --json or "
+                   "--report (or in the current folder) and evaluate those streamed, and fit "
+                   "the prediction's folds band by band: the same numbers in memory for a "
+                   "band, whatever the set's size (the SSIM and colour difference of held-out "
+                   "images only); a --report's pictures are drawn band by band");
+  AddPbrOptions(command, options.pbr);
+}
+
+LoadOptions LoadOptionsOf(const EvaluateCommandOptions& options) {
+  LoadOptions load;
+  load.apply_intensities = !options.raw_intensities;
+  return load;
+}
+
+// `evaluate INPUT --stack STACK`: a fitted stack against its set, streamed (README, "Streamed
+// relighting and export").
+void EvaluateStackCommand(const EvaluateCommandOptions& options) {
+  StreamedSet set = OpenStreamedSet(options.input, LoadOptionsOf(options));
+  const std::optional<std::string> method =
+      options.methods == "all" ? std::nullopt : std::optional(options.methods);
+  StackBandReader stack(ResolveStack(options.stack, method));
+  TerminalProgressBar bar;
+  StreamedEvaluationOptions streamed;
+  streamed.memory_bytes = options.memory_mb << 20;
+  streamed.literal_thesis_rms = options.literal_rms;
+  streamed.ground_truth_normals = TruthPath(options.gt_normals, set.ground_truth_normals());
+  streamed.progress = &bar;
+  const std::vector<MethodEvaluation> results = {EvaluateStackStreamed(set, stack, streamed)};
+  fmt::print("{} images, stack {} (streamed)\n{}", set.size(), stack.path().string(),
+             FormatEvaluationTable(results));
+  if (!options.json.empty()) WriteJsonFile(options.json, EvaluationsToJson(results));
+}
+
+// What the options ask of a fit-and-evaluate run, checked before it starts (it can take
+// minutes; the checks that need the set come in RunEvaluate).
+struct EvaluationRequest {
+  std::vector<Method> methods;
+  RankingMeasure measure = RankingMeasure::kEta;
+  std::optional<RankingMeasure> ranking;  // with --compare
+  bool appearance = false;                // the predictions' SSIM and colour difference
+  std::vector<int> report_images;
+  bool pbr_asked = false;
+};
+
+EvaluationRequest CheckedRequest(const EvaluateCommandOptions& options) {
+  EvaluationRequest request;
+  request.methods = ParseMethodList(options.methods);
+  ApplyLightProfileOptions(options.profile, request.methods);
+  request.pbr_asked = std::any_of(request.methods.begin(), request.methods.end(),
+                                  [](const Method& m) { return m.kind == Method::Kind::kPbr; });
+  if (options.hold_out_every > 0 && options.no_prediction) {
+    throw Error(
+        "--hold-out-every chooses the predicted images: it does not go with --no-prediction");
+  }
+  if (options.compare && (options.no_prediction || request.methods.size() < 2)) {
+    throw Error(
+        "--compare ranks two or more methods by their prediction errors: it needs --methods "
+        "with at least two methods and does not go with --no-prediction");
+  }
+  request.measure = ParseRankingMeasure(options.rank_by);
+  if (!options.compare && request.measure != RankingMeasure::kEta) {
+    throw Error("--rank-by chooses the measure of --compare's ranking: add --compare");
+  }
+  if (options.compare) request.ranking = request.measure;
+  // IMPLEMENTER CHOICE: by default the SSIM and colour difference where few images are
+  // predicted (held out) and where the ranking needs them; they cost about as much as a cheap
+  // method's folds (EvaluationOptions::appearance).
+  if (options.appearance == "never" && request.measure != RankingMeasure::kEta) {
+    throw Error(
+        fmt::format("--rank-by {} needs the SSIM and colour difference: not with "
+                    "--appearance never",
+                    RankingMeasureName(request.measure)));
+  }
+  request.appearance = options.appearance == "always" ||
+                       (options.appearance == "auto" &&
+                        (options.hold_out_every > 0 || request.measure != RankingMeasure::kEta));
+  request.report_images = ParseIndexList(options.report_images);
+  return request;
+}
+
+// `evaluate --stream`, or a set too large to hold: fitted and evaluated band by band.
+void EvaluateStreamedCommand(const EvaluateCommandOptions& options,
+                             const EvaluationRequest& request, StreamedSet& set) {
+  // Checked before the evaluation, which can take hours at this size: streamed, the SSIM and
+  // colour difference are measured for held-out images only.
+  if (options.hold_out_every == 0 && request.appearance) {
+    throw Error(set.source(),
+                fmt::format("{}: the streamed evaluation ({}) measures the SSIM and colour "
+                            "difference of held-out images only (--hold-out-every K); "
+                            "leave-one-out in memory (--memory MB) measures them for every "
+                            "image",
+                            request.measure != RankingMeasure::kEta
+                                ? fmt::format("--rank-by {}", RankingMeasureName(request.measure))
+                                : std::string("--appearance always"),
+                            options.stream ? "--stream" : "the set exceeds the memory budget"));
+  }
+  StreamedEvaluationOptions streamed;
+  streamed.memory_bytes = options.memory_mb << 20;
+  streamed.literal_thesis_rms = options.literal_rms;
+  streamed.ground_truth_normals = TruthPath(options.gt_normals, set.ground_truth_normals());
+  // The measured masks are found per band (StreamedFitOptions, FoldFitOptions).
+  const std::vector<Mask> found_per_band;
+  std::optional<RobustFitOptions> robust;
+  if (options.robust) robust = RobustOptionsFromCommandLine(options.loss, found_per_band);
+  RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options.loss, found_per_band);
+  pbr_robust.pbr = options.pbr;
+  std::optional<StreamedPredictionOptions> prediction;
+  if (!options.no_prediction) {
+    prediction.emplace();
+    prediction->memory_bytes = streamed.memory_bytes;
+    prediction->hold_out_every = options.hold_out_every;
+    prediction->literal_thesis_rms = options.literal_rms;
+    prediction->robust = robust;
+    prediction->appearance = request.appearance;
+  }
+  const auto print_and_report = [&](const std::vector<MethodEvaluation>& results,
+                                    std::span<const std::filesystem::path> stacks) {
     const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
-        fmt::format("{} images, {} pixels{}", loaded.set.size(), observations.pixels(),
-                    truth ? fmt::format(", ground truth {}", truth_path->string()) : ""),
-        results, ranking, options->json);
-    if (!options->report.empty()) {
-      WriteEvaluationReport(options->report, loaded.set, results, truth ? &*truth : nullptr,
-                            ReportOptions(options->input, report_images, evaluation.robust,
-                                          pbr_robust, comparison, bar));
-      fmt::print("report: {}\n", (options->report / "index.html").string());
-    }
-  });
+        fmt::format("{} images (streamed){}", set.size(),
+                    streamed.ground_truth_normals
+                        ? fmt::format(", ground truth {}", streamed.ground_truth_normals->string())
+                        : ""),
+        results, request.ranking, options.json);
+    if (options.report.empty()) return;
+    TerminalProgressBar bar;
+    StreamedReportOptions bands;
+    bands.memory_bytes = streamed.memory_bytes;
+    WriteEvaluationReportStreamed(
+        options.report, set, stacks, results, streamed.ground_truth_normals,
+        ReportOptions(options.input, request.report_images, robust, pbr_robust, comparison, bar),
+        bands);
+    fmt::print("report: {}\n", (options.report / "index.html").string());
+  };
+  EvaluateSetStreamed(set, request.methods, streamed,
+                      FitGroups(request.methods, robust, pbr_robust), prediction,
+                      options.json.empty() ? options.report : options.json, print_and_report);
+}
+
+// The evaluation of a set held in memory (EvaluateMethod per method).
+void EvaluateInMemoryCommand(const EvaluateCommandOptions& options,
+                             const EvaluationRequest& request) {
+  // pbr is fitted as `fit --method pbr` fits it, robustly (its start, the measured masks and
+  // the --pbr-* options), with or without --robust.
+  const LoadOptions load = LoadOptionsOf(options);
+  const RobustInput input = options.robust || request.pbr_asked
+                                ? LoadSetForRobustFit(options.input, load)
+                                : RobustInput{LoadSetForCommand(options.input, load), {}};
+  const LoadedSet& loaded = input.loaded;
+  std::optional<Image> truth;
+  const auto truth_path = TruthPath(options.gt_normals, loaded.ground_truth_normals);
+  if (truth_path) truth = ReadImage(*truth_path).image;
+  if (truth && (truth->width() != loaded.set.width() || truth->height() != loaded.set.height())) {
+    throw Error(*truth_path,
+                fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
+                            truth->height(), loaded.set.width(), loaded.set.height()));
+  }
+  CheckReportImages(request.report_images, loaded.set.size());
+  const Observations observations(loaded.set);
+  TerminalProgressBar bar;
+  EvaluationOptions evaluation;
+  evaluation.prediction = !options.no_prediction;
+  evaluation.literal_thesis_rms = options.literal_rms;
+  evaluation.hold_out_every = options.hold_out_every;
+  evaluation.appearance = request.appearance;
+  evaluation.progress = &bar;
+  if (options.robust) {
+    evaluation.robust = RobustOptionsFromCommandLine(options.loss, input.measured);
+  }
+  RobustFitOptions pbr_robust = RobustOptionsFromCommandLine(options.loss, input.measured);
+  pbr_robust.pbr = options.pbr;
+  std::vector<MethodEvaluation> results;
+  for (const Method& method : request.methods) {
+    EvaluationOptions method_evaluation = evaluation;
+    if (method.kind == Method::Kind::kPbr) method_evaluation.robust = pbr_robust;
+    results.push_back(EvaluateMethod(loaded.set, observations, method, truth ? &*truth : nullptr,
+                                     method_evaluation));
+  }
+  const std::optional<MethodComparison> comparison = PrintAndSaveEvaluations(
+      fmt::format("{} images, {} pixels{}", loaded.set.size(), observations.pixels(),
+                  truth ? fmt::format(", ground truth {}", truth_path->string()) : ""),
+      results, request.ranking, options.json);
+  if (!options.report.empty()) {
+    WriteEvaluationReport(options.report, loaded.set, results, truth ? &*truth : nullptr,
+                          ReportOptions(options.input, request.report_images, evaluation.robust,
+                                        pbr_robust, comparison, bar));
+    fmt::print("report: {}\n", (options.report / "index.html").string());
+  }
+}
+
+void RunEvaluate(EvaluateCommandOptions& options) {
+  if (!options.stack.empty()) {
+    EvaluateStackCommand(options);
+    return;
+  }
+  if (!options.synthesis.synthesised.empty()) {
+    options.synthesis.sample = options.input;
+    options.synthesis.json = options.json;
+    EvaluateSynthesis(options.synthesis);
+    return;
+  }
+  const EvaluationRequest request = CheckedRequest(options);
+  StreamedSet set = OpenStreamedSet(options.input, LoadOptionsOf(options));
+  CheckReportImages(request.report_images, set.size());
+  if (request.measure == RankingMeasure::kDeltaE2000 && set.channels() != 1 &&
+      set.channels() != 3) {
+    throw Error(set.source(), fmt::format("--rank-by delta-e2000 needs grey or RGB images, "
+                                          "these have {} channels",
+                                          set.channels()));
+  }
+  const std::size_t budget = options.memory_mb > 0 ? options.memory_mb << 20
+                                                   : DefaultMemoryBudget(kMinimumEvaluationMemory);
+  // IMPLEMENTER CHOICE: as `export` (StreamsCapture), streamed when asked or when the set held
+  // whole would not fit the budget.
+  if (options.stream || HoldingSetExceeds(set, budget)) {
+    EvaluateStreamedCommand(options, request, set);
+  } else {
+    EvaluateInMemoryCommand(options, request);
+  }
+}
+
+}  // namespace
+
+void AddEvaluateCommand(CLI::App& app) {
+  auto options = std::make_shared<EvaluateCommandOptions>();
+  CLI::App* command = AddListedCommand(app, "evaluate");
+  AddEvaluateOptions(*command, *options);
+  command->callback([options] { RunEvaluate(*options); });
 }
 
 }  // namespace photomat::app
