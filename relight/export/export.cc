@@ -457,6 +457,217 @@ HeightSummary FrankotChellappaHeight(const fs::path& surface_path, const fs::pat
   return {0.0, HeightRange(integrated, mask)};
 }
 
+ImageWriteOptions Png16() {
+  ImageWriteOptions png16;
+  png16.sample_type = SampleType::kUint16;
+  return png16;
+}
+
+// Pass 1's outputs, written band by band. Every output of a streamed export stays pending until
+// all passes are done, so that a fault anywhere leaves none of them.
+struct SurfaceOutputs {
+  SurfaceOutputs(const fs::path& folder, int width, int height, int channels,
+                 const ExportOptions& maps)
+      : normal_png(folder / "normal.png", width, height, {"R", "G", "B"}, Png16()),
+        albedo_png(folder / "albedo.png", width, height, OutputChannelNames(channels),
+                   SrgbBytes()) {
+    if (maps.gltf && maps.normal_convention != NormalConvention::kOpenGl) {
+      gltf_normal_png.emplace(folder / kGltfNormalFile, width, height,
+                              std::vector<std::string>{"R", "G", "B"}, Png16());
+    }
+  }
+  static ImageWriteOptions SrgbBytes() {
+    ImageWriteOptions srgb8;
+    srgb8.sample_type = SampleType::kUint8;
+    srgb8.encoding = ColourSpace::kSrgb;
+    return srgb8;
+  }
+  void Commit() {
+    normal_png.Commit();
+    if (gltf_normal_png) gltf_normal_png->Commit();
+    albedo_png.Commit();
+  }
+
+  ImageBandWriter normal_png;
+  std::optional<ImageBandWriter> gltf_normal_png;
+  ImageBandWriter albedo_png;
+};
+
+// What pass 1 learns about the whole stack.
+struct SurfaceSummary {
+  std::string normals_source;
+  // A pbr stack's specular texture is scaled by the largest F0 of the whole map.
+  double largest_f0 = kGltfDielectricF0;
+};
+
+// Pass 1 over the stack: normals and albedo into their files, and gradients, mask, normals and
+// albedo into the surface scratch file (SurfaceChannels), band by band.
+SurfaceSummary WriteSurfacePass(StackBandReader& stack, int band_rows,
+                                const StreamedExportOptions& options, const fs::path& surface_path,
+                                SurfaceOutputs& outputs, Progress& progress) {
+  const LoadedStack& header = stack.header();
+  const Representation& r = header.representation;
+  const int width = stack.width(), height = stack.height();
+  const bool pbr = IsMicrofacet(r.shading());
+  MaterialMapOptions map_options;
+  map_options.values = StackValueEncoding(header.provenance);
+  map_options.sample_lights = header.provenance.capture_lights;
+  const std::vector<std::string> surface_names = SurfaceChannels(r.output_channels());
+  ImageBandWriter surface(surface_path, width, height, surface_names, ScratchFileOptions());
+  SurfaceSummary summary;
+  std::size_t covered = 0;
+  if (stack.next_row() != 0) stack.Rewind();
+  const int bands = (height + band_rows - 1) / band_rows;
+  progress.Start("export: normals and albedo", static_cast<std::size_t>(bands));
+  for (int b = 0; b < bands; ++b) {
+    const LoadedStack band = stack.ReadNext(band_rows);
+    const MaterialMaps maps = ExtractSurfaceMaps(band.representation, map_options);
+    summary.normals_source = maps.normals_source;
+    covered += maps.mask.CountSet();
+    if (pbr) {
+      summary.largest_f0 =
+          std::max(summary.largest_f0, LargestF0(band.representation.maps(), maps.mask));
+    }
+    outputs.normal_png.WriteNext(EncodeNormalMap(maps.normals, options.maps.normal_convention));
+    if (outputs.gltf_normal_png) {
+      outputs.gltf_normal_png->WriteNext(EncodeNormalMap(maps.normals, NormalConvention::kOpenGl));
+    }
+    outputs.albedo_png.WriteNext(maps.albedo);
+    const Image gradients = GradientsFromNormals(maps.normals);
+    Image rows(width, band.representation.height(), surface_names);
+    auto out = rows.values().begin();  // planar, in surface_names' order
+    out = std::copy(gradients.values().begin(), gradients.values().end(), out);
+    for (std::size_t p = 0; p < maps.mask.pixel_count(); ++p) *out++ = maps.mask[p] ? 1.0f : 0.0f;
+    out = std::copy(maps.normals.values().begin(), maps.normals.values().end(), out);
+    std::copy(maps.albedo.values().begin(), maps.albedo.values().end(), out);
+    surface.WriteNext(rows);
+    progress.Advance();
+  }
+  progress.Finish();
+  if (covered == 0) throw Error(stack.path(), fmt::format("{}: every map is zero", r.method()));
+  surface.Commit();
+  return summary;
+}
+
+// stack.exr's layers: the maps, then the derived normals and albedo the stack lacks, then height.
+struct StackExrLayers {
+  std::vector<std::string> extra;    // after the maps
+  std::vector<std::string> all;      // the maps and `extra`
+  std::vector<std::string> derived;  // what the surface scratch file gives: extra but height, mask
+};
+
+StackExrLayers StackExrLayersOf(const Representation& r) {
+  std::vector<std::string> albedo_names;
+  for (const auto& c : OutputChannelNames(r.output_channels())) {
+    albedo_names.push_back("albedo." + c);
+  }
+  StackExrLayers layers;
+  if (r.maps().FindChannel("normal.X") < 0) {
+    layers.extra.insert(layers.extra.end(), {"normal.X", "normal.Y", "normal.Z"});
+  }
+  if (r.maps().FindChannel(albedo_names.front()) < 0) {
+    layers.extra.insert(layers.extra.end(), albedo_names.begin(), albedo_names.end());
+  }
+  layers.derived = layers.extra;
+  layers.derived.push_back("mask");
+  layers.extra.push_back("height");
+  layers.all = r.maps().channel_names();
+  layers.all.insert(layers.all.end(), layers.extra.begin(), layers.extra.end());
+  return layers;
+}
+
+// Pass 3's outputs: the height files, stack.exr and a pbr stack's material files.
+struct HeightOutputs {
+  HeightOutputs(const fs::path& folder, const StackBandReader& stack, const StackExrLayers& layers,
+                const Range& range)
+      : height_exr(folder / "height.exr", stack.width(), stack.height(), {"height"}),
+        height_png(folder / "height.png", stack.width(), stack.height(), {"Y"},
+                   HeightPngOptions(range)),
+        stack_exr(folder / "stack.exr", StackExrDescription(stack.header(), layers), layers.all,
+                  stack.width(), stack.height()) {
+    if (!IsMicrofacet(stack.header().representation.shading())) return;
+    pbr_files = PbrFileList(Png16());
+    for (const PbrFile& file : pbr_files) {
+      pbr_writers.push_back(std::make_unique<ImageBandWriter>(
+          folder / file.name, stack.width(), stack.height(), file.channels, file.options));
+    }
+  }
+  static ImageWriteOptions HeightPngOptions(const Range& range) {
+    ImageWriteOptions height16 = Png16();
+    height16.attributes["photomat:height_min"] = fmt::format("{:.9g}", range.low);
+    height16.attributes["photomat:height_max"] = fmt::format("{:.9g}", range.high);
+    return height16;
+  }
+  static nlohmann::json StackExrDescription(const LoadedStack& header,
+                                            const StackExrLayers& layers) {
+    nlohmann::json description = StackDescription(header.representation, header.provenance);
+    description["extra_layers"] = layers.extra;
+    return description;
+  }
+  void Commit() {
+    height_exr.Commit();
+    height_png.Commit();
+    stack_exr.Commit();
+    for (const auto& writer : pbr_writers) writer->Commit();
+  }
+
+  ImageBandWriter height_exr;
+  ImageBandWriter height_png;
+  StackBandWriter stack_exr;
+  std::vector<PbrFile> pbr_files;
+  std::vector<std::unique_ptr<ImageBandWriter>> pbr_writers;
+};
+
+// Pass 3 over the stack: the height (its mean over the mask taken out) into its files, stack.exr
+// with its extra layers, and a pbr stack's material files.
+void WriteHeightAndStackPass(StackBandReader& stack, int band_rows, const fs::path& surface_path,
+                             const fs::path& height_path, const HeightSummary& height_summary,
+                             const StackExrLayers& layers, double largest_f0,
+                             HeightOutputs& outputs, Progress& progress) {
+  const int width = stack.width();
+  stack.Rewind();
+  ImageBandReader surface(surface_path, {});
+  ImageBandReader height_file(height_path, {});
+  const std::vector<int> derived_channels = ChannelsOf(surface, layers.derived);
+  const int bands = (stack.height() + band_rows - 1) / band_rows;
+  progress.Start("export: height and stack", static_cast<std::size_t>(bands));
+  for (int b = 0; b < bands; ++b) {
+    const LoadedStack band = stack.ReadNext(band_rows);
+    const int rows = band.representation.height();
+    Image stored(width, rows, surface.channels());
+    surface.ReadNext(stored.View());
+    const Image derived = Channels(stored, derived_channels, layers.derived);
+    Image height_band(width, rows, std::vector<std::string>{"height"});
+    height_file.ReadNext(height_band.View());
+    Mask mask(width, rows, false);
+    const auto mask_plane = derived.plane(derived.channels() - 1);
+    for (std::size_t p = 0; p < mask.pixel_count(); ++p) {
+      mask.Set(p, mask_plane[p] >= 0.5f);
+      height_band.pixel(p)[0] =
+          mask[p] ? static_cast<float>(height_band.pixel(p)[0] - height_summary.mean) : 0.0f;
+    }
+    outputs.height_exr.WriteNext(height_band);
+    outputs.height_png.WriteNext(NormalisedHeight(height_band, mask, height_summary.range));
+    Image stack_layers(width, rows, layers.all);
+    auto out = stack_layers.values().begin();  // planar: maps, derived layers, height
+    const auto& maps = band.representation.maps().values();
+    out = std::copy(maps.begin(), maps.end(), out);
+    const auto derived_values = derived.values();
+    out = std::copy(derived_values.begin(),
+                    derived_values.end() - static_cast<std::ptrdiff_t>(mask.pixel_count()), out);
+    std::copy(height_band.values().begin(), height_band.values().end(), out);
+    outputs.stack_exr.Write(stack_layers);
+    if (!outputs.pbr_files.empty()) {
+      const PbrImages images = PbrBand(band.representation.maps(), mask, largest_f0);
+      for (std::size_t f = 0; f < outputs.pbr_files.size(); ++f) {
+        outputs.pbr_writers[f]->WriteNext(images.*outputs.pbr_files[f].image);
+      }
+    }
+    progress.Advance();
+  }
+  progress.Finish();
+}
+
 int StreamedBandRows(const StackBandReader& stack, const StreamedExportOptions& options) {
   return BudgetedBandRows(
       options.band_rows, options.memory_bytes, kMinimumExportMemory,
@@ -515,177 +726,48 @@ nlohmann::json ExportMapsStreamed(StackBandReader& stack, const fs::path& folder
                                   const StreamedExportOptions& options,
                                   StreamedExportReport* report) {
   const LoadedStack& header = stack.header();
-  const Representation& r = header.representation;
   const int width = stack.width(), height = stack.height();
-  const int channels = r.output_channels();
   const int band_rows = StreamedBandRows(stack, options);
-  const int bands = (height + band_rows - 1) / band_rows;
   NullProgress none;
   Progress& progress = OrNull(options.progress, none);
-  MaterialMapOptions map_options;
-  map_options.values = StackValueEncoding(header.provenance);
-  map_options.sample_lights = header.provenance.capture_lights;
   ScratchFiles scratch;
   const fs::path surface_path = scratch.Add(folder / ".export-surface.exr");
   const fs::path height_path = scratch.Add(folder / ".export-height.exr");
-  ImageWriteOptions png16;
-  png16.sample_type = SampleType::kUint16;
-  ImageWriteOptions srgb8;
-  srgb8.sample_type = SampleType::kUint8;
-  srgb8.encoding = ColourSpace::kSrgb;
-  const std::vector<std::string> rgb = {"R", "G", "B"};
-  const std::vector<std::string> surface_names = SurfaceChannels(channels);
 
-  // Pass 1 over the stack: normals, albedo and gradients, band by band. The outputs stay pending
-  // until every pass is done, so a fault anywhere leaves none of them.
-  ImageBandWriter normal_png(folder / "normal.png", width, height, rgb, png16);
-  std::optional<ImageBandWriter> gltf_normal_png;
-  if (options.maps.gltf && options.maps.normal_convention != NormalConvention::kOpenGl) {
-    gltf_normal_png.emplace(folder / kGltfNormalFile, width, height, rgb, png16);
-  }
-  ImageBandWriter albedo_png(folder / "albedo.png", width, height, OutputChannelNames(channels),
-                             srgb8);
-  std::string normals_source;
-  // A pbr stack's specular texture is scaled by the largest F0 of the whole map: gathered here,
-  // the pbr maps written in pass 3.
-  const bool pbr = IsMicrofacet(r.shading());
-  double largest_f0 = kGltfDielectricF0;
-  {
-    ImageBandWriter surface(surface_path, width, height, surface_names, ScratchFileOptions());
-    std::size_t covered = 0;
-    if (stack.next_row() != 0) stack.Rewind();
-    progress.Start("export: normals and albedo", static_cast<std::size_t>(bands));
-    for (int b = 0; b < bands; ++b) {
-      const LoadedStack band = stack.ReadNext(band_rows);
-      const MaterialMaps maps = ExtractSurfaceMaps(band.representation, map_options);
-      normals_source = maps.normals_source;
-      covered += maps.mask.CountSet();
-      if (pbr) largest_f0 = std::max(largest_f0, LargestF0(band.representation.maps(), maps.mask));
-      normal_png.WriteNext(EncodeNormalMap(maps.normals, options.maps.normal_convention));
-      if (gltf_normal_png) {
-        gltf_normal_png->WriteNext(EncodeNormalMap(maps.normals, NormalConvention::kOpenGl));
-      }
-      albedo_png.WriteNext(maps.albedo);
-      const Image gradients = GradientsFromNormals(maps.normals);
-      Image rows(width, band.representation.height(), surface_names);
-      auto out = rows.values().begin();  // planar, in surface_names' order
-      out = std::copy(gradients.values().begin(), gradients.values().end(), out);
-      for (std::size_t p = 0; p < maps.mask.pixel_count(); ++p) *out++ = maps.mask[p] ? 1.0f : 0.0f;
-      out = std::copy(maps.normals.values().begin(), maps.normals.values().end(), out);
-      std::copy(maps.albedo.values().begin(), maps.albedo.values().end(), out);
-      surface.WriteNext(rows);
-      progress.Advance();
-    }
-    progress.Finish();
-    if (covered == 0) throw Error(stack.path(), fmt::format("{}: every map is zero", r.method()));
-    surface.Commit();
-  }
+  SurfaceOutputs surface(folder, width, height, header.representation.output_channels(),
+                         options.maps);
+  const SurfaceSummary surface_summary =
+      WriteSurfacePass(stack, band_rows, options, surface_path, surface, progress);
 
   // Pass 2: the height into its scratch file, its mean and range over the mask.
-  const HeightSummary summary =
+  const HeightSummary height_summary =
       options.maps.height == HeightIntegrator::kPoisson
           ? TiledPoissonHeight(surface_path, height_path, width, height, options, progress)
           : FrankotChellappaHeight(surface_path, height_path, width, height, progress);
-  const double mean = summary.mean;
-  const Range range = summary.range;
 
-  // Pass 3 over the stack: the height files and stack.exr with its extra layers.
-  ImageBandWriter height_exr(folder / "height.exr", width, height, {"height"});
-  ImageWriteOptions height16 = png16;
-  height16.attributes["photomat:height_min"] = fmt::format("{:.9g}", range.low);
-  height16.attributes["photomat:height_max"] = fmt::format("{:.9g}", range.high);
-  ImageBandWriter height_png(folder / "height.png", width, height, {"Y"}, height16);
-  // stack.exr's layers: the maps, then the derived normals and albedo the stack lacks, then height.
-  std::vector<std::string> albedo_names;
-  for (const auto& c : OutputChannelNames(channels)) albedo_names.push_back("albedo." + c);
-  const bool add_normals = r.maps().FindChannel("normal.X") < 0;
-  const bool add_albedo = r.maps().FindChannel(albedo_names.front()) < 0;
-  std::vector<std::string> extra_names;
-  if (add_normals) extra_names.insert(extra_names.end(), {"normal.X", "normal.Y", "normal.Z"});
-  if (add_albedo) extra_names.insert(extra_names.end(), albedo_names.begin(), albedo_names.end());
-  extra_names.push_back("height");
-  nlohmann::json stack_description = StackDescription(r, header.provenance);
-  stack_description["extra_layers"] = extra_names;
-  std::vector<std::string> stack_names = r.maps().channel_names();
-  stack_names.insert(stack_names.end(), extra_names.begin(), extra_names.end());
-  StackBandWriter stack_exr(folder / "stack.exr", stack_description, stack_names, width, height);
-  const std::vector<PbrFile> pbr_files = pbr ? PbrFileList(png16) : std::vector<PbrFile>{};
-  std::vector<std::unique_ptr<ImageBandWriter>> pbr_writers;
-  for (const PbrFile& file : pbr_files) {
-    pbr_writers.push_back(std::make_unique<ImageBandWriter>(folder / file.name, width, height,
-                                                            file.channels, file.options));
-  }
-  {
-    stack.Rewind();
-    ImageBandReader surface(surface_path, {});
-    ImageBandReader height_file(height_path, {});
-    std::vector<std::string> derived_names;
-    if (add_normals)
-      derived_names.insert(derived_names.end(), {"normal.X", "normal.Y", "normal.Z"});
-    if (add_albedo)
-      derived_names.insert(derived_names.end(), albedo_names.begin(), albedo_names.end());
-    derived_names.push_back("mask");
-    const std::vector<int> derived_channels = ChannelsOf(surface, derived_names);
-    progress.Start("export: height and stack", static_cast<std::size_t>(bands));
-    for (int b = 0; b < bands; ++b) {
-      const LoadedStack band = stack.ReadNext(band_rows);
-      const int rows = band.representation.height();
-      Image stored(width, rows, surface.channels());
-      surface.ReadNext(stored.View());
-      const Image derived = Channels(stored, derived_channels, derived_names);
-      Image height_band(width, rows, std::vector<std::string>{"height"});
-      height_file.ReadNext(height_band.View());
-      Mask mask(width, rows, false);
-      const auto mask_plane = derived.plane(derived.channels() - 1);
-      for (std::size_t p = 0; p < mask.pixel_count(); ++p) {
-        mask.Set(p, mask_plane[p] >= 0.5f);
-        height_band.pixel(p)[0] =
-            mask[p] ? static_cast<float>(height_band.pixel(p)[0] - mean) : 0.0f;
-      }
-      height_exr.WriteNext(height_band);
-      height_png.WriteNext(NormalisedHeight(height_band, mask, range));
-      Image layers(width, rows, stack_names);
-      auto out = layers.values().begin();  // planar: maps, derived layers, height
-      const auto& maps = band.representation.maps().values();
-      out = std::copy(maps.begin(), maps.end(), out);
-      const auto derived_values = derived.values();
-      out = std::copy(derived_values.begin(),
-                      derived_values.end() - static_cast<std::ptrdiff_t>(mask.pixel_count()), out);
-      std::copy(height_band.values().begin(), height_band.values().end(), out);
-      stack_exr.Write(layers);
-      if (pbr) {
-        const PbrImages images = PbrBand(band.representation.maps(), mask, largest_f0);
-        for (std::size_t f = 0; f < pbr_files.size(); ++f) {
-          pbr_writers[f]->WriteNext(images.*pbr_files[f].image);
-        }
-      }
-      progress.Advance();
-    }
-    progress.Finish();
-  }
+  const StackExrLayers layers = StackExrLayersOf(header.representation);
+  HeightOutputs height_outputs(folder, stack, layers, height_summary.range);
+  WriteHeightAndStackPass(stack, band_rows, surface_path, height_path, height_summary, layers,
+                          surface_summary.largest_f0, height_outputs, progress);
 
-  nlohmann::json description =
-      ExportDescription(header, width, height, normals_source, range, options.maps);
+  nlohmann::json description = ExportDescription(
+      header, width, height, surface_summary.normals_source, height_summary.range, options.maps);
   description["streamed"] = {{"band_rows", band_rows}};
   if (options.maps.height == HeightIntegrator::kPoisson) {
     description["streamed"]["tile"] = options.poisson.tile;
     description["streamed"]["overlap"] = options.poisson.overlap;
     description["streamed"]["coarse_factor"] = CoarseFactor(width, height, options.poisson);
   }
-  normal_png.Commit();
-  if (gltf_normal_png) gltf_normal_png->Commit();
-  albedo_png.Commit();
-  height_exr.Commit();
-  height_png.Commit();
-  stack_exr.Commit();
+  surface.Commit();
+  height_outputs.Commit();
   PbrFiles pbr_description;
-  if (pbr) {
-    for (const auto& writer : pbr_writers) writer->Commit();
-    pbr_description = PbrDescription(largest_f0);
+  if (IsMicrofacet(header.representation.shading())) {
+    pbr_description = PbrDescription(surface_summary.largest_f0);
     description["pbr"] = pbr_description.description;
   }
   if (options.maps.gltf) {
-    WriteTile(folder, width, height, range, pbr_description, options.maps, description);
+    WriteTile(folder, width, height, height_summary.range, pbr_description, options.maps,
+              description);
   }
   WriteJsonFile(folder / "export.json", description);
   if (report) {
