@@ -170,6 +170,164 @@ std::vector<torch::Tensor> CopyParameters(const std::vector<torch::Tensor>& para
   return copies;
 }
 
+// The encoder and the decoder trained together (NeuralRTI), with their optimiser. The encoder
+// maps a pixel's profile (n C values) to k coefficients; the decoder maps k coefficients and a
+// light's (lx, ly) to the pixel's value under that light. The random draws (the minibatch order,
+// the lights of each minibatch) come from the caller's Random in a fixed order, so a seed gives
+// the same training bit for bit.
+class NeuralTrainer {
+ public:
+  NeuralTrainer(const TrainingData& data, std::int64_t channels, const NeuralFitOptions& options)
+      : data_(data),
+        channels_(channels),
+        lights_(data.lights.size(0)),
+        // The encoder's weights are drawn first, then the decoder's (torch's seeded generator).
+        encoder_(MakePerceptron(static_cast<int>(lights_ * channels), options.encoder_width,
+                                options.encoder_layers, options.coefficients)),
+        decoder_(MakePerceptron(options.coefficients + 2, options.decoder_width,
+                                options.decoder_layers, static_cast<int>(channels))),
+        parameters_(AllParameters(encoder_, decoder_)),
+        learning_rate_(options.learning_rate),
+        optimiser_(parameters_, torch::optim::AdamOptions(learning_rate_)),
+        batch_(static_cast<std::size_t>(options.batch_pixels)),
+        lights_per_batch_(options.lights_per_batch > 0
+                              ? std::min<std::int64_t>(options.lights_per_batch, lights_)
+                              : lights_),
+        light_order_(static_cast<std::size_t>(lights_)) {
+    std::iota(light_order_.begin(), light_order_.end(), std::int64_t{0});
+  }
+
+  std::size_t Batches(std::size_t pixels) const { return (pixels + batch_ - 1) / batch_; }
+
+  // One epoch: `training` shuffled, then one Adam step per minibatch of its pixels, each decoded
+  // under lights_per_batch of the lights (drawn per minibatch) or all of them. Returns the mean
+  // training loss; advances `bar` once per minibatch.
+  double Epoch(std::vector<std::int64_t>& training, Random& random, Progress& bar) {
+    Shuffle(training, random);
+    double sum = 0.0;
+    for (std::size_t first = 0; first < training.size(); first += batch_) {
+      const std::size_t count = std::min(batch_, training.size() - first);
+      const torch::Tensor index = torch::tensor(
+          std::vector<std::int64_t>(training.begin() + first, training.begin() + first + count),
+          torch::kInt64);
+      optimiser_.zero_grad();
+      torch::Tensor loss;
+      if (lights_per_batch_ < lights_) {
+        Shuffle(light_order_, random);
+        std::vector<std::int64_t> chosen(light_order_.begin(),
+                                         light_order_.begin() + lights_per_batch_);
+        std::sort(chosen.begin(), chosen.end());
+        loss = LossUnder(index, torch::tensor(chosen, torch::kInt64));
+      } else {
+        loss = Loss(index);
+      }
+      loss.backward();
+      optimiser_.step();
+      sum += loss.item<double>() * static_cast<double>(count);
+      bar.Advance();
+    }
+    return sum / static_cast<double>(training.size());
+  }
+
+  // Mean squared error over `pixels` under every light, without gradients, in batches.
+  double MeanLoss(const std::vector<std::int64_t>& pixels) {
+    torch::NoGradGuard no_grad;
+    constexpr std::size_t kBatch = 1024;
+    double sum = 0.0;
+    for (std::size_t first = 0; first < pixels.size(); first += kBatch) {
+      const std::size_t count = std::min(kBatch, pixels.size() - first);
+      const torch::Tensor index = torch::tensor(
+          std::vector<std::int64_t>(pixels.begin() + first, pixels.begin() + first + count),
+          torch::kInt64);
+      sum += Loss(index).item<double>() * static_cast<double>(count);
+    }
+    return sum / static_cast<double>(pixels.size());
+  }
+
+  std::vector<torch::Tensor> Snapshot() const { return CopyParameters(parameters_); }
+  void Restore(const std::vector<torch::Tensor>& snapshot) {
+    torch::NoGradGuard no_grad;
+    for (std::size_t i = 0; i < parameters_.size(); ++i) parameters_[i].copy_(snapshot[i]);
+  }
+  void ScaleLearningRate(double factor) {
+    learning_rate_ *= factor;
+    for (auto& group : optimiser_.param_groups()) {
+      static_cast<torch::optim::AdamOptions&>(group.options()).lr(learning_rate_);
+    }
+  }
+
+  torch::nn::Sequential& encoder() { return encoder_; }
+  torch::nn::Sequential& decoder() { return decoder_; }
+
+ private:
+  static std::vector<torch::Tensor> AllParameters(torch::nn::Sequential& encoder,
+                                                  torch::nn::Sequential& decoder) {
+    std::vector<torch::Tensor> parameters = encoder->parameters();
+    for (const torch::Tensor& p : decoder->parameters()) parameters.push_back(p);
+    return parameters;
+  }
+  // The minibatch `index`'s mean squared error under every light.
+  torch::Tensor Loss(const torch::Tensor& index) {
+    const torch::Tensor codes = encoder_->forward(data_.inputs.index_select(0, index));
+    return torch::mse_loss(DecodeAllLights(decoder_, codes, data_.lights, channels_),
+                           data_.values.index_select(0, index));
+  }
+  // The same under a subset of the lights (`light_index`, ascending).
+  torch::Tensor LossUnder(const torch::Tensor& index, const torch::Tensor& light_index) {
+    const torch::Tensor codes = encoder_->forward(data_.inputs.index_select(0, index));
+    return torch::mse_loss(
+        DecodeAllLights(decoder_, codes, data_.lights.index_select(0, light_index), channels_),
+        data_.values.index_select(0, index).index_select(1, light_index));
+  }
+
+  const TrainingData& data_;
+  std::int64_t channels_;
+  std::int64_t lights_;
+  torch::nn::Sequential encoder_;
+  torch::nn::Sequential decoder_;
+  std::vector<torch::Tensor> parameters_;
+  double learning_rate_;
+  torch::optim::Adam optimiser_;
+  std::size_t batch_;
+  std::int64_t lights_per_batch_;
+  std::vector<std::int64_t> light_order_;
+};
+
+// Trains epoch after epoch until the validation pixels' loss has not fallen below (1 -
+// min_improvement) times its best for `patience` epochs, or for max_epochs; the best epoch's
+// weights are kept. Fills the report's epochs and losses.
+void TrainWithEarlyStopping(NeuralTrainer& trainer, std::vector<std::int64_t>& training,
+                            const std::vector<std::int64_t>& validation, Random& random,
+                            const NeuralFitOptions& options, Progress& bar,
+                            NeuralFitReport& report) {
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<torch::Tensor> best_parameters = trainer.Snapshot();
+  int stale = 0;
+  for (int epoch = 1; epoch <= options.max_epochs; ++epoch) {
+    bar.Start(std::isfinite(best) ? fmt::format("neural: epoch {}/{} (validation loss {:.4g})",
+                                                epoch, options.max_epochs, best)
+                                  : fmt::format("neural: epoch {}/{}", epoch, options.max_epochs),
+              trainer.Batches(training.size()));
+    const double training_loss = trainer.Epoch(training, random, bar);
+    bar.Finish();
+    const double validation_loss = trainer.MeanLoss(validation);
+    report.epochs = epoch;
+    if (validation_loss < best * (1.0 - options.min_improvement)) {
+      best = validation_loss;
+      best_parameters = trainer.Snapshot();
+      report.best_epoch = epoch;
+      report.training_loss = training_loss;
+      report.validation_loss = validation_loss;
+      stale = 0;
+    } else if (++stale >= options.patience) {
+      break;
+    } else if (options.plateau_decay < 1.0) {
+      trainer.ScaleLearningRate(options.plateau_decay);
+    }
+  }
+  trainer.Restore(best_parameters);
+}
+
 }  // namespace
 
 nlohmann::json NeuralFitOptions::ToJson() const {
@@ -229,7 +387,6 @@ Representation FitNeural(const Observations& observations,
   torch::set_num_threads(threads);
   torch::manual_seed(options.seed);
   const std::int64_t channels = observations.channels();
-  const std::int64_t n = static_cast<std::int64_t>(selected.size());
 
   // The sample: a seeded draw of the pixels; its first validation_count are the early-stopping
   // set, the rest train.
@@ -246,118 +403,22 @@ Representation FitNeural(const Observations& observations,
   std::vector<std::int64_t> training(static_cast<std::size_t>(sample_count - validation_count));
   std::iota(training.begin(), training.end(), validation_count);
 
-  torch::nn::Sequential encoder =
-      MakePerceptron(static_cast<int>(n * channels), options.encoder_width, options.encoder_layers,
-                     options.coefficients);
-  torch::nn::Sequential decoder =
-      MakePerceptron(options.coefficients + 2, options.decoder_width, options.decoder_layers,
-                     static_cast<int>(channels));
-  std::vector<torch::Tensor> parameters = encoder->parameters();
-  for (const torch::Tensor& p : decoder->parameters()) parameters.push_back(p);
-  double learning_rate = options.learning_rate;
-  torch::optim::Adam optimiser(parameters, torch::optim::AdamOptions(learning_rate));
-
-  auto loss_of = [&](const torch::Tensor& index) {
-    const torch::Tensor codes = encoder->forward(data.inputs.index_select(0, index));
-    return torch::mse_loss(DecodeAllLights(decoder, codes, data.lights, channels),
-                           data.values.index_select(0, index));
-  };
-  // The same under a subset of the lights (`light_index`, ascending).
-  auto loss_under = [&](const torch::Tensor& index, const torch::Tensor& light_index) {
-    const torch::Tensor codes = encoder->forward(data.inputs.index_select(0, index));
-    return torch::mse_loss(
-        DecodeAllLights(decoder, codes, data.lights.index_select(0, light_index), channels),
-        data.values.index_select(0, index).index_select(1, light_index));
-  };
-  const std::int64_t lights_per_batch =
-      options.lights_per_batch > 0 ? std::min<std::int64_t>(options.lights_per_batch, n) : n;
-  std::vector<std::int64_t> light_order(static_cast<std::size_t>(n));
-  std::iota(light_order.begin(), light_order.end(), std::int64_t{0});
-  // Mean squared error over `pixels`, without gradients, in batches.
-  auto mean_loss = [&](const std::vector<std::int64_t>& pixels) {
-    torch::NoGradGuard no_grad;
-    constexpr std::size_t kBatch = 1024;
-    double sum = 0.0;
-    for (std::size_t first = 0; first < pixels.size(); first += kBatch) {
-      const std::size_t count = std::min(kBatch, pixels.size() - first);
-      const torch::Tensor index = torch::tensor(
-          std::vector<std::int64_t>(pixels.begin() + first, pixels.begin() + first + count),
-          torch::kInt64);
-      sum += loss_of(index).item<double>() * static_cast<double>(count);
-    }
-    return sum / static_cast<double>(pixels.size());
-  };
-
+  NeuralTrainer trainer(data, channels, options);
   NeuralFitReport report;
   report.training_pixels = static_cast<int>(training.size());
   report.validation_pixels = static_cast<int>(validation.size());
-  double best = std::numeric_limits<double>::infinity();
-  std::vector<torch::Tensor> best_parameters = CopyParameters(parameters);
-  int stale = 0;
-  const auto batch = static_cast<std::size_t>(options.batch_pixels);
-  const std::size_t batches = (training.size() + batch - 1) / batch;
-  for (int epoch = 1; epoch <= options.max_epochs; ++epoch) {
-    bar.Start(std::isfinite(best) ? fmt::format("neural: epoch {}/{} (validation loss {:.4g})",
-                                                epoch, options.max_epochs, best)
-                                  : fmt::format("neural: epoch {}/{}", epoch, options.max_epochs),
-              batches);
-    Shuffle(training, random);
-    double training_sum = 0.0;
-    for (std::size_t first = 0; first < training.size(); first += batch) {
-      const std::size_t count = std::min(batch, training.size() - first);
-      const torch::Tensor index = torch::tensor(
-          std::vector<std::int64_t>(training.begin() + first, training.begin() + first + count),
-          torch::kInt64);
-      optimiser.zero_grad();
-      torch::Tensor loss;
-      if (lights_per_batch < n) {
-        Shuffle(light_order, random);
-        std::vector<std::int64_t> chosen(light_order.begin(),
-                                         light_order.begin() + lights_per_batch);
-        std::sort(chosen.begin(), chosen.end());
-        loss = loss_under(index, torch::tensor(chosen, torch::kInt64));
-      } else {
-        loss = loss_of(index);
-      }
-      loss.backward();
-      optimiser.step();
-      training_sum += loss.item<double>() * static_cast<double>(count);
-      bar.Advance();
-    }
-    bar.Finish();
-    const double validation_loss = mean_loss(validation);
-    report.epochs = epoch;
-    if (validation_loss < best * (1.0 - options.min_improvement)) {
-      best = validation_loss;
-      best_parameters = CopyParameters(parameters);
-      report.best_epoch = epoch;
-      report.training_loss = training_sum / static_cast<double>(training.size());
-      report.validation_loss = validation_loss;
-      stale = 0;
-    } else if (++stale >= options.patience) {
-      break;
-    } else if (options.plateau_decay < 1.0) {
-      learning_rate *= options.plateau_decay;
-      for (auto& group : optimiser.param_groups()) {
-        static_cast<torch::optim::AdamOptions&>(group.options()).lr(learning_rate);
-      }
-    }
-  }
-  {
-    torch::NoGradGuard no_grad;
-    for (std::size_t i = 0; i < parameters.size(); ++i) parameters[i].copy_(best_parameters[i]);
-  }
+  TrainWithEarlyStopping(trainer, training, validation, random, options, bar, report);
 
   // The coefficient maps: every pixel encoded by the kept encoder.
   Image maps(observations.width(), observations.height(), NeuralMapNames(options.coefficients));
-  EncodeEveryPixel(encoder, observations, selected, data.scale, maps);
+  EncodeEveryPixel(trainer.encoder(), observations, selected, data.scale, maps);
   report.encoded_pixels = static_cast<int>(m);
   report.threads = threads;
   report.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
   report.cpu_seconds = static_cast<double>(std::clock() - start_cpu) / CLOCKS_PER_SEC;
   if (report_out) *report_out = report;
-  auto shading = std::make_shared<NeuralShading>(ToNeuralDecoder(decoder, data.scale));
+  auto shading = std::make_shared<NeuralShading>(ToNeuralDecoder(trainer.decoder(), data.scale));
   nlohmann::json details = {{"neural", options.ToJson()}, {"neural_training", report.ToJson()}};
   return Representation("neural", std::move(maps), std::move(shading), std::move(details));
 }
