@@ -75,8 +75,10 @@ int StreamedBandRows(std::size_t memory_bytes, const StreamedSet& set,
   return RowsWithinBytes(room, per_pixel * width, set.height());
 }
 
-StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
-                              std::span<const fs::path> stacks, const StreamedFitOptions& options) {
+namespace {
+
+void CheckFitRequest(const StreamedSet& set, std::span<const Method> methods,
+                     std::span<const fs::path> stacks, const StreamedFitOptions& options) {
   if (methods.size() != stacks.size()) {
     throw Error(set.source(),
                 fmt::format("{} methods but {} stack files", methods.size(), stacks.size()));
@@ -91,48 +93,26 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
   if (options.encoded_values && options.robust) {
     throw Error(set.source(), "robust fits are of linear values, not of sRGB-encoded ones");
   }
-  Streamer streamer(set, methods, options);
-  const int n = set.size();
-  const fs::path& source = set.source();
-  const bool needs_gram = std::any_of(methods.begin(), methods.end(), NeedsGram);
-  RowGram start_gram(n);
-  if (needs_gram) {
-    streamer.Pass("fit: gram", [&](Band& band) {
-      if (band.empty()) return;
-      const Observations& o = *band.observations;
-      start_gram.Add(band.StartProfiles(), o.pixel_indices(), o.width(), o.channels());
-    });
-  }
+}
+
+// What the methods with a global sum take from whole passes over the set before the maps.
+struct GlobalModels {
   // The rbf and bilinear models, by method index: from the Gram pass alone.
   std::map<std::size_t, LightProfileModel> profiles;
-  nlohmann::json profile_details = nlohmann::json::object();
-  if (options.robust) {
-    profile_details["robust"] = options.robust_options.ToJson();
-    profile_details["robust"]["measured_masks"] = true;  // found per band (StreamedFitOptions)
-  }
-  for (std::size_t i = 0; i < methods.size(); ++i) {
-    if (!IsLightProfile(methods[i])) continue;
-    profiles.emplace(i, FitLightProfileModel(start_gram.gram(), start_gram.column_sums(),
-                                             set.lights(), methods[i], source, profile_details));
-  }
-  // The Eigen-k bases, by k: least squares from the Gram pass; robust: the Gram pass gives the
-  // first EM iteration's, and one pass more makes each further iteration's.
+  // The Eigen-k bases, by k: least squares from the Gram pass.
   std::map<int, EigenBasis> eigen;
-  std::map<int, std::vector<EigenBasis>> robust_eigen;  // per k, the basis of each iteration
-  for (const Method& method : methods) {
-    if (method.kind != Method::Kind::kEigen) continue;
-    const EigenBasis basis = EigenBasisFromGram(start_gram.gram(), start_gram.column_sums(),
-                                                streamer.all(), method.eigen_k, source);
-    if (options.robust) {
-      robust_eigen[method.eigen_k] = {basis};
-    } else {
-      eigen[method.eigen_k] = basis;
-    }
-  }
+  // Robust Eigen-k, per k: the basis of each EM iteration (the Gram pass gives the first).
+  std::map<int, std::vector<EigenBasis>> robust_eigen;
+};
+
+// The robust Eigen-k bases' further EM iterations: one pass each, every k's Gram matrix of the
+// profiles imputed with the bases so far.
+void IterateRobustEigen(Streamer& streamer, const StreamedSet& set,
+                        std::map<int, std::vector<EigenBasis>>& robust_eigen) {
   for (int iteration = 1; !robust_eigen.empty() && iteration <= kRobustEigenIterations;
        ++iteration) {
     std::map<int, RowGram> grams;
-    for (const auto& entry : robust_eigen) grams.emplace(entry.first, RowGram(n));
+    for (const auto& entry : robust_eigen) grams.emplace(entry.first, RowGram(set.size()));
     streamer.Pass(
         fmt::format("fit: robust eigen, EM {} of {}", iteration + 1, kRobustEigenIterations + 1),
         [&](Band& band) {
@@ -147,10 +127,79 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
     for (auto& [k, bases] : robust_eigen) {
       const RowGram& gram = grams.at(k);
       bases.push_back(
-          EigenBasisFromGram(gram.gram(), gram.column_sums(), streamer.all(), k, source));
+          EigenBasisFromGram(gram.gram(), gram.column_sums(), streamer.all(), k, set.source()));
     }
   }
+}
 
+// The Gram pass (when a method needs it) and the models made from it.
+GlobalModels FitGlobalModels(Streamer& streamer, const StreamedSet& set,
+                             std::span<const Method> methods, const StreamedFitOptions& options) {
+  GlobalModels models;
+  if (!std::any_of(methods.begin(), methods.end(), NeedsGram)) return models;
+  RowGram start_gram(set.size());
+  streamer.Pass("fit: gram", [&](Band& band) {
+    if (band.empty()) return;
+    const Observations& o = *band.observations;
+    start_gram.Add(band.StartProfiles(), o.pixel_indices(), o.width(), o.channels());
+  });
+  nlohmann::json profile_details = nlohmann::json::object();
+  if (options.robust) {
+    profile_details["robust"] = options.robust_options.ToJson();
+    profile_details["robust"]["measured_masks"] = true;  // found per band (StreamedFitOptions)
+  }
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    const Method& method = methods[i];
+    if (IsLightProfile(method)) {
+      models.profiles.emplace(
+          i, FitLightProfileModel(start_gram.gram(), start_gram.column_sums(), set.lights(), method,
+                                  set.source(), profile_details));
+    } else if (method.kind == Method::Kind::kEigen) {
+      const EigenBasis basis = EigenBasisFromGram(start_gram.gram(), start_gram.column_sums(),
+                                                  streamer.all(), method.eigen_k, set.source());
+      if (options.robust) {
+        models.robust_eigen[method.eigen_k] = {basis};
+      } else {
+        models.eigen[method.eigen_k] = basis;
+      }
+    }
+  }
+  IterateRobustEigen(streamer, set, models.robust_eigen);
+  return models;
+}
+
+// Method `index`'s fit of one band.
+Representation FitBand(Band& band, std::size_t index, std::span<const Method> methods,
+                       const GlobalModels& models, const StreamedSet& set,
+                       const Streamer& streamer) {
+  const Method& method = methods[index];
+  if (IsLightProfile(method)) {
+    return ProjectLightProfiles(models.profiles.at(index), *band.observations, band.StartProfiles(),
+                                streamer.all());
+  }
+  if (method.kind == Method::Kind::kEigen) {
+    if (!band.robust) {
+      return FitEigenWithBasis(*band.observations, set.lights(), streamer.all(),
+                               models.eigen.at(method.eigen_k));
+    }
+    const std::vector<EigenBasis>& bases = models.robust_eigen.at(method.eigen_k);
+    Eigen::MatrixXf filled = band.StartProfiles();
+    for (std::size_t t = 0; t + 1 < bases.size(); ++t) {
+      band.robust->EigenImpute(filled, bases[t].v);
+    }
+    return band.robust->EigenFromImputed(filled, bases.back());
+  }
+  if (band.robust) return band.robust->Fit(method);
+  return FitObservations(*band.observations, set.lights(), method, streamer.all(), set.source());
+}
+
+}  // namespace
+
+StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
+                              std::span<const fs::path> stacks, const StreamedFitOptions& options) {
+  CheckFitRequest(set, methods, stacks, options);
+  Streamer streamer(set, methods, options);
+  const GlobalModels models = FitGlobalModels(streamer, set, methods, options);
   std::vector<std::unique_ptr<FittedStackWriter>> outputs;
   for (const fs::path& path : stacks) {
     outputs.push_back(std::make_unique<FittedStackWriter>(path, set.width(), set.height(),
@@ -162,27 +211,7 @@ StreamedFitReport FitStreamed(StreamedSet& set, std::span<const Method> methods,
     if (band.empty()) return;  // zero maps (FittedStackWriter)
     if (band.robust) summary.Add(band.robust->summary());
     for (std::size_t i = 0; i < methods.size(); ++i) {
-      const Method& method = methods[i];
-      const auto representation = [&]() -> Representation {
-        if (IsLightProfile(method)) {
-          return ProjectLightProfiles(profiles.at(i), *band.observations, band.StartProfiles(),
-                                      streamer.all());
-        }
-        if (method.kind == Method::Kind::kEigen) {
-          if (!band.robust) {
-            return FitEigenWithBasis(*band.observations, set.lights(), streamer.all(),
-                                     eigen.at(method.eigen_k));
-          }
-          const std::vector<EigenBasis>& bases = robust_eigen.at(method.eigen_k);
-          Eigen::MatrixXf filled = band.StartProfiles();
-          for (std::size_t t = 0; t + 1 < bases.size(); ++t) {
-            band.robust->EigenImpute(filled, bases[t].v);
-          }
-          return band.robust->EigenFromImputed(filled, bases.back());
-        }
-        if (band.robust) return band.robust->Fit(method);
-        return FitObservations(*band.observations, set.lights(), method, streamer.all(), source);
-      }();
+      const Representation representation = FitBand(band, i, methods, models, set, streamer);
       if (const auto found = representation.details().find("pbr_summary");
           found != representation.details().end()) {
         if (!report.pbr_summary) report.pbr_summary.emplace();
