@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <tuple>
+#include <utility>
 
 #include "apps/cli_main.h"
 #include "apps/cli_support.h"
@@ -161,156 +163,184 @@ bool RefineByDefault() {
   return false;
 }
 
+struct LightsCommandOptions {
+  fs::path input;
+  fs::path out;
+  fs::path mask;
+  fs::path reference;
+  fs::path report;
+  fs::path camera;
+  fs::path images_for;
+  std::string colour_space;
+  std::string light_model = "distant";
+  bool refine = false;
+  bool no_refine = false;
+};
+
+void AddLightsOptions(CLI::App& command, LightsCommandOptions& options) {
+  command
+      .add_option("sphere", options.input,
+                  "The sphere images: a folder of images (natural order; a file named *mask* "
+                  "is the sphere's mask) or a photometric set (.lp, manifest, DiLiGenT)")
+      ->required();
+  command.add_option("--out", options.out, "The .lp file to write")->required();
+  command.add_option("--mask", options.mask,
+                     "The sphere's mask (anti-aliased or binary); default: the folder's *mask* "
+                     "file or the set's mask; without one the sphere is detected (Hough)");
+  command.add_option("--reference", options.reference,
+                     "Lights to compare with (.lp, manifest, DiLiGenT, or a list of \"x y z\" "
+                     "lines with an optional count line); default: the set's own lights");
+  command.add_option("--report", options.report,
+                     "The report's SVG (default: <out stem>_report.svg; JSON beside it)");
+  command.add_option("--camera", options.camera,
+                     "3x3 intrinsics (K.txt) of a perspective camera; default orthographic");
+  command.add_option("--images-for", options.images_for,
+                     "Name the lights after the images of this folder (natural order, same "
+                     "count): the sample captured under the same lights");
+  command.add_option("--colour-space", options.colour_space,
+                     "How untagged integer images encode light: linear or srgb (a file's own "
+                     "colour tags come first; default: 8-bit sRGB, 16-bit linear)");
+  CLI::Option* refine = command.add_flag(
+      "--refine", options.refine,
+      "Refine the sphere jointly with the lights (Ceres; the default when this build has Ceres, "
+      "an error when it has not)");
+  command.add_flag("--no-refine", options.no_refine, "Skip the Ceres refinement")->excludes(refine);
+  command
+      .add_option("--light-model", options.light_model,
+                  "distant, or near: point lamps triangulated from two or more spheres in the "
+                  "mask (resting on the sample plane; orthographic camera), their positions "
+                  "written to <out stem>_lamps.txt for calibrate apply --near-lights")
+      ->capture_default_str();
+}
+
+MirrorSphereCalibration CalibrateSphere(const LightsCommandOptions& options,
+                                        SphereCapture& capture) {
+  if (!options.mask.empty()) {
+    ImageReadOptions coverage;
+    coverage.colour_space = ColourSpace::kLinear;
+    capture.mask = ReadImage(options.mask, coverage).image;
+  }
+  MirrorSphereOptions sphere_options;
+  sphere_options.refine = options.refine || (!options.no_refine && RefineByDefault());
+  sphere_options.light_model = ParseLightModel(options.light_model);
+  if (!options.camera.empty()) sphere_options.camera = ReadCameraIntrinsics(options.camera);
+  TerminalProgressBar bar;
+  sphere_options.progress = &bar;
+  const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
+      capture.images, capture.names, capture.mask, sphere_options, options.input);
+  if (result.refinement.requested && !result.refinement.used) {
+    spdlog::warn("the refinement was not used ({}): the lights come from the unrefined sphere",
+                 result.refinement.status);
+  }
+  return result;
+}
+
+// The lights' files: the .lp, the manifest beside it (whose provenance describes the sphere)
+// and, for near lamps, their positions. Returns the manifest's path and the lamps' (or empty).
+std::pair<fs::path, fs::path> WriteLightFiles(const LightsCommandOptions& options,
+                                              const SphereCapture& capture,
+                                              const MirrorSphereCalibration& result,
+                                              CaptureManifest& manifest) {
+  // The images the lights belong to.
+  std::vector<fs::path> files = capture.files;
+  if (!options.images_for.empty()) {
+    files = ListImageFolder(options.images_for).images;
+    if (files.size() != result.lights.size()) {
+      throw Error(options.images_for, fmt::format("{} images, but the sphere gave {} lights",
+                                                  files.size(), result.lights.size()));
+    }
+  }
+  const fs::path out_folder =
+      options.out.parent_path().empty() ? fs::path(".") : options.out.parent_path();
+  CreateFolder(out_folder);
+  std::vector<std::string> names;
+  for (const fs::path& file : files) names.push_back(RelativeName(file, out_folder));
+  WriteLpFile(options.out, names, result.lights);
+  fs::path manifest_path = options.out;
+  manifest_path.replace_extension(".json");
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    manifest.images.push_back({names[i], result.lights[i], {}, {}});
+  }
+  manifest.provenance = {{"calibration", "mirror sphere"},
+                         {"sphere_images", fs::absolute(options.input).generic_string()},
+                         {"sphere",
+                          {{"centre", {result.sphere.centre.x(), result.sphere.centre.y()}},
+                           {"radius", result.sphere.radius},
+                           {"edge_rms_px", result.edge_rms_pixels},
+                           {"camera", result.perspective ? "perspective" : "orthographic"}}},
+                         {"spheres", MirrorSpheresJson(result)},
+                         {"light_model", ToString(result.light_model)},
+                         {"refinement", MirrorSphereRefinementJson(result.refinement)}};
+  WriteCaptureManifest(manifest_path, manifest);
+  fs::path lamps_path;
+  if (!result.lamp_positions.empty()) {
+    lamps_path = options.out;
+    lamps_path.replace_filename(options.out.stem().string() + "_lamps.txt");
+    WriteLampPositions(lamps_path, result.lamp_positions);
+  }
+  return {manifest_path, lamps_path};
+}
+
+// The report: the recovered lights against the reference (the set's own, or --reference), as an
+// SVG and JSON (with the manifest's description of the sphere). Returns the report and its SVG's
+// and JSON's paths.
+std::tuple<LightCalibrationReport, fs::path, fs::path> WriteLightReport(
+    const LightsCommandOptions& options, const SphereCapture& capture,
+    const MirrorSphereCalibration& result, const CaptureManifest& manifest) {
+  LightCalibrationReport report;
+  report.title = fmt::format("mirror-sphere lights: {}", options.input.filename().string());
+  report.names = capture.names;
+  report.recovered = result.lights;
+  report.uncertainty_degrees = result.light_uncertainty_degrees;
+  report.notes = MirrorSphereNotes(result);
+  report.reference = options.reference.empty() ? capture.lights : ReadLightList(options.reference);
+  if (!report.reference.empty() && report.reference.size() != report.recovered.size()) {
+    throw Error(options.reference.empty() ? options.input : options.reference,
+                fmt::format("{} reference lights for {} sphere images", report.reference.size(),
+                            report.recovered.size()));
+  }
+  fs::path svg = options.report;
+  if (svg.empty()) {
+    svg = options.out;
+    svg.replace_filename(options.out.stem().string() + "_report.svg");
+  }
+  WriteLightCalibrationSvg(svg, report);
+  fs::path json = svg;
+  json.replace_extension(".json");
+  nlohmann::json details = report.ToJson();
+  for (const char* key : {"sphere", "spheres", "light_model", "refinement"}) {
+    details[key] = manifest.provenance[key];
+  }
+  WriteJsonFile(json, details);
+  return {std::move(report), svg, json};
+}
+
+void RunLights(const LightsCommandOptions& options) {
+  const std::optional<ColourSpace> space = ParseColourSpaceOption(options.colour_space);
+  SphereCapture capture = ReadSphereCapture(options.input, space);
+  const MirrorSphereCalibration result = CalibrateSphere(options, capture);
+  CaptureManifest manifest;
+  const auto [manifest_path, lamps_path] = WriteLightFiles(options, capture, result, manifest);
+  const auto [report, svg, json] = WriteLightReport(options, capture, result, manifest);
+  fmt::print(
+      "sphere: centre ({:.2f}, {:.2f}) px, radius {:.2f} px, outline RMS {:.3f} px from "
+      "{} edge points ({})\n{}",
+      result.sphere.centre.x(), result.sphere.centre.y(), result.sphere.radius,
+      result.edge_rms_pixels, result.edge_points,
+      result.perspective ? "perspective" : "orthographic", report.ToTable());
+  fmt::print("wrote {}, {}, {}, {}{}\n", options.out.string(), manifest_path.string(), svg.string(),
+             json.string(), lamps_path.empty() ? "" : ", " + lamps_path.string());
+}
+
 void AddLightsCommand(CLI::App& calibrate) {
-  struct Options {
-    fs::path input;
-    fs::path out;
-    fs::path mask;
-    fs::path reference;
-    fs::path report;
-    fs::path camera;
-    fs::path images_for;
-    std::string colour_space;
-    std::string light_model = "distant";
-    bool refine = false;
-    bool no_refine = false;
-  };
-  auto options = std::make_shared<Options>();
+  auto options = std::make_shared<LightsCommandOptions>();
   CLI::App* command = calibrate.add_subcommand(
       "lights",
       "Light directions from a mirror (chrome) sphere photographed under each light: writes a "
       ".lp file, the same lights as a manifest (.json beside it) and a report (hemisphere plot "
       "SVG, JSON, and a table on standard output).");
-  command
-      ->add_option("sphere", options->input,
-                   "The sphere images: a folder of images (natural order; a file named *mask* "
-                   "is the sphere's mask) or a photometric set (.lp, manifest, DiLiGenT)")
-      ->required();
-  command->add_option("--out", options->out, "The .lp file to write")->required();
-  command->add_option("--mask", options->mask,
-                      "The sphere's mask (anti-aliased or binary); default: the folder's *mask* "
-                      "file or the set's mask; without one the sphere is detected (Hough)");
-  command->add_option("--reference", options->reference,
-                      "Lights to compare with (.lp, manifest, DiLiGenT, or a list of \"x y z\" "
-                      "lines with an optional count line); default: the set's own lights");
-  command->add_option("--report", options->report,
-                      "The report's SVG (default: <out stem>_report.svg; JSON beside it)");
-  command->add_option("--camera", options->camera,
-                      "3x3 intrinsics (K.txt) of a perspective camera; default orthographic");
-  command->add_option("--images-for", options->images_for,
-                      "Name the lights after the images of this folder (natural order, same "
-                      "count): the sample captured under the same lights");
-  command->add_option("--colour-space", options->colour_space,
-                      "How untagged integer images encode light: linear or srgb (a file's own "
-                      "colour tags come first; default: 8-bit sRGB, 16-bit linear)");
-  CLI::Option* refine = command->add_flag(
-      "--refine", options->refine,
-      "Refine the sphere jointly with the lights (Ceres; the default when this build has Ceres, "
-      "an error when it has not)");
-  command->add_flag("--no-refine", options->no_refine, "Skip the Ceres refinement")
-      ->excludes(refine);
-  command
-      ->add_option("--light-model", options->light_model,
-                   "distant, or near: point lamps triangulated from two or more spheres in the "
-                   "mask (resting on the sample plane; orthographic camera), their positions "
-                   "written to <out stem>_lamps.txt for calibrate apply --near-lights")
-      ->capture_default_str();
-  command->callback([options] {
-    const std::optional<ColourSpace> space = ParseColourSpaceOption(options->colour_space);
-    SphereCapture capture = ReadSphereCapture(options->input, space);
-    if (!options->mask.empty()) {
-      ImageReadOptions coverage;
-      coverage.colour_space = ColourSpace::kLinear;
-      capture.mask = ReadImage(options->mask, coverage).image;
-    }
-    MirrorSphereOptions sphere_options;
-    sphere_options.refine = options->refine || (!options->no_refine && RefineByDefault());
-    sphere_options.light_model = ParseLightModel(options->light_model);
-    if (!options->camera.empty()) sphere_options.camera = ReadCameraIntrinsics(options->camera);
-    TerminalProgressBar bar;
-    sphere_options.progress = &bar;
-    const MirrorSphereCalibration result = CalibrateLightsFromMirrorSphere(
-        capture.images, capture.names, capture.mask, sphere_options, options->input);
-    if (result.refinement.requested && !result.refinement.used) {
-      spdlog::warn("the refinement was not used ({}): the lights come from the unrefined sphere",
-                   result.refinement.status);
-    }
-
-    // The images the lights belong to.
-    std::vector<fs::path> files = capture.files;
-    if (!options->images_for.empty()) {
-      files = ListImageFolder(options->images_for).images;
-      if (files.size() != result.lights.size()) {
-        throw Error(options->images_for, fmt::format("{} images, but the sphere gave {} lights",
-                                                     files.size(), result.lights.size()));
-      }
-    }
-    const fs::path out_folder =
-        options->out.parent_path().empty() ? fs::path(".") : options->out.parent_path();
-    CreateFolder(out_folder);
-    std::vector<std::string> names;
-    for (const fs::path& file : files) names.push_back(RelativeName(file, out_folder));
-    WriteLpFile(options->out, names, result.lights);
-    fs::path manifest_path = options->out;
-    manifest_path.replace_extension(".json");
-    CaptureManifest manifest;
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      manifest.images.push_back({names[i], result.lights[i], {}, {}});
-    }
-    manifest.provenance = {{"calibration", "mirror sphere"},
-                           {"sphere_images", fs::absolute(options->input).generic_string()},
-                           {"sphere",
-                            {{"centre", {result.sphere.centre.x(), result.sphere.centre.y()}},
-                             {"radius", result.sphere.radius},
-                             {"edge_rms_px", result.edge_rms_pixels},
-                             {"camera", result.perspective ? "perspective" : "orthographic"}}},
-                           {"spheres", MirrorSpheresJson(result)},
-                           {"light_model", ToString(result.light_model)},
-                           {"refinement", MirrorSphereRefinementJson(result.refinement)}};
-    WriteCaptureManifest(manifest_path, manifest);
-    fs::path lamps_path;
-    if (!result.lamp_positions.empty()) {
-      lamps_path = options->out;
-      lamps_path.replace_filename(options->out.stem().string() + "_lamps.txt");
-      WriteLampPositions(lamps_path, result.lamp_positions);
-    }
-
-    LightCalibrationReport report;
-    report.title = fmt::format("mirror-sphere lights: {}", options->input.filename().string());
-    report.names = capture.names;
-    report.recovered = result.lights;
-    report.uncertainty_degrees = result.light_uncertainty_degrees;
-    report.notes = MirrorSphereNotes(result);
-    report.reference =
-        options->reference.empty() ? capture.lights : ReadLightList(options->reference);
-    if (!report.reference.empty() && report.reference.size() != report.recovered.size()) {
-      throw Error(options->reference.empty() ? options->input : options->reference,
-                  fmt::format("{} reference lights for {} sphere images", report.reference.size(),
-                              report.recovered.size()));
-    }
-    fs::path svg = options->report;
-    if (svg.empty()) {
-      svg = options->out;
-      svg.replace_filename(options->out.stem().string() + "_report.svg");
-    }
-    WriteLightCalibrationSvg(svg, report);
-    fs::path json = svg;
-    json.replace_extension(".json");
-    nlohmann::json details = report.ToJson();
-    details["sphere"] = manifest.provenance["sphere"];
-    details["spheres"] = manifest.provenance["spheres"];
-    details["light_model"] = manifest.provenance["light_model"];
-    details["refinement"] = manifest.provenance["refinement"];
-    WriteJsonFile(json, details);
-    fmt::print(
-        "sphere: centre ({:.2f}, {:.2f}) px, radius {:.2f} px, outline RMS {:.3f} px from "
-        "{} edge points ({})\n{}",
-        result.sphere.centre.x(), result.sphere.centre.y(), result.sphere.radius,
-        result.edge_rms_pixels, result.edge_points,
-        result.perspective ? "perspective" : "orthographic", report.ToTable());
-    fmt::print("wrote {}, {}, {}, {}{}\n", options->out.string(), manifest_path.string(),
-               svg.string(), json.string(), lamps_path.empty() ? "" : ", " + lamps_path.string());
-  });
+  AddLightsOptions(*command, *options);
+  command->callback([options] { RunLights(*options); });
 }
 
 void AddFlatFieldCommand(CLI::App& calibrate) {
@@ -489,135 +519,154 @@ std::vector<std::vector<float>> SemiCalibratedIntensities(StreamedSet& set, int 
   return EstimateLightIntensitiesFromSamples(samples.samples(), options).intensities;
 }
 
+struct ApplyCommandOptions {
+  fs::path input;
+  fs::path out;
+  fs::path response;
+  fs::path dark;
+  fs::path flat_field;
+  fs::path near_lights;
+  fs::path intensities;
+  bool semi_calibrated = false;
+  bool ignore_intensities = false;
+  bool png16 = false;
+  std::size_t memory_mb = 0;
+};
+
+void AddApplyOptions(CLI::App& command, ApplyCommandOptions& options) {
+  command.add_option("input", options.input, "Photometric set")->required();
+  command.add_option("--out", options.out, "Output folder")->required();
+  command.add_option("--response", options.response,
+                     "Response curve JSON (calibrate response): images are read as codes and "
+                     "linearised with it instead of the default decoding");
+  command.add_option("--dark", options.dark, "Dark frame: an image or a folder of them (mean)");
+  command.add_option("--flat-field", options.flat_field, "Flat-field folder (calibrate flatfield)");
+  command.add_option("--near-lights", options.near_lights,
+                     "Lamp positions, \"x y z [intensity]\" a line in pixel units (origin at the "
+                     "image centre, y up): divide by their inverse-square fall-off");
+  command.add_option("--intensities", options.intensities,
+                     "Light intensities file (\"r g b\" a line) to divide by");
+  command.add_flag("--semi-calibrated", options.semi_calibrated,
+                   "Estimate the intensities from the capture (calibrate intensities)");
+  command.add_flag("--ignore-intensities", options.ignore_intensities,
+                   "Do not divide by the intensities the input gives");
+  command.add_flag("--png16", options.png16, "16-bit linear PNG (clips at 1) instead of float EXR");
+  AddBandMemoryOption(command, options.memory_mb, "the bands of rows corrected at a time",
+                      kMinimumApplyMemory);
+}
+
+// The corrections the options name, each recorded as a step of the output's provenance.
+CaptureCorrections CorrectionsFor(const ApplyCommandOptions& options, const StreamedSet& set,
+                                  nlohmann::json& steps) {
+  CaptureCorrections corrections;
+  if (!options.response.empty()) {
+    corrections.response = ReadResponseCurve(options.response);
+    steps.push_back({{"response", fs::absolute(options.response).generic_string()}});
+  }
+  if (!options.dark.empty()) {
+    corrections.dark = ReadDarkFrame(options.dark);
+    steps.push_back({{"dark", fs::absolute(options.dark).generic_string()}});
+  }
+  if (!options.flat_field.empty()) {
+    corrections.flat_field.emplace(options.flat_field);
+    steps.push_back({{"flat_field", fs::absolute(options.flat_field).generic_string()}});
+  }
+  if (!options.near_lights.empty()) {
+    const auto lamps = ReadNearLights(options.near_lights);
+    if (static_cast<int>(lamps.size()) != set.size()) {
+      throw Error(options.near_lights,
+                  fmt::format("{} lamps for {} images", lamps.size(), set.size()));
+    }
+    corrections.near_lights.emplace(lamps, set.width(), set.height(), set.channels());
+    steps.push_back({{"near_lights", fs::absolute(options.near_lights).generic_string()}});
+  }
+  return corrections;
+}
+
+// The intensities each band is divided by, after the corrections: a file's, none, or (nullopt)
+// the input's own; semi-calibrated ones are estimated later, in a pass of their own.
+std::optional<std::vector<std::vector<float>>> IntensitiesFor(const ApplyCommandOptions& options,
+                                                              const StreamedSet& set,
+                                                              nlohmann::json& steps) {
+  std::optional<std::vector<std::vector<float>>> intensities;
+  if (!options.intensities.empty()) {
+    intensities = ReadLightIntensities(options.intensities);
+    steps.push_back({{"intensities", fs::absolute(options.intensities).generic_string()}});
+  } else if (options.ignore_intensities) {
+    intensities.emplace();
+  } else if (options.semi_calibrated) {
+    steps.push_back({{"intensities", "semi-calibrated"}});
+  } else if (!set.intensities().empty()) {
+    steps.push_back({{"intensities", "the input's"}});
+  }
+  return intensities;
+}
+
+void RunApply(const ApplyCommandOptions& options) {
+  const int sources = !options.intensities.empty() + options.semi_calibrated;
+  if (sources > 1) throw Error("give at most one of --intensities and --semi-calibrated");
+  if (!options.flat_field.empty() && !options.near_lights.empty()) {
+    throw Error("give at most one of --flat-field and --near-lights");
+  }
+  LoadOptions load;
+  load.apply_intensities = false;
+  if (!options.response.empty()) load.colour_space = ColourSpace::kLinear;
+  StreamedSet set = OpenStreamedSet(options.input, load);
+  nlohmann::json steps = nlohmann::json::array();
+  CaptureCorrections corrections = CorrectionsFor(options, set, steps);
+  std::optional<std::vector<std::vector<float>>> intensities = IntensitiesFor(options, set, steps);
+  SaveSetOptions save;
+  save.sample_type = options.png16 ? SampleType::kUint16 : SampleType::kFloat;
+  save.provenance = {{"source", fs::absolute(options.input).generic_string()},
+                     {"calibration", steps}};
+  const std::size_t bytes_per_sample = options.png16 ? 2 : 4;
+  CheckDiskSpace(options.out,
+                 static_cast<std::size_t>(set.size()) * set.channels() * bytes_per_sample *
+                     static_cast<std::size_t>(set.width()) * set.height(),
+                 "the corrected capture");
+  const std::size_t budget =
+      options.memory_mb > 0 ? options.memory_mb << 20 : DefaultBandBudget(kMinimumApplyMemory);
+  const int rows = ApplyBandRows(budget, set, corrections);
+  const std::size_t bands = static_cast<std::size_t>((set.height() + rows - 1) / rows);
+  TerminalProgressBar bar;
+  if (options.semi_calibrated) {
+    intensities = SemiCalibratedIntensities(set, rows, corrections, bar);
+    set.Rewind();
+    // The flat-field's gain maps are read again, from the top.
+    if (!options.flat_field.empty()) corrections.flat_field.emplace(options.flat_field);
+  }
+  CaptureBandWriter writer(options.out, set.height(), save);
+  bar.Start("calibrate apply", bands);
+  while (writer.rows_written() < set.height()) {
+    const int first = writer.rows_written();
+    PhotometricSet band = CorrectCaptureBand(
+        set.ReadBand(std::min(rows, set.height() - first), true), first, set.height(), corrections);
+    if (intensities) band.set_intensities(*intensities);
+    band.ApplyIntensities();
+    writer.WriteNext(band);
+    bar.Advance();
+  }
+  bar.Finish();
+  WarnAboutClippedPixels(set.SaturatedPixels(), set.image_names());
+  CaptureManifest manifest = writer.Finish();
+  if (set.ground_truth_normals()) {
+    manifest.ground_truth_normals = fs::absolute(*set.ground_truth_normals()).generic_string();
+    WriteCaptureManifest(options.out / kCaptureManifestName, manifest);
+  }
+  fmt::print("{} images, {} step(s), bands of {} rows -> {}\n", set.size(), steps.size(), rows,
+             options.out.string());
+}
+
 void AddApplyCommand(CLI::App& calibrate) {
-  struct Options {
-    fs::path input;
-    fs::path out;
-    fs::path response;
-    fs::path dark;
-    fs::path flat_field;
-    fs::path near_lights;
-    fs::path intensities;
-    bool semi_calibrated = false;
-    bool ignore_intensities = false;
-    bool png16 = false;
-    std::size_t memory_mb = 0;
-  };
-  auto options = std::make_shared<Options>();
+  auto options = std::make_shared<ApplyCommandOptions>();
   CLI::App* command = calibrate.add_subcommand(
       "apply",
       "Write a corrected copy of a capture: linearise (--response), subtract a dark frame, "
       "divide by a flat-field (a target's or near lamps'), and by light intensities (a file, "
       "semi-calibrated estimates, or the input's own); the result is a manifest set. Streamed "
       "in bands of rows (two passes with --semi-calibrated: its samples, then the copy).");
-  command->add_option("input", options->input, "Photometric set")->required();
-  command->add_option("--out", options->out, "Output folder")->required();
-  command->add_option("--response", options->response,
-                      "Response curve JSON (calibrate response): images are read as codes and "
-                      "linearised with it instead of the default decoding");
-  command->add_option("--dark", options->dark, "Dark frame: an image or a folder of them (mean)");
-  command->add_option("--flat-field", options->flat_field,
-                      "Flat-field folder (calibrate flatfield)");
-  command->add_option("--near-lights", options->near_lights,
-                      "Lamp positions, \"x y z [intensity]\" a line in pixel units (origin at the "
-                      "image centre, y up): divide by their inverse-square fall-off");
-  command->add_option("--intensities", options->intensities,
-                      "Light intensities file (\"r g b\" a line) to divide by");
-  command->add_flag("--semi-calibrated", options->semi_calibrated,
-                    "Estimate the intensities from the capture (calibrate intensities)");
-  command->add_flag("--ignore-intensities", options->ignore_intensities,
-                    "Do not divide by the intensities the input gives");
-  command->add_flag("--png16", options->png16,
-                    "16-bit linear PNG (clips at 1) instead of float EXR");
-  AddBandMemoryOption(*command, options->memory_mb, "the bands of rows corrected at a time",
-                      kMinimumApplyMemory);
-  command->callback([options] {
-    const int sources = !options->intensities.empty() + options->semi_calibrated;
-    if (sources > 1) throw Error("give at most one of --intensities and --semi-calibrated");
-    if (!options->flat_field.empty() && !options->near_lights.empty()) {
-      throw Error("give at most one of --flat-field and --near-lights");
-    }
-    LoadOptions load;
-    load.apply_intensities = false;
-    if (!options->response.empty()) load.colour_space = ColourSpace::kLinear;
-    StreamedSet set = OpenStreamedSet(options->input, load);
-    CaptureCorrections corrections;
-    nlohmann::json steps = nlohmann::json::array();
-    if (!options->response.empty()) {
-      corrections.response = ReadResponseCurve(options->response);
-      steps.push_back({{"response", fs::absolute(options->response).generic_string()}});
-    }
-    if (!options->dark.empty()) {
-      corrections.dark = ReadDarkFrame(options->dark);
-      steps.push_back({{"dark", fs::absolute(options->dark).generic_string()}});
-    }
-    if (!options->flat_field.empty()) {
-      corrections.flat_field.emplace(options->flat_field);
-      steps.push_back({{"flat_field", fs::absolute(options->flat_field).generic_string()}});
-    }
-    if (!options->near_lights.empty()) {
-      const auto lamps = ReadNearLights(options->near_lights);
-      if (static_cast<int>(lamps.size()) != set.size()) {
-        throw Error(options->near_lights,
-                    fmt::format("{} lamps for {} images", lamps.size(), set.size()));
-      }
-      corrections.near_lights.emplace(lamps, set.width(), set.height(), set.channels());
-      steps.push_back({{"near_lights", fs::absolute(options->near_lights).generic_string()}});
-    }
-    // The intensities each band is divided by, after the corrections.
-    std::optional<std::vector<std::vector<float>>> intensities;  // nullopt: the input's own
-    if (!options->intensities.empty()) {
-      intensities = ReadLightIntensities(options->intensities);
-      steps.push_back({{"intensities", fs::absolute(options->intensities).generic_string()}});
-    } else if (options->ignore_intensities) {
-      intensities.emplace();
-    } else if (options->semi_calibrated) {
-      steps.push_back({{"intensities", "semi-calibrated"}});
-    } else if (!set.intensities().empty()) {
-      steps.push_back({{"intensities", "the input's"}});
-    }
-    SaveSetOptions save;
-    save.sample_type = options->png16 ? SampleType::kUint16 : SampleType::kFloat;
-    save.provenance = {{"source", fs::absolute(options->input).generic_string()},
-                       {"calibration", steps}};
-    const std::size_t bytes_per_sample = options->png16 ? 2 : 4;
-    CheckDiskSpace(options->out,
-                   static_cast<std::size_t>(set.size()) * set.channels() * bytes_per_sample *
-                       static_cast<std::size_t>(set.width()) * set.height(),
-                   "the corrected capture");
-    const std::size_t budget =
-        options->memory_mb > 0 ? options->memory_mb << 20 : DefaultBandBudget(kMinimumApplyMemory);
-    const int rows = ApplyBandRows(budget, set, corrections);
-    const std::size_t bands = static_cast<std::size_t>((set.height() + rows - 1) / rows);
-    TerminalProgressBar bar;
-    if (options->semi_calibrated) {
-      intensities = SemiCalibratedIntensities(set, rows, corrections, bar);
-      set.Rewind();
-      // The flat-field's gain maps are read again, from the top.
-      if (!options->flat_field.empty()) corrections.flat_field.emplace(options->flat_field);
-    }
-    CaptureBandWriter writer(options->out, set.height(), save);
-    bar.Start("calibrate apply", bands);
-    while (writer.rows_written() < set.height()) {
-      const int first = writer.rows_written();
-      PhotometricSet band =
-          CorrectCaptureBand(set.ReadBand(std::min(rows, set.height() - first), true), first,
-                             set.height(), corrections);
-      if (intensities) band.set_intensities(*intensities);
-      band.ApplyIntensities();
-      writer.WriteNext(band);
-      bar.Advance();
-    }
-    bar.Finish();
-    WarnAboutClippedPixels(set.SaturatedPixels(), set.image_names());
-    CaptureManifest manifest = writer.Finish();
-    if (set.ground_truth_normals()) {
-      manifest.ground_truth_normals = fs::absolute(*set.ground_truth_normals()).generic_string();
-      WriteCaptureManifest(options->out / kCaptureManifestName, manifest);
-    }
-    fmt::print("{} images, {} step(s), bands of {} rows -> {}\n", set.size(), steps.size(), rows,
-               options->out.string());
-  });
+  AddApplyOptions(*command, *options);
+  command->callback([options] { RunApply(*options); });
 }
 
 }  // namespace
