@@ -188,182 +188,206 @@ int EmulatedV4l2Device::Ioctl(int fd, unsigned long request, void* argument) {
 
 int EmulatedV4l2Device::HandleIoctl(unsigned long request, void* argument) {
   switch (request) {
-    case VIDIOC_QUERYCAP: {
-      auto* caps = static_cast<v4l2_capability*>(argument);
-      std::memset(caps, 0, sizeof *caps);
-      CopyName("photomat-emul", caps->driver, sizeof caps->driver);
-      CopyName("Emulated Camera", caps->card, sizeof caps->card);
-      CopyName("emulated", caps->bus_info, sizeof caps->bus_info);
-      caps->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
-      caps->capabilities = caps->device_caps | V4L2_CAP_DEVICE_CAPS;
-      return 0;
-    }
-    case VIDIOC_ENUM_FMT: {
-      auto* description = static_cast<v4l2_fmtdesc*>(argument);
-      if (description->type != V4L2_BUF_TYPE_VIDEO_CAPTURE ||
-          description->index >= options_.fourccs.size()) {
-        return Fail(EINVAL);
-      }
-      const std::uint32_t fourcc = options_.fourccs[description->index];
-      description->pixelformat = fourcc;
-      description->flags = fourcc == V4L2_PIX_FMT_MJPEG ? V4L2_FMT_FLAG_COMPRESSED : 0;
-      CopyName(FourCcToString(fourcc).c_str(), description->description,
-               sizeof description->description);
-      return 0;
-    }
-    case VIDIOC_ENUM_FRAMESIZES: {
-      auto* size = static_cast<v4l2_frmsizeenum*>(argument);
-      if (size->index != 0 || std::find(options_.fourccs.begin(), options_.fourccs.end(),
-                                        size->pixel_format) == options_.fourccs.end()) {
-        return Fail(EINVAL);
-      }
-      size->type = V4L2_FRMSIZE_TYPE_DISCRETE;
-      size->discrete.width = options_.width;
-      size->discrete.height = options_.height;
-      return 0;
-    }
+    case VIDIOC_QUERYCAP:
+      return QueryCapability(static_cast<v4l2_capability*>(argument));
+    case VIDIOC_ENUM_FMT:
+      return EnumerateFormat(static_cast<v4l2_fmtdesc*>(argument));
+    case VIDIOC_ENUM_FRAMESIZES:
+      return EnumerateFrameSizes(static_cast<v4l2_frmsizeenum*>(argument));
     case VIDIOC_G_FMT:
-    case VIDIOC_S_FMT: {
-      auto* format = static_cast<v4l2_format*>(argument);
-      if (format->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
-      if (request == VIDIOC_S_FMT) {
-        if (!buffers_.empty()) return Fail(EBUSY);
-        const bool offered = std::find(options_.fourccs.begin(), options_.fourccs.end(),
-                                       format->fmt.pix.pixelformat) != options_.fourccs.end();
-        // Drivers do not fail on an unknown format: they pick one they have.
-        fourcc_ = offered ? format->fmt.pix.pixelformat : options_.fourccs.front();
-      }
-      const auto decoded = PixelFormatFromV4l2(fourcc_);
-      std::memset(&format->fmt.pix, 0, sizeof format->fmt.pix);
-      format->fmt.pix.width = options_.width;
-      format->fmt.pix.height = options_.height;
-      format->fmt.pix.pixelformat = fourcc_;
-      format->fmt.pix.field = V4L2_FIELD_NONE;
-      format->fmt.pix.bytesperline =
-          decoded == PixelFormat::kMjpeg
-              ? 0
-              : options_.width * (decoded ? BytesPerPixel(*decoded) : 2) + options_.row_padding;
-      format->fmt.pix.sizeimage = static_cast<std::uint32_t>(FrameBytes());
-      format->fmt.pix.colorspace = V4L2_COLORSPACE_SRGB;
-      return 0;
-    }
-    case VIDIOC_REQBUFS: {
-      auto* request_buffers = static_cast<v4l2_requestbuffers*>(argument);
-      if (request_buffers->type != V4L2_BUF_TYPE_VIDEO_CAPTURE ||
-          request_buffers->memory != V4L2_MEMORY_MMAP) {
-        return Fail(EINVAL);
-      }
-      if (streaming_ || mapped_ > 0) return Fail(EBUSY);
-      buffers_.clear();
-      done_.clear();
-      const std::uint32_t count = std::min<std::uint32_t>(request_buffers->count, 8);
-      buffers_.resize(count);
-      for (Buffer& buffer : buffers_) buffer.bytes.assign(FrameBytes(), 0);
-      request_buffers->count = count;
-      return 0;
-    }
+    case VIDIOC_S_FMT:
+      return GetOrSetFormat(request, static_cast<v4l2_format*>(argument));
+    case VIDIOC_REQBUFS:
+      return RequestBuffers(static_cast<v4l2_requestbuffers*>(argument));
     case VIDIOC_QUERYBUF:
-    case VIDIOC_QBUF: {
-      auto* buffer = static_cast<v4l2_buffer*>(argument);
-      if (buffer->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || buffer->memory != V4L2_MEMORY_MMAP ||
-          buffer->index >= buffers_.size()) {
-        return Fail(EINVAL);
-      }
-      Buffer& ours = buffers_[buffer->index];
-      if (request == VIDIOC_QUERYBUF) {
-        buffer->length = static_cast<std::uint32_t>(ours.bytes.size());
-        buffer->m.offset = static_cast<std::uint32_t>(buffer->index * kBufferOffsetStep);
-        buffer->flags = ours.queued ? V4L2_BUF_FLAG_QUEUED : 0;
-        return 0;
-      }
-      if (ours.queued) return Fail(EINVAL);
-      ours.queued = true;
-      if (streaming_ && !Stalled()) Expose(static_cast<int>(buffer->index));
-      return 0;
-    }
-    case VIDIOC_DQBUF: {
-      auto* buffer = static_cast<v4l2_buffer*>(argument);
-      if (!streaming_) return Fail(EINVAL);
-      if (done_.empty()) return Fail(EAGAIN);
-      const int index = done_.front();
-      done_.pop_front();
-      Buffer& ours = buffers_[index];
-      ours.queued = false;
-      buffer->index = index;
-      buffer->bytesused = ours.bytes_used;
-      buffer->flags = ours.flags;
-      buffer->field = V4L2_FIELD_NONE;
-      buffer->sequence = ours.sequence;
-      const auto since = ours.time.time_since_epoch();
-      const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(since);
-      buffer->timestamp.tv_sec = seconds.count();
-      buffer->timestamp.tv_usec =
-          std::chrono::duration_cast<std::chrono::microseconds>(since - seconds).count();
-      buffer->length = static_cast<std::uint32_t>(ours.bytes.size());
-      buffer->m.offset = static_cast<std::uint32_t>(index * kBufferOffsetStep);
-      ++frames_dequeued_;
-      return 0;
-    }
-    case VIDIOC_STREAMON: {
-      if (*static_cast<int*>(argument) != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
-      if (buffers_.empty()) return Fail(EINVAL);
-      streaming_ = true;
-      for (std::size_t i = 0; i < buffers_.size(); ++i) {
-        if (buffers_[i].queued && !Stalled()) Expose(static_cast<int>(i));
-      }
-      return 0;
-    }
-    case VIDIOC_STREAMOFF: {
-      if (*static_cast<int*>(argument) != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
-      streaming_ = false;
-      done_.clear();
-      for (Buffer& buffer : buffers_) buffer.queued = false;
-      return 0;
-    }
-    case VIDIOC_QUERYCTRL: {
-      auto* query = static_cast<v4l2_queryctrl*>(argument);
-      auto it = controls_.end();
-      if (query->id & V4L2_CTRL_FLAG_NEXT_CTRL) {
-        it = controls_.upper_bound(query->id &
-                                   ~(V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND));
-      } else {
-        it = controls_.find(query->id);
-      }
-      if (it == controls_.end()) return Fail(EINVAL);
-      const Control& control = it->second;
-      std::memset(query, 0, sizeof *query);
-      query->id = it->first;
-      query->type = control.type;
-      CopyName(control.name, query->name, sizeof query->name);
-      query->minimum = control.minimum;
-      query->maximum = control.maximum;
-      query->step = control.step;
-      query->default_value = control.default_value;
-      return 0;
-    }
+    case VIDIOC_QBUF:
+      return QueryOrQueueBuffer(request, static_cast<v4l2_buffer*>(argument));
+    case VIDIOC_DQBUF:
+      return DequeueBuffer(static_cast<v4l2_buffer*>(argument));
+    case VIDIOC_STREAMON:
+      return StreamOn(*static_cast<int*>(argument));
+    case VIDIOC_STREAMOFF:
+      return StreamOff(*static_cast<int*>(argument));
+    case VIDIOC_QUERYCTRL:
+      return QueryControl(static_cast<v4l2_queryctrl*>(argument));
     case VIDIOC_G_CTRL:
-    case VIDIOC_S_CTRL: {
-      auto* control = static_cast<v4l2_control*>(argument);
-      const auto it = controls_.find(control->id);
-      if (it == controls_.end()) return Fail(EINVAL);
-      if (request == VIDIOC_G_CTRL) {
-        control->value = it->second.value;
-        return 0;
-      }
-      if (control->value < it->second.minimum || control->value > it->second.maximum) {
-        return Fail(ERANGE);
-      }
-      it->second.value = control->value;
-      if (control->id == V4L2_CID_EXPOSURE_ABSOLUTE) {
-        // The sensor takes the new value from the frame `exposure_delay_frames` after the next.
-        pending_exposures_.emplace_back(sequence_ + options_.exposure_delay_frames,
-                                        control->value * 100.0);
-      }
-      return 0;
-    }
+    case VIDIOC_S_CTRL:
+      return GetOrSetControl(request, static_cast<v4l2_control*>(argument));
     default:
       return Fail(ENOTTY);
   }
+}
+
+int EmulatedV4l2Device::QueryCapability(v4l2_capability* caps) {
+  std::memset(caps, 0, sizeof *caps);
+  CopyName("photomat-emul", caps->driver, sizeof caps->driver);
+  CopyName("Emulated Camera", caps->card, sizeof caps->card);
+  CopyName("emulated", caps->bus_info, sizeof caps->bus_info);
+  caps->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+  caps->capabilities = caps->device_caps | V4L2_CAP_DEVICE_CAPS;
+  return 0;
+}
+
+int EmulatedV4l2Device::EnumerateFormat(v4l2_fmtdesc* description) {
+  if (description->type != V4L2_BUF_TYPE_VIDEO_CAPTURE ||
+      description->index >= options_.fourccs.size()) {
+    return Fail(EINVAL);
+  }
+  const std::uint32_t fourcc = options_.fourccs[description->index];
+  description->pixelformat = fourcc;
+  description->flags = fourcc == V4L2_PIX_FMT_MJPEG ? V4L2_FMT_FLAG_COMPRESSED : 0;
+  CopyName(FourCcToString(fourcc).c_str(), description->description,
+           sizeof description->description);
+  return 0;
+}
+
+int EmulatedV4l2Device::EnumerateFrameSizes(v4l2_frmsizeenum* size) {
+  if (size->index != 0 || std::find(options_.fourccs.begin(), options_.fourccs.end(),
+                                    size->pixel_format) == options_.fourccs.end()) {
+    return Fail(EINVAL);
+  }
+  size->type = V4L2_FRMSIZE_TYPE_DISCRETE;
+  size->discrete.width = options_.width;
+  size->discrete.height = options_.height;
+  return 0;
+}
+
+int EmulatedV4l2Device::GetOrSetFormat(unsigned long request, v4l2_format* format) {
+  if (format->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
+  if (request == VIDIOC_S_FMT) {
+    if (!buffers_.empty()) return Fail(EBUSY);
+    const bool offered = std::find(options_.fourccs.begin(), options_.fourccs.end(),
+                                   format->fmt.pix.pixelformat) != options_.fourccs.end();
+    // Drivers do not fail on an unknown format: they pick one they have.
+    fourcc_ = offered ? format->fmt.pix.pixelformat : options_.fourccs.front();
+  }
+  const auto decoded = PixelFormatFromV4l2(fourcc_);
+  std::memset(&format->fmt.pix, 0, sizeof format->fmt.pix);
+  format->fmt.pix.width = options_.width;
+  format->fmt.pix.height = options_.height;
+  format->fmt.pix.pixelformat = fourcc_;
+  format->fmt.pix.field = V4L2_FIELD_NONE;
+  format->fmt.pix.bytesperline =
+      decoded == PixelFormat::kMjpeg
+          ? 0
+          : options_.width * (decoded ? BytesPerPixel(*decoded) : 2) + options_.row_padding;
+  format->fmt.pix.sizeimage = static_cast<std::uint32_t>(FrameBytes());
+  format->fmt.pix.colorspace = V4L2_COLORSPACE_SRGB;
+  return 0;
+}
+
+int EmulatedV4l2Device::RequestBuffers(v4l2_requestbuffers* request_buffers) {
+  if (request_buffers->type != V4L2_BUF_TYPE_VIDEO_CAPTURE ||
+      request_buffers->memory != V4L2_MEMORY_MMAP) {
+    return Fail(EINVAL);
+  }
+  if (streaming_ || mapped_ > 0) return Fail(EBUSY);
+  buffers_.clear();
+  done_.clear();
+  const std::uint32_t count = std::min<std::uint32_t>(request_buffers->count, 8);
+  buffers_.resize(count);
+  for (Buffer& buffer : buffers_) buffer.bytes.assign(FrameBytes(), 0);
+  request_buffers->count = count;
+  return 0;
+}
+
+int EmulatedV4l2Device::QueryOrQueueBuffer(unsigned long request, v4l2_buffer* buffer) {
+  if (buffer->type != V4L2_BUF_TYPE_VIDEO_CAPTURE || buffer->memory != V4L2_MEMORY_MMAP ||
+      buffer->index >= buffers_.size()) {
+    return Fail(EINVAL);
+  }
+  Buffer& ours = buffers_[buffer->index];
+  if (request == VIDIOC_QUERYBUF) {
+    buffer->length = static_cast<std::uint32_t>(ours.bytes.size());
+    buffer->m.offset = static_cast<std::uint32_t>(buffer->index * kBufferOffsetStep);
+    buffer->flags = ours.queued ? V4L2_BUF_FLAG_QUEUED : 0;
+    return 0;
+  }
+  if (ours.queued) return Fail(EINVAL);
+  ours.queued = true;
+  if (streaming_ && !Stalled()) Expose(static_cast<int>(buffer->index));
+  return 0;
+}
+
+int EmulatedV4l2Device::DequeueBuffer(v4l2_buffer* buffer) {
+  if (!streaming_) return Fail(EINVAL);
+  if (done_.empty()) return Fail(EAGAIN);
+  const int index = done_.front();
+  done_.pop_front();
+  Buffer& ours = buffers_[index];
+  ours.queued = false;
+  buffer->index = index;
+  buffer->bytesused = ours.bytes_used;
+  buffer->flags = ours.flags;
+  buffer->field = V4L2_FIELD_NONE;
+  buffer->sequence = ours.sequence;
+  const auto since = ours.time.time_since_epoch();
+  const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(since);
+  buffer->timestamp.tv_sec = seconds.count();
+  buffer->timestamp.tv_usec =
+      std::chrono::duration_cast<std::chrono::microseconds>(since - seconds).count();
+  buffer->length = static_cast<std::uint32_t>(ours.bytes.size());
+  buffer->m.offset = static_cast<std::uint32_t>(index * kBufferOffsetStep);
+  ++frames_dequeued_;
+  return 0;
+}
+
+int EmulatedV4l2Device::StreamOn(int type) {
+  if (type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
+  if (buffers_.empty()) return Fail(EINVAL);
+  streaming_ = true;
+  for (std::size_t i = 0; i < buffers_.size(); ++i) {
+    if (buffers_[i].queued && !Stalled()) Expose(static_cast<int>(i));
+  }
+  return 0;
+}
+
+int EmulatedV4l2Device::StreamOff(int type) {
+  if (type != V4L2_BUF_TYPE_VIDEO_CAPTURE) return Fail(EINVAL);
+  streaming_ = false;
+  done_.clear();
+  for (Buffer& buffer : buffers_) buffer.queued = false;
+  return 0;
+}
+
+int EmulatedV4l2Device::QueryControl(v4l2_queryctrl* query) {
+  auto it = controls_.end();
+  if (query->id & V4L2_CTRL_FLAG_NEXT_CTRL) {
+    it = controls_.upper_bound(query->id &
+                               ~(V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND));
+  } else {
+    it = controls_.find(query->id);
+  }
+  if (it == controls_.end()) return Fail(EINVAL);
+  const Control& control = it->second;
+  std::memset(query, 0, sizeof *query);
+  query->id = it->first;
+  query->type = control.type;
+  CopyName(control.name, query->name, sizeof query->name);
+  query->minimum = control.minimum;
+  query->maximum = control.maximum;
+  query->step = control.step;
+  query->default_value = control.default_value;
+  return 0;
+}
+
+int EmulatedV4l2Device::GetOrSetControl(unsigned long request, v4l2_control* control) {
+  const auto it = controls_.find(control->id);
+  if (it == controls_.end()) return Fail(EINVAL);
+  if (request == VIDIOC_G_CTRL) {
+    control->value = it->second.value;
+    return 0;
+  }
+  if (control->value < it->second.minimum || control->value > it->second.maximum) {
+    return Fail(ERANGE);
+  }
+  it->second.value = control->value;
+  if (control->id == V4L2_CID_EXPOSURE_ABSOLUTE) {
+    // The sensor takes the new value from the frame `exposure_delay_frames` after the next.
+    pending_exposures_.emplace_back(sequence_ + options_.exposure_delay_frames,
+                                    control->value * 100.0);
+  }
+  return 0;
 }
 
 void* EmulatedV4l2Device::Mmap(std::size_t length, int /*protection*/, int flags, int fd,

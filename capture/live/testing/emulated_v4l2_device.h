@@ -16,6 +16,17 @@
 #include "core/colour.h"
 #include "core/image.h"
 
+// The requests' structures (linux/videodev2.h), declared so that users of the emulator need not
+// include the kernel's header.
+struct v4l2_buffer;
+struct v4l2_capability;
+struct v4l2_control;
+struct v4l2_fmtdesc;
+struct v4l2_format;
+struct v4l2_frmsizeenum;
+struct v4l2_queryctrl;
+struct v4l2_requestbuffers;
+
 namespace photomat::testing {
 
 // The linear radiance the emulated camera sees at this instant (1 or 3 channels, any scale: the
@@ -105,6 +116,18 @@ class EmulatedV4l2Device final : public V4l2Syscalls {
   };
 
   int HandleIoctl(unsigned long request, void* argument);
+  // One handler per request HandleIoctl serves, as the driver's ioctl would.
+  int QueryCapability(v4l2_capability* caps);
+  int EnumerateFormat(v4l2_fmtdesc* description);
+  int EnumerateFrameSizes(v4l2_frmsizeenum* size);
+  int GetOrSetFormat(unsigned long request, v4l2_format* format);
+  int RequestBuffers(v4l2_requestbuffers* request_buffers);
+  int QueryOrQueueBuffer(unsigned long request, v4l2_buffer* buffer);
+  int DequeueBuffer(v4l2_buffer* buffer);
+  int StreamOn(int type);
+  int StreamOff(int type);
+  int QueryControl(v4l2_queryctrl* query);
+  int GetOrSetControl(unsigned long request, v4l2_control* control);
   bool Gone() const;
   bool Stalled() const;
   void Expose(int index);
