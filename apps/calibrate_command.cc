@@ -333,14 +333,12 @@ void RunLights(const LightsCommandOptions& options) {
 }
 
 void AddLightsCommand(CLI::App& calibrate) {
-  auto options = std::make_shared<LightsCommandOptions>();
   CLI::App* command = calibrate.add_subcommand(
       "lights",
       "Light directions from a mirror (chrome) sphere photographed under each light: writes a "
       ".lp file, the same lights as a manifest (.json beside it) and a report (hemisphere plot "
       "SVG, JSON, and a table on standard output).");
-  AddLightsOptions(*command, *options);
-  command->callback([options] { RunLights(*options); });
+  BindCommand(*command, AddLightsOptions, RunLights);
 }
 
 void AddFlatFieldCommand(CLI::App& calibrate) {
@@ -658,15 +656,13 @@ void RunApply(const ApplyCommandOptions& options) {
 }
 
 void AddApplyCommand(CLI::App& calibrate) {
-  auto options = std::make_shared<ApplyCommandOptions>();
   CLI::App* command = calibrate.add_subcommand(
       "apply",
       "Write a corrected copy of a capture: linearise (--response), subtract a dark frame, "
       "divide by a flat-field (a target's or near lamps'), and by light intensities (a file, "
       "semi-calibrated estimates, or the input's own); the result is a manifest set. Streamed "
       "in bands of rows (two passes with --semi-calibrated: its samples, then the copy).");
-  AddApplyOptions(*command, *options);
-  command->callback([options] { RunApply(*options); });
+  BindCommand(*command, AddApplyOptions, RunApply);
 }
 
 }  // namespace

@@ -229,10 +229,7 @@ void RunCapture(const CaptureCommandOptions& options) {
 }  // namespace
 
 void AddCaptureCommand(CLI::App& app) {
-  auto options = std::make_shared<CaptureCommandOptions>();
-  CLI::App* command = AddListedCommand(app, "capture");
-  AddCaptureOptions(*command, *options);
-  command->callback([options] { RunCapture(*options); });
+  BindCommand(*AddListedCommand(app, "capture"), AddCaptureOptions, RunCapture);
 }
 
 void AddDevicesCommand(CLI::App& app) {

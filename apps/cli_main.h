@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <initializer_list>
+#include <memory>
 #include <string_view>
 
 #include "apps/command_table.h"
@@ -18,6 +19,16 @@ int RunCommands(int argc, char** argv, std::initializer_list<AddCommandFunction>
 
 // Adds the subcommand `name` of the command table (its description from there) to `app`.
 CLI::App* AddListedCommand(CLI::App& app, std::string_view name);
+
+// Gives `command` its options (`add_options` registers them into one Options object) and its
+// action: `run` with those options once they are parsed. The object is shared with the callback,
+// which CLI11 keeps beyond this call.
+template <typename Options, typename Run>
+void BindCommand(CLI::App& command, void (*add_options)(CLI::App&, Options&), Run run) {
+  auto options = std::make_shared<Options>();
+  add_options(command, *options);
+  command.callback([options, run] { run(*options); });
+}
 
 // Adds a subcommand that this build left out: listed in the help as `description` with what is
 // missing, it fails with BuiltWithout(component) whatever its arguments.

@@ -548,10 +548,7 @@ void RunEvaluate(EvaluateCommandOptions& options) {
 }  // namespace
 
 void AddEvaluateCommand(CLI::App& app) {
-  auto options = std::make_shared<EvaluateCommandOptions>();
-  CLI::App* command = AddListedCommand(app, "evaluate");
-  AddEvaluateOptions(*command, *options);
-  command->callback([options] { RunEvaluate(*options); });
+  BindCommand(*AddListedCommand(app, "evaluate"), AddEvaluateOptions, RunEvaluate);
 }
 
 }  // namespace photomat::app

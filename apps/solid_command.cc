@@ -206,14 +206,12 @@ void RunFromViews(const FromViewsCommandOptions& options) {
 }
 
 void AddFromViews(CLI::App& solid) {
-  auto options = std::make_shared<FromViewsCommandOptions>();
   CLI::App* command = solid.add_subcommand(
       "from-views",
       "Synthesise an N^3 solid texture whose slices in each orientation look like the 2D view "
       "given for it (spectrum and histogram; Dischler et al. 1998). Each view must show its plane "
       "with the slice axes: xy: x right, y down; xz: x right, z down; yz: y right, z down.");
-  AddFromViewsOptions(*command, *options);
-  command->callback([options] { RunFromViews(*options); });
+  BindCommand(*command, AddFromViewsOptions, RunFromViews);
 }
 
 // --- grow ---
@@ -423,14 +421,12 @@ void RunGrow(const GrowCommandOptions& options) {
 }
 
 void AddGrow(CLI::App& solid) {
-  auto options = std::make_shared<GrowCommandOptions>();
   CLI::App* command = solid.add_subcommand(
       "grow",
       "Grow a solid texture of any size from a solid exemplar by pyramid synthesis of exemplar "
       "coordinates (Su 2008), optionally steered by a frame field. Every channel of the exemplar "
       "is carried, so a volume of representation maps grows as well as a colour one.");
-  AddGrowOptions(*command, *options);
-  command->callback([options] { RunGrow(*options); });
+  BindCommand(*command, AddGrowOptions, RunGrow);
 }
 
 // --- exemplar ---

@@ -258,11 +258,9 @@ void RunSynthesize(const SynthesizeCommandOptions& options,
 }  // namespace
 
 void AddSynthesizeCommand(CLI::App& app) {
-  auto options = std::make_shared<SynthesizeCommandOptions>();
   CLI::App* command = AddListedCommand(app, "synthesize");
-  AddSynthesizeOptions(*command, *options);
-  command->callback([options, command] {
-    RunSynthesize(*options,
+  BindCommand(*command, AddSynthesizeOptions, [command](const SynthesizeCommandOptions& options) {
+    RunSynthesize(options,
                   [command](const char* name) { return command->get_option(name)->count() > 0; });
   });
 }

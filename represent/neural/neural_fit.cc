@@ -164,6 +164,14 @@ torch::Tensor DecodeAllLights(torch::nn::Sequential& decoder, const torch::Tenso
   return decoder->forward(input.reshape({b * n, k + 2})).view({b, n, channels});
 }
 
+// Pixels [first, first + count) of `pixels` as an index tensor.
+torch::Tensor IndexTensor(const std::vector<std::int64_t>& pixels, std::size_t first,
+                          std::size_t count) {
+  const auto begin = pixels.begin() + static_cast<std::ptrdiff_t>(first);
+  return torch::tensor(std::vector<std::int64_t>(begin, begin + static_cast<std::ptrdiff_t>(count)),
+                       torch::kInt64);
+}
+
 std::vector<torch::Tensor> CopyParameters(const std::vector<torch::Tensor>& parameters) {
   std::vector<torch::Tensor> copies;
   for (const torch::Tensor& p : parameters) copies.push_back(p.detach().clone());
@@ -207,9 +215,7 @@ class NeuralTrainer {
     double sum = 0.0;
     for (std::size_t first = 0; first < training.size(); first += batch_) {
       const std::size_t count = std::min(batch_, training.size() - first);
-      const torch::Tensor index = torch::tensor(
-          std::vector<std::int64_t>(training.begin() + first, training.begin() + first + count),
-          torch::kInt64);
+      const torch::Tensor index = IndexTensor(training, first, count);
       optimiser_.zero_grad();
       torch::Tensor loss;
       if (lights_per_batch_ < lights_) {
@@ -236,9 +242,7 @@ class NeuralTrainer {
     double sum = 0.0;
     for (std::size_t first = 0; first < pixels.size(); first += kBatch) {
       const std::size_t count = std::min(kBatch, pixels.size() - first);
-      const torch::Tensor index = torch::tensor(
-          std::vector<std::int64_t>(pixels.begin() + first, pixels.begin() + first + count),
-          torch::kInt64);
+      const torch::Tensor index = IndexTensor(pixels, first, count);
       sum += Loss(index).item<double>() * static_cast<double>(count);
     }
     return sum / static_cast<double>(pixels.size());
