@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <span>
 #include <vector>
 
@@ -238,14 +239,9 @@ double SolvePixel(const PbrPixelData& data, const PbrFitOptions& options, double
   return cost;
 }
 
-}  // namespace
-
-Representation FitPbr(const Observations& observations, const std::vector<LightDirection>& lights,
-                      const NearLighting* near_lighting, std::span<const int> selected,
-                      const Eigen::Matrix3Xf& start_normals, const Eigen::MatrixXf& start_albedo,
-                      std::span<const Mask> measured, const PbrFitOptions& options,
-                      nlohmann::json details, const std::filesystem::path& source,
-                      Progress* progress) {
+void CheckPbrInputs(const Observations& observations, const std::vector<LightDirection>& lights,
+                    const NearLighting* near_lighting, const PbrFitOptions& options,
+                    const std::filesystem::path& source) {
   if (observations.channels() != 3) {
     throw Error(source, fmt::format("pbr fits RGB images; these have {} channel(s)",
                                     observations.channels()));
@@ -257,99 +253,154 @@ Representation FitPbr(const Observations& observations, const std::vector<LightD
                 "pbr options: need 0 < min roughness <= start roughness <= 1, 0 <= start F0 <= 1, "
                 "a positive loss scale and a prior weight >= 0");
   }
-  const Eigen::Index m = observations.pixels();
-  const Eigen::MatrixXf& matrix = observations.matrix();
-  const auto shading = std::make_shared<MicrofacetShading>();
-  Image maps(observations.width(), observations.height(), shading->MapNames());
-  tbb::enumerable_thread_specific<PbrFitSummary> tallies;
   if (near_lighting && near_lighting->lamps.size() != lights.size()) {
     throw Error(source, fmt::format("{} near lamps for {} lights", near_lighting->lamps.size(),
                                     lights.size()));
   }
+}
+
+// What the pixels' fits share: the observations, which of them count, and the lights.
+struct PbrFitInputs {
+  const Observations& observations;
+  std::span<const int> selected;
+  std::span<const Mask> measured;
+  const NearLighting* near_lighting;
   std::vector<MicrofacetLight> light_terms;  // distant: once per image, not per pixel
+};
+
+// Pixel k's measured samples: each selected image's RGB under its light (as the pixel sees a
+// near lamp: its own direction and relative irradiance).
+void GatherPixelData(const PbrFitInputs& in, Eigen::Index k, PbrPixelData& data) {
+  const Observations& observations = in.observations;
+  const Eigen::Index m = observations.pixels();
+  const Eigen::MatrixXf& matrix = observations.matrix();
+  const std::size_t pixel = observations.pixel_indices()[k];
+  const auto width = static_cast<std::size_t>(observations.width());
+  data.lights.clear();
+  data.irradiance.clear();
+  data.observed.clear();
+  const int column = static_cast<int>(pixel % width);
+  const int row = static_cast<int>(pixel / width);
+  for (int image : in.selected) {
+    if (!in.measured.empty() && !in.measured[image][pixel]) continue;
+    if (in.near_lighting) {
+      const LampAtPixel lamp = in.near_lighting->At(image, column, row);
+      data.lights.emplace_back(lamp.direction.data());
+      data.irradiance.push_back(lamp.irradiance);
+    } else {
+      data.lights.push_back(in.light_terms[image]);
+      data.irradiance.push_back(1.0);
+    }
+    data.observed.push_back({matrix(k, image), matrix(m + k, image), matrix(2 * m + k, image)});
+  }
+}
+
+// The start of pixel k's fit from the Lambertian start (normals and albedo) and the options;
+// `brightness` is the start's mean base colour (the scale of the loss and the prior).
+PixelParameters StartOfPixel(const Eigen::Matrix3Xf& start_normals,
+                             const Eigen::MatrixXf& start_albedo, Eigen::Index k,
+                             const PbrFitOptions& options, double& brightness) {
+  PixelParameters start;
+  const double keep = 1.0 - options.start_f0;  // the diffuse share at normal incidence
+  brightness = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    start.base[c] = std::max(0.0, static_cast<double>(start_albedo(c, k))) / keep;
+    brightness += start.base[c] / 3.0;
+  }
+  brightness = std::max(brightness, 1e-4);
+  Eigen::Vector3d n = start_normals.col(k).cast<double>();
+  if (!(n.z() > 0.05)) n = Eigen::Vector3d::UnitZ();  // the view must see the surface
+  start.normal = {n.x(), n.y(), n.z()};
+  start.roughness = options.start_roughness;
+  start.f0 = options.start_f0;
+  return start;
+}
+
+// One pixel's fit from `start`: solved when it has 3 samples or more; a pixel whose fitted lobe
+// no light samples is solved again with the roughness prior (when it has a weight). Counted in
+// `tally`; its final cost in `cost`.
+PixelParameters FitPbrPixel(const PbrPixelData& data, PixelParameters start,
+                            const PbrFitOptions& options, double brightness, PbrFitSummary& tally,
+                            double& cost) {
+  const bool enough = data.lights.size() >= 3;
+  if (options.grid_start && enough) {
+    GridStart(data, options, options.loss_scale * brightness, start);
+  }
+  PixelParameters fitted = start;
+  cost = 0.0;
+  if (enough) cost = SolvePixel(data, options, brightness, 0.0, fitted);
+  const Eigen::Vector3d normal(fitted.normal[0], fitted.normal[1], fitted.normal[2]);
+  const bool sampled = std::any_of(data.lights.begin(), data.lights.end(), [&](auto& l) {
+    return InSpecularLobe(normal, Eigen::Vector3d(l.direction), fitted.roughness);
+  });
+  if (sampled) {
+    ++tally.lobe_sampled;
+  } else {
+    ++tally.lobe_unsampled;
+    if (options.prior_weight > 0.0 && enough) {
+      fitted = start;
+      const double weight =
+          options.prior_weight * brightness * std::sqrt(static_cast<double>(data.lights.size()));
+      cost = SolvePixel(data, options, brightness, weight, fitted);
+      ++tally.regularised;
+    }
+  }
+  return fitted;
+}
+
+void StorePixel(PixelValues<float> out, const PixelParameters& fitted) {
+  for (int c = 0; c < 3; ++c) {
+    out[MicrofacetShading::kBase + c] = static_cast<float>(fitted.base[c]);
+    out[MicrofacetShading::kNormal + c] = static_cast<float>(fitted.normal[c]);
+  }
+  out[MicrofacetShading::kRoughness] = static_cast<float>(fitted.roughness);
+  out[MicrofacetShading::kF0] = static_cast<float>(fitted.f0);
+}
+
+}  // namespace
+
+Representation FitPbr(const Observations& observations, const std::vector<LightDirection>& lights,
+                      const NearLighting* near_lighting, std::span<const int> selected,
+                      const Eigen::Matrix3Xf& start_normals, const Eigen::MatrixXf& start_albedo,
+                      std::span<const Mask> measured, const PbrFitOptions& options,
+                      nlohmann::json details, const std::filesystem::path& source,
+                      Progress* progress) {
+  CheckPbrInputs(observations, lights, near_lighting, options, source);
+  const Eigen::Index m = observations.pixels();
+  const auto shading = std::make_shared<MicrofacetShading>();
+  Image maps(observations.width(), observations.height(), shading->MapNames());
+  PbrFitInputs inputs{observations, selected, measured, near_lighting, {}};
   for (const LightDirection& light : lights) {
     const Eigen::Vector3d l = light.vector();
-    light_terms.emplace_back(l.data());
+    inputs.light_terms.emplace_back(l.data());
   }
-  const int width = observations.width();
+  tbb::enumerable_thread_specific<PbrFitSummary> tallies;
+  // Each pixel's final cost, summed in pixel order after the loop: a sum in the threads' tallies
+  // would depend on how the scheduler split the pixels, and the summary would differ from run to
+  // run in its last digits.
+  std::vector<double> costs(static_cast<std::size_t>(m));
   NullProgress no_progress;
   Progress& bar = OrNull(progress, no_progress);
   bar.Start("pbr fit", static_cast<std::size_t>((m + kPixelGrain - 1) / kPixelGrain));
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, m, kPixelGrain), [&](const tbb::
-                                                                                 blocked_range<
-                                                                                     Eigen::Index>&
-                                                                                     range) {
+  const auto fit_range = [&](const tbb::blocked_range<Eigen::Index>& range) {
     PbrFitSummary& tally = tallies.local();
     PbrPixelData data;
     for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
-      const std::size_t pixel = observations.pixel_indices()[k];
-      data.lights.clear();
-      data.irradiance.clear();
-      data.observed.clear();
-      const int column = static_cast<int>(pixel % static_cast<std::size_t>(width));
-      const int row = static_cast<int>(pixel / static_cast<std::size_t>(width));
-      for (int image : selected) {
-        if (!measured.empty() && !measured[image][pixel]) continue;
-        if (near_lighting) {
-          // The lamp as this pixel sees it: its own direction and relative irradiance.
-          const LampAtPixel lamp = near_lighting->At(image, column, row);
-          data.lights.emplace_back(lamp.direction.data());
-          data.irradiance.push_back(lamp.irradiance);
-        } else {
-          data.lights.push_back(light_terms[image]);
-          data.irradiance.push_back(1.0);
-        }
-        data.observed.push_back({matrix(k, image), matrix(m + k, image), matrix(2 * m + k, image)});
-      }
-      PixelParameters start;
-      const double keep = 1.0 - options.start_f0;  // the diffuse share at normal incidence
+      GatherPixelData(inputs, k, data);
       double brightness = 0.0;
-      for (int c = 0; c < 3; ++c) {
-        start.base[c] = std::max(0.0, static_cast<double>(start_albedo(c, k))) / keep;
-        brightness += start.base[c] / 3.0;
-      }
-      brightness = std::max(brightness, 1e-4);
-      Eigen::Vector3d n = start_normals.col(k).cast<double>();
-      if (!(n.z() > 0.05)) n = Eigen::Vector3d::UnitZ();  // the view must see the surface
-      start.normal = {n.x(), n.y(), n.z()};
-      start.roughness = options.start_roughness;
-      start.f0 = options.start_f0;
-      if (options.grid_start && data.lights.size() >= 3) {
-        GridStart(data, options, options.loss_scale * brightness, start);
-      }
-      PixelParameters fitted = start;
-      double cost = 0.0;
-      if (data.lights.size() >= 3) cost = SolvePixel(data, options, brightness, 0.0, fitted);
-      const Eigen::Vector3d normal(fitted.normal[0], fitted.normal[1], fitted.normal[2]);
-      const bool sampled = std::any_of(data.lights.begin(), data.lights.end(), [&](auto& l) {
-        return InSpecularLobe(normal, Eigen::Vector3d(l.direction), fitted.roughness);
-      });
-      if (sampled) {
-        ++tally.lobe_sampled;
-      } else {
-        ++tally.lobe_unsampled;
-        if (options.prior_weight > 0.0 && data.lights.size() >= 3) {
-          fitted = start;
-          const double weight = options.prior_weight * brightness *
-                                std::sqrt(static_cast<double>(data.lights.size()));
-          cost = SolvePixel(data, options, brightness, weight, fitted);
-          ++tally.regularised;
-        }
-      }
-      tally.total_cost += cost;
-      const auto out = maps.pixel(pixel);
-      for (int c = 0; c < 3; ++c)
-        out[MicrofacetShading::kBase + c] = static_cast<float>(fitted.base[c]);
-      out[MicrofacetShading::kRoughness] = static_cast<float>(fitted.roughness);
-      out[MicrofacetShading::kF0] = static_cast<float>(fitted.f0);
-      for (int c = 0; c < 3; ++c)
-        out[MicrofacetShading::kNormal + c] = static_cast<float>(fitted.normal[c]);
+      const PixelParameters start =
+          StartOfPixel(start_normals, start_albedo, k, options, brightness);
+      StorePixel(
+          maps.pixel(observations.pixel_indices()[k]),
+          FitPbrPixel(data, start, options, brightness, tally, costs[static_cast<std::size_t>(k)]));
     }
     bar.Advance();
-  });
+  };
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, m, kPixelGrain), fit_range);
   bar.Finish();
   PbrFitSummary total;
   for (const PbrFitSummary& t : tallies) total.Add(t);
+  total.total_cost = std::accumulate(costs.begin(), costs.end(), 0.0);
   total.pixels = static_cast<std::size_t>(m);  // pixels with fewer than 3 samples too
   if (!details.is_object()) details = nlohmann::json::object();
   details["pbr"] = options.ToJson();

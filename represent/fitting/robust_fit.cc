@@ -252,6 +252,141 @@ nlohmann::json RobustFitSummary::ToJson() const {
           {"mean_weight", mean_weight},         {"normal_inlier_fraction", normal_inlier_fraction}};
 }
 
+namespace {
+
+void CheckRobustFitInputs(const Observations& observations,
+                          const std::vector<LightDirection>& lights, std::size_t selected,
+                          const RobustFitOptions& options, const fs::path& source) {
+  const int n_all = observations.images();
+  if (selected < 3) {
+    throw Error(source, fmt::format("robust fit needs at least 3 images; {} given", selected));
+  }
+  if (static_cast<int>(lights.size()) != n_all) {
+    throw Error(source, fmt::format("{} lights for {} images", lights.size(), n_all));
+  }
+  if (options.measured.empty()) return;
+  if (static_cast<int>(options.measured.size()) != n_all) {
+    throw Error(source, fmt::format("{} measured-pixel masks for {} images",
+                                    options.measured.size(), n_all));
+  }
+  for (const Mask& mask : options.measured) {
+    if (mask.width() != observations.width() || mask.height() != observations.height()) {
+      throw Error(source, fmt::format("a measured-pixel mask is {}x{} but the images are {}x{}",
+                                      mask.width(), mask.height(), observations.width(),
+                                      observations.height()));
+    }
+  }
+}
+
+// The selected lights as columns; an error when they lie near one plane.
+Eigen::Matrix3Xd IndependentLightMatrix(const std::vector<LightDirection>& lights,
+                                        std::span<const int> selected, const fs::path& source) {
+  const Eigen::Matrix3Xd l = LightMatrix(lights, selected);
+  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(l);
+  const Eigen::Vector3d s = svd.singularValues();
+  if (s[2] < kGradientConditionLimit * s[0]) {
+    throw Error(source, fmt::format("robust fit: the {} lights are coplanar (singular values "
+                                    "{:.3g}, {:.3g}, {:.3g}); photometric stereo needs lights "
+                                    "in three independent directions",
+                                    selected.size(), s[0], s[1], s[2]));
+  }
+  return l;
+}
+
+// What the pixels' robust fits found, counted per thread and added at the end.
+struct RobustTally {
+  std::size_t not_measured = 0, attached = 0, down = 0, inliers = 0;
+  void Add(const RobustTally& other) {
+    not_measured += other.not_measured;
+    attached += other.attached;
+    down += other.down;
+    inliers += other.inliers;
+  }
+};
+
+// One thread's solver and per-pixel buffers (n selected observations).
+struct RobustPixelWork {
+  RobustPixelWork(const Eigen::Matrix3Xd& l, const RobustFitOptions& options)
+      : solver(l, options),
+        y(static_cast<std::size_t>(l.cols())),
+        measured(static_cast<std::size_t>(l.cols())),
+        inlier(static_cast<std::size_t>(l.cols())),
+        outlier(static_cast<std::size_t>(l.cols())) {}
+  PixelSolver solver;
+  std::vector<double> y;
+  std::vector<std::uint8_t> measured;
+  std::vector<float> inlier, outlier;
+};
+
+// Where the robust fit of the pixels goes: column k of each is pixel k's.
+struct RobustPixelMaps {
+  Eigen::Matrix3Xf& normals;
+  Eigen::MatrixXf& albedo;
+  Eigen::MatrixXf& weights;  // pixels x all images; the selected images' columns are written
+};
+
+// Pixel k: the robust normal from the channels' sum, the albedo per channel along it from the
+// normal's inliers, and each selected observation's weight; counted in `tally`. Returns the sum of
+// the pixel's weights.
+double FitRobustPixel(const Observations& observations, std::span<const int> selected,
+                      const RobustFitOptions& options, const Eigen::Matrix3Xd& l, Eigen::Index k,
+                      RobustPixelWork& work, RobustPixelMaps maps, RobustTally& tally) {
+  const Eigen::Index m = observations.pixels();
+  const auto n = static_cast<Eigen::Index>(selected.size());
+  const int channels = observations.channels();
+  const Eigen::MatrixXf& matrix = observations.matrix();
+  const std::size_t pixel = observations.pixel_indices()[k];
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int image = selected[i];
+    double sum = 0.0;
+    for (int c = 0; c < channels; ++c) sum += matrix(c * m + k, image);
+    work.y[i] = sum;
+    work.measured[i] = options.measured.empty() || options.measured[image][pixel];
+  }
+  const Eigen::Vector3d b = work.solver.Solve(work.y, work.measured, {work.inlier, work.outlier});
+  const double norm = b.norm();
+  const Eigen::Vector3d normal = norm > 0.0 ? (b / norm).eval() : Eigen::Vector3d::UnitZ();
+  maps.normals.col(k) = normal.cast<float>();
+  for (int c = 0; c < channels; ++c) {
+    double numerator = 0.0, denominator = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (work.inlier[i] <= 0.0f) continue;
+      const double shading = normal.dot(l.col(i));
+      numerator += work.inlier[i] * matrix(c * m + k, selected[i]) * shading;
+      denominator += work.inlier[i] * shading * shading;
+    }
+    maps.albedo(c, k) = denominator > 0.0 ? static_cast<float>(numerator / denominator) : 0.0f;
+  }
+  double weight_sum = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    maps.weights(k, selected[i]) = work.outlier[i];
+    weight_sum += work.outlier[i];
+    if (work.inlier[i] > 0.0f) ++tally.inliers;
+    if (!work.measured[i]) {
+      ++tally.not_measured;
+    } else if (normal.dot(l.col(i)) < options.attached_shadow_cosine) {
+      ++tally.attached;
+    } else if (work.outlier[i] < 0.5f) {
+      ++tally.down;
+    }
+  }
+  return weight_sum;
+}
+
+RobustFitSummary SummaryOf(const RobustTally& total, double weight_sum, std::size_t observations) {
+  RobustFitSummary summary;
+  summary.observations = observations;
+  summary.not_measured = total.not_measured;
+  summary.attached_shadow = total.attached;
+  summary.down_weighted = total.down;
+  const auto count = static_cast<double>(std::max<std::size_t>(observations, 1));
+  summary.mean_weight = weight_sum / count;
+  summary.normal_inlier_fraction = static_cast<double>(total.inliers) / count;
+  return summary;
+}
+
+}  // namespace
+
 RobustFit::RobustFit(const Observations& observations, const std::vector<LightDirection>& lights,
                      std::span<const int> selected, const RobustFitOptions& options,
                      fs::path source)
@@ -260,116 +395,38 @@ RobustFit::RobustFit(const Observations& observations, const std::vector<LightDi
       selected_(selected.begin(), selected.end()),
       options_(options),
       source_(std::move(source)) {
-  const int n_all = observations.images();
-  const auto n = static_cast<Eigen::Index>(selected_.size());
-  if (n < 3) {
-    throw Error(source_, fmt::format("robust fit needs at least 3 images; {} given", n));
-  }
-  if (static_cast<int>(lights.size()) != n_all) {
-    throw Error(source_, fmt::format("{} lights for {} images", lights.size(), n_all));
-  }
-  if (!options_.measured.empty()) {
-    if (static_cast<int>(options_.measured.size()) != n_all) {
-      throw Error(source_, fmt::format("{} measured-pixel masks for {} images",
-                                       options_.measured.size(), n_all));
-    }
-    for (const Mask& mask : options_.measured) {
-      if (mask.width() != observations.width() || mask.height() != observations.height()) {
-        throw Error(source_, fmt::format("a measured-pixel mask is {}x{} but the images are {}x{}",
-                                         mask.width(), mask.height(), observations.width(),
-                                         observations.height()));
-      }
-    }
-  }
-  const Eigen::Matrix3Xd l = LightMatrix(lights, selected_);
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(l);
-  const Eigen::Vector3d s = svd.singularValues();
-  if (s[2] < kGradientConditionLimit * s[0]) {
-    throw Error(source_, fmt::format("robust fit: the {} lights are coplanar (singular values "
-                                     "{:.3g}, {:.3g}, {:.3g}); photometric stereo needs lights "
-                                     "in three independent directions",
-                                     n, s[0], s[1], s[2]));
-  }
-
+  CheckRobustFitInputs(observations, lights, selected_.size(), options_, source_);
+  const Eigen::Matrix3Xd l = IndependentLightMatrix(lights, selected_, source_);
   const Eigen::Index m = observations.pixels();
-  const int channels = observations.channels();
-  const Eigen::MatrixXf& matrix = observations.matrix();
-  weights_ = Eigen::MatrixXf::Zero(m, n_all);
+  weights_ = Eigen::MatrixXf::Zero(m, observations.images());
   normals_ = Eigen::Matrix3Xf::Zero(3, m);
-  albedo_ = Eigen::MatrixXf::Zero(channels, m);
+  albedo_ = Eigen::MatrixXf::Zero(observations.channels(), m);
   NullProgress no_progress;
   Progress& progress = OrNull(options_.progress, no_progress);
   progress.Start("robust fit", static_cast<std::size_t>((m + kPixelGrain - 1) / kPixelGrain));
-  struct Tally {
-    std::size_t not_measured = 0, attached = 0, down = 0, inliers = 0;
-    double weight_sum = 0.0;
-  };
-  tbb::enumerable_thread_specific<Tally> tallies;
-  tbb::enumerable_thread_specific<PixelSolver> solvers([&] { return PixelSolver(l, options_); });
-  tbb::parallel_for(
-      tbb::blocked_range<Eigen::Index>(0, m, kPixelGrain),
-      [&](const tbb::blocked_range<Eigen::Index>& range) {
-        PixelSolver& solver = solvers.local();
-        Tally& tally = tallies.local();
-        std::vector<double> y(n);
-        std::vector<std::uint8_t> measured(n);
-        std::vector<float> inlier(n), outlier(n);
-        for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
-          const std::size_t pixel = observations.pixel_indices()[k];
-          for (Eigen::Index i = 0; i < n; ++i) {
-            const int image = selected_[i];
-            double sum = 0.0;
-            for (int c = 0; c < channels; ++c) sum += matrix(c * m + k, image);
-            y[i] = sum;
-            measured[i] = options_.measured.empty() || options_.measured[image][pixel];
-          }
-          const Eigen::Vector3d b = solver.Solve(y, measured, {inlier, outlier});
-          const double norm = b.norm();
-          const Eigen::Vector3d normal = norm > 0.0 ? (b / norm).eval() : Eigen::Vector3d::UnitZ();
-          normals_.col(k) = normal.cast<float>();
-          // Albedo per channel along the robust normal, from the normal's inliers.
-          for (int c = 0; c < channels; ++c) {
-            double numerator = 0.0, denominator = 0.0;
-            for (Eigen::Index i = 0; i < n; ++i) {
-              if (inlier[i] <= 0.0f) continue;
-              const double shading = normal.dot(l.col(i));
-              numerator += inlier[i] * matrix(c * m + k, selected_[i]) * shading;
-              denominator += inlier[i] * shading * shading;
-            }
-            albedo_(c, k) = denominator > 0.0 ? static_cast<float>(numerator / denominator) : 0.0f;
-          }
-          for (Eigen::Index i = 0; i < n; ++i) {
-            weights_(k, selected_[i]) = outlier[i];
-            tally.weight_sum += outlier[i];
-            if (inlier[i] > 0.0f) ++tally.inliers;
-            if (!measured[i]) {
-              ++tally.not_measured;
-            } else if (normal.dot(l.col(i)) < options_.attached_shadow_cosine) {
-              ++tally.attached;
-            } else if (outlier[i] < 0.5f) {
-              ++tally.down;
-            }
-          }
-        }
-        progress.Advance();
-      });
+  tbb::enumerable_thread_specific<RobustTally> tallies;
+  // Each pixel's sum of weights, added in pixel order after the loop: a sum in the threads'
+  // tallies would depend on how the scheduler split the pixels (the summary's last digits would
+  // differ from run to run).
+  std::vector<double> weight_sums(static_cast<std::size_t>(m));
+  tbb::enumerable_thread_specific<RobustPixelWork> works(
+      [&] { return RobustPixelWork(l, options_); });
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, m, kPixelGrain),
+                    [&](const tbb::blocked_range<Eigen::Index>& range) {
+                      RobustPixelWork& work = works.local();
+                      RobustTally& tally = tallies.local();
+                      for (Eigen::Index k = range.begin(); k < range.end(); ++k) {
+                        weight_sums[static_cast<std::size_t>(k)] =
+                            FitRobustPixel(observations, selected_, options_, l, k, work,
+                                           {normals_, albedo_, weights_}, tally);
+                      }
+                      progress.Advance();
+                    });
   progress.Finish();
-  Tally total;
-  for (const Tally& tally : tallies) {
-    total.not_measured += tally.not_measured;
-    total.attached += tally.attached;
-    total.down += tally.down;
-    total.inliers += tally.inliers;
-    total.weight_sum += tally.weight_sum;
-  }
-  summary_.observations = static_cast<std::size_t>(m) * static_cast<std::size_t>(n);
-  summary_.not_measured = total.not_measured;
-  summary_.attached_shadow = total.attached;
-  summary_.down_weighted = total.down;
-  const auto observations_count =
-      static_cast<double>(std::max<std::size_t>(summary_.observations, 1));
-  summary_.mean_weight = total.weight_sum / observations_count;
-  summary_.normal_inlier_fraction = static_cast<double>(total.inliers) / observations_count;
+  RobustTally total;
+  for (const RobustTally& tally : tallies) total.Add(tally);
+  summary_ = SummaryOf(total, std::accumulate(weight_sums.begin(), weight_sums.end(), 0.0),
+                       static_cast<std::size_t>(m) * selected_.size());
 }
 
 Representation RobustFit::Fit(const Method& method) const {
