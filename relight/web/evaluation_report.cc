@@ -683,47 +683,47 @@ void WriteEvaluationReport(const fs::path& folder, const PhotometricSet& set,
   WriteReportFolder(folder, info, evaluations, plan, pictures, options);
 }
 
-void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
-                                   std::span<const fs::path> stacks,
-                                   const std::vector<MethodEvaluation>& evaluations,
-                                   const std::optional<fs::path>& truth,
-                                   const EvaluationReportOptions& options,
-                                   const StreamedReportOptions& bands) {
-  const ReportPlan plan = PlanReport(folder, set.size(), set.lights(), evaluations, options);
-  if (stacks.size() != evaluations.size()) {
-    throw Error(folder,
-                fmt::format("{} stacks for {} evaluations", stacks.size(), evaluations.size()));
+namespace {
+
+// The fits' stacks and the truth, opened and checked against the set's size.
+struct StreamedReportInputs {
+  std::vector<StackBandReader> fits;
+  std::optional<ImageBandReader> truth;
+  std::size_t stored_channels = 0;  // of all fits
+};
+
+StreamedReportInputs OpenReportInputs(const fs::path& folder, const StreamedSet& set,
+                                      std::span<const fs::path> stacks, std::size_t evaluations,
+                                      const std::optional<fs::path>& truth) {
+  if (stacks.size() != evaluations) {
+    throw Error(folder, fmt::format("{} stacks for {} evaluations", stacks.size(), evaluations));
   }
-  const int width = set.width(), height = set.height();
   const auto check_size = [&](const fs::path& path, int w, int h) {
-    if (w != width || h != height) {
-      throw Error(path, fmt::format("{}x{}, but the images are {}x{}", w, h, width, height));
+    if (w != set.width() || h != set.height()) {
+      throw Error(path,
+                  fmt::format("{}x{}, but the images are {}x{}", w, h, set.width(), set.height()));
     }
   };
-  std::vector<StackBandReader> fits;
-  std::size_t stored_channels = 0;
+  StreamedReportInputs inputs;
   for (const fs::path& path : stacks) {
-    const StackBandReader& fit = fits.emplace_back(path);
+    const StackBandReader& fit = inputs.fits.emplace_back(path);
     check_size(path, fit.width(), fit.height());
-    stored_channels += static_cast<std::size_t>(fit.stored_channels());
+    inputs.stored_channels += static_cast<std::size_t>(fit.stored_channels());
   }
-  std::optional<ImageBandReader> truth_rows;
   if (truth) {
-    truth_rows.emplace(*truth);
-    check_size(*truth, truth_rows->width(), truth_rows->height());
+    inputs.truth.emplace(*truth);
+    check_size(*truth, inputs.truth->width(), inputs.truth->height());
   }
-  NullProgress no_progress;
-  Progress& progress = OrNull(options.progress, no_progress);
-  // A band holds the shown photographs' band, every fit's band and the truth's (floats), and a
-  // relit image, normals and errors at a time.
-  const std::size_t pixel_bytes =
-      4 * (plan.shown.size() * static_cast<std::size_t>(set.channels()) + stored_channels + 3 + 8);
-  const int band_rows = BudgetedBandRows(bands.band_rows, bands.memory_bytes, kMinimumReportMemory,
-                                         static_cast<std::size_t>(width) * pixel_bytes, height);
-  ReportPictures pictures(width, height, set.channels(), plan, evaluations, truth.has_value());
+  return inputs;
+}
 
-  // Pass 1: the photographs shown, every fit's relighting of them and its normal errors. Only
-  // the shown photographs are decoded (a subset of the set, opened anew).
+// Pass 1: the photographs shown, every fit's relighting of them and its normal errors. Only the
+// shown photographs are decoded (a subset of the set, opened anew). Returns the pixels the mask
+// sets.
+std::size_t GatherRelitPictures(StreamedSet& set, StreamedReportInputs& inputs,
+                                const ReportPlan& plan, int band_rows, ReportPictures& pictures,
+                                Progress& progress) {
+  const int width = set.width(), height = set.height();
   std::optional<StreamedSet> shown;
   if (!plan.shown.empty()) shown.emplace(set.Subset(plan.shown));
   std::size_t pixels = 0;
@@ -741,12 +741,12 @@ void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
       }
     }
     std::optional<Image> truth_band;
-    if (truth_rows) {
-      truth_band.emplace(width, rows, truth_rows->channels());
-      truth_rows->ReadNext(truth_band->View());
+    if (inputs.truth) {
+      truth_band.emplace(width, rows, inputs.truth->channels());
+      inputs.truth->ReadNext(truth_band->View());
     }
-    for (std::size_t m = 0; m < fits.size(); ++m) {
-      const LoadedStack fit = fits[m].ReadNext(rows);
+    for (std::size_t m = 0; m < inputs.fits.size(); ++m) {
+      const LoadedStack fit = inputs.fits[m].ReadNext(rows);
       tbb::parallel_for(std::size_t{0}, plan.shown.size(), [&](std::size_t s) {
         pictures.AddRelit(m, s, first,
                           fit.representation.Relight(set.lights()[plan.shown[s]]).View());
@@ -756,10 +756,16 @@ void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
     progress.Advance();
   }
   progress.Finish();
+  return pixels;
+}
 
-  // Pass 2: the shown images' predictions, by their folds fitted band by band; pbr in a pass of
-  // its own when it was fitted with options of its own.
+// Pass 2: the shown images' predictions, by their folds fitted band by band; pbr in a pass of
+// its own when it was fitted with options of its own.
+void GatherPredictedPictures(StreamedSet& set, const std::vector<MethodEvaluation>& evaluations,
+                             const ReportPlan& plan, const EvaluationReportOptions& options,
+                             const StreamedReportOptions& bands, ReportPictures& pictures) {
   const std::vector<PredictionFold> folds = ShownFolds(plan, set.size());
+  if (folds.empty()) return;
   for (const bool pbr_pass : {false, true}) {
     std::vector<std::size_t> members;
     std::vector<Method> methods;
@@ -769,29 +775,51 @@ void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
       members.push_back(m);
       methods.push_back(method);
     }
-    if (folds.empty() || members.empty()) continue;
+    if (members.empty()) continue;
     FoldFitOptions fold_options;
     fold_options.memory_bytes = bands.memory_bytes;
     fold_options.band_rows = bands.band_rows;
     fold_options.robust = FitOptionsFor(methods.front(), options);
     fold_options.progress = options.progress;
-    VisitFoldFits(
-        set, methods, folds,
-        [&](const FoldFit& fold) {
-          const std::size_t m = members[fold.method];
-          const std::vector<int>& predicted = folds[fold.fold].predicted;
-          for (std::size_t s = 0; s < plan.shown.size(); ++s) {
-            const int index = plan.shown[s];
-            if (std::find(predicted.begin(), predicted.end(), index) == predicted.end() ||
-                PredictionPosition(evaluations[m], index) < 0) {
-              continue;
-            }
-            pictures.AddPredicted(m, s, fold.first_row,
-                                  fold.fit.Relight(set.lights()[index]).View());
-          }
-        },
-        fold_options);
+    const auto add_prediction = [&](const FoldFit& fold) {
+      const std::size_t m = members[fold.method];
+      const std::vector<int>& predicted = folds[fold.fold].predicted;
+      for (std::size_t s = 0; s < plan.shown.size(); ++s) {
+        const int index = plan.shown[s];
+        if (std::find(predicted.begin(), predicted.end(), index) == predicted.end() ||
+            PredictionPosition(evaluations[m], index) < 0) {
+          continue;
+        }
+        pictures.AddPredicted(m, s, fold.first_row, fold.fit.Relight(set.lights()[index]).View());
+      }
+    };
+    VisitFoldFits(set, methods, folds, add_prediction, fold_options);
   }
+}
+
+}  // namespace
+
+void WriteEvaluationReportStreamed(const fs::path& folder, StreamedSet& set,
+                                   std::span<const fs::path> stacks,
+                                   const std::vector<MethodEvaluation>& evaluations,
+                                   const std::optional<fs::path>& truth,
+                                   const EvaluationReportOptions& options,
+                                   const StreamedReportOptions& bands) {
+  const ReportPlan plan = PlanReport(folder, set.size(), set.lights(), evaluations, options);
+  StreamedReportInputs inputs = OpenReportInputs(folder, set, stacks, evaluations.size(), truth);
+  const int width = set.width(), height = set.height();
+  NullProgress no_progress;
+  Progress& progress = OrNull(options.progress, no_progress);
+  // A band holds the shown photographs' band, every fit's band and the truth's (floats), and a
+  // relit image, normals and errors at a time.
+  const std::size_t pixel_bytes =
+      4 * (plan.shown.size() * static_cast<std::size_t>(set.channels()) + inputs.stored_channels +
+           3 + 8);
+  const int band_rows = BudgetedBandRows(bands.band_rows, bands.memory_bytes, kMinimumReportMemory,
+                                         static_cast<std::size_t>(width) * pixel_bytes, height);
+  ReportPictures pictures(width, height, set.channels(), plan, evaluations, truth.has_value());
+  const std::size_t pixels = GatherRelitPictures(set, inputs, plan, band_rows, pictures, progress);
+  GatherPredictedPictures(set, evaluations, plan, options, bands, pictures);
   const ReportSet info{set.source(),   set.size(), width,        height,
                        set.channels(), pixels,     set.lights(), set.image_names()};
   WriteReportFolder(folder, info, evaluations, plan, pictures, options);
