@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <utility>
 
 #include "core/error.h"
 
@@ -125,10 +126,10 @@ void AppearanceSpace::Project(const Image& volume, int x, int y, int z,
   std::copy(projected.data(), projected.data() + dimensions, out.begin());
 }
 
-AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOptions& options,
-                                       Progress* progress) {
-  NullProgress null_progress;
-  Progress& report = OrNull(progress, null_progress);
+namespace {
+
+// The space's neighbourhood, spacing and domain, the options and the exemplar's size checked.
+AppearanceSpace EmptyAppearanceSpace(const Image& exemplar, const AppearanceOptions& options) {
   if (options.neighbourhood < 1 || options.neighbourhood % 2 == 0) {
     throw Error(fmt::format("neighbourhood {} must be odd and positive", options.neighbourhood));
   }
@@ -149,24 +150,18 @@ AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOp
                             ToString(exemplar.extent()), options.neighbourhood,
                             space.domain.periodic ? "" : " inside its border"));
   }
-  FitChannelReduction(exemplar, options.max_channels, space);
-  const RowMatrixXf reduced = ReducedChannels(exemplar, space);
-  const int side = options.neighbourhood;
+  return space;
+}
+
+// The covariance and mean of the neighbourhood vectors of `samples` (each relative to `centre`,
+// which keeps the sums well conditioned), summed in kGroups fixed groups of blocks: the same
+// result on any number of threads.
+std::pair<Eigen::MatrixXd, Eigen::VectorXd> NeighbourhoodCovariance(
+    const RowMatrixXf& reduced, const Image& exemplar, const AppearanceSpace& space,
+    const std::vector<std::size_t>& samples, const Eigen::RowVectorXf& centre, Progress& report) {
+  const int side = space.neighbourhood;
   const Eigen::Index features = static_cast<Eigen::Index>(side) * side * side * reduced.cols();
-  space.dimensions = static_cast<int>(std::min<Eigen::Index>(options.dimensions, features));
-  if (space.dimensions < 1) throw Error("the appearance space needs at least one dimension");
-
-  const std::vector<std::size_t> valid = space.domain.ValidIndices();
-  const std::size_t stride =
-      (valid.size() + static_cast<std::size_t>(options.covariance_samples) - 1) /
-      static_cast<std::size_t>(options.covariance_samples);
-  std::vector<std::size_t> samples;
-  for (std::size_t i = 0; i < valid.size(); i += stride) samples.push_back(valid[i]);
-  const Eigen::RowVectorXf centre = reduced.colwise().mean();  // keeps the sums well conditioned
-
-  // Covariance of the neighbourhood vectors.
   const std::size_t blocks = (samples.size() + kBlock - 1) / kBlock;
-  report.Start("appearance space", blocks + (valid.size() + kBlock - 1) / kBlock);
   std::vector<Eigen::MatrixXd> outer(kGroups, Eigen::MatrixXd::Zero(features, features));
   std::vector<Eigen::VectorXd> sums(kGroups, Eigen::VectorXd::Zero(features));
   tbb::parallel_for(std::size_t{0}, kGroups, [&](std::size_t group) {
@@ -177,7 +172,7 @@ AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOp
       for (std::size_t i = begin; i < end; ++i) {
         const auto [x, y, z] = space.domain.Coordinates(samples[i]);
         float* row = block.row(static_cast<Eigen::Index>(i - begin)).data();
-        Gather(reduced, exemplar.extent(), x, y, z, side, options.spacing, space.domain.periodic,
+        Gather(reduced, exemplar.extent(), x, y, z, side, space.spacing, space.domain.periodic,
                row);
         for (Eigen::Index f = 0; f < features; ++f) row[f] -= centre[f % reduced.cols()];
       }
@@ -196,6 +191,14 @@ AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOp
   const double count = static_cast<double>(samples.size());
   const Eigen::VectorXd mean = sum / count;
   covariance = covariance / count - mean * mean.transpose();
+  return {covariance, mean};
+}
+
+// The space's feature basis (the covariance's leading eigenvectors, each with a fixed sign), its
+// mean and the variance it retains.
+void FitFeatureBasis(const Eigen::MatrixXd& covariance, const Eigen::VectorXd& mean,
+                     const Eigen::RowVectorXf& centre, Eigen::Index reduced_channels,
+                     AppearanceSpace& space) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(covariance);
   const Eigen::VectorXd eigenvalues = solver.eigenvalues().cwiseMax(0.0);
   const double total = eigenvalues.sum();
@@ -207,13 +210,20 @@ AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOp
     if (basis(largest, c) < 0) basis.col(c) *= -1.0;
   }
   space.feature_basis = basis.cast<float>();
+  const Eigen::Index features = mean.size();
   Eigen::VectorXf feature_mean(features);
   for (Eigen::Index f = 0; f < features; ++f) {
-    feature_mean[f] = static_cast<float>(mean[f]) + centre[f % reduced.cols()];
+    feature_mean[f] = static_cast<float>(mean[f]) + centre[f % reduced_channels];
   }
   space.feature_mean = feature_mean;
+}
 
-  // Projection of every valid voxel.
+// Every valid voxel's neighbourhood projected onto the basis, into space.values.
+void ProjectEveryVoxel(const RowMatrixXf& reduced, const Image& exemplar,
+                       const std::vector<std::size_t>& valid, AppearanceSpace& space,
+                       Progress& report) {
+  const int side = space.neighbourhood;
+  const Eigen::Index features = static_cast<Eigen::Index>(side) * side * side * reduced.cols();
   const std::size_t d = static_cast<std::size_t>(space.dimensions);
   space.values.assign(exemplar.pixel_count() * d, 0.0f);
   const std::size_t projection_blocks = (valid.size() + kBlock - 1) / kBlock;
@@ -223,7 +233,7 @@ AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOp
     block.setZero();
     for (std::size_t i = begin; i < end; ++i) {
       const auto [x, y, z] = space.domain.Coordinates(valid[i]);
-      Gather(reduced, exemplar.extent(), x, y, z, side, options.spacing, space.domain.periodic,
+      Gather(reduced, exemplar.extent(), x, y, z, side, space.spacing, space.domain.periodic,
              block.row(static_cast<Eigen::Index>(i - begin)).data());
     }
     const RowMatrixXf projected =
@@ -234,6 +244,35 @@ AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOp
     }
     report.Advance();
   });
+}
+
+}  // namespace
+
+AppearanceSpace ComputeAppearanceSpace(const Image& exemplar, const AppearanceOptions& options,
+                                       Progress* progress) {
+  NullProgress null_progress;
+  Progress& report = OrNull(progress, null_progress);
+  AppearanceSpace space = EmptyAppearanceSpace(exemplar, options);
+  FitChannelReduction(exemplar, options.max_channels, space);
+  const RowMatrixXf reduced = ReducedChannels(exemplar, space);
+  const int side = options.neighbourhood;
+  const Eigen::Index features = static_cast<Eigen::Index>(side) * side * side * reduced.cols();
+  space.dimensions = static_cast<int>(std::min<Eigen::Index>(options.dimensions, features));
+  if (space.dimensions < 1) throw Error("the appearance space needs at least one dimension");
+
+  const std::vector<std::size_t> valid = space.domain.ValidIndices();
+  const std::size_t stride =
+      (valid.size() + static_cast<std::size_t>(options.covariance_samples) - 1) /
+      static_cast<std::size_t>(options.covariance_samples);
+  std::vector<std::size_t> samples;
+  for (std::size_t i = 0; i < valid.size(); i += stride) samples.push_back(valid[i]);
+  const Eigen::RowVectorXf centre = reduced.colwise().mean();  // keeps the sums well conditioned
+  report.Start("appearance space",
+               (samples.size() + kBlock - 1) / kBlock + (valid.size() + kBlock - 1) / kBlock);
+  const auto [covariance, mean] =
+      NeighbourhoodCovariance(reduced, exemplar, space, samples, centre, report);
+  FitFeatureBasis(covariance, mean, centre, reduced.cols(), space);
+  ProjectEveryVoxel(reduced, exemplar, valid, space, report);
   report.Finish();
   return space;
 }
