@@ -97,6 +97,83 @@ std::string LightCalibrationReport::ToTable() const {
   return table;
 }
 
+namespace {
+
+// The hemisphere: slant rings and tilt spokes, labelled, and the image axes.
+std::string HemisphereSvg() {
+  std::string svg;
+  // Slant labels along the 315-degree spoke, clear of the tilt labels.
+  for (int slant : {30, 60, 90}) {
+    const double r = kRadius * slant / 90.0;
+    svg += fmt::format(
+        "<circle cx=\"{}\" cy=\"{}\" r=\"{:.1f}\" fill=\"none\" stroke=\"#bbb\"/>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\">{}&#176;</text>\n",
+        kCentreX, kCentreY, r, kCentreX + r * std::sqrt(0.5) + 3, kCentreY + r * std::sqrt(0.5) - 3,
+        slant);
+  }
+  for (int tilt = 0; tilt < 360; tilt += 30) {
+    const double a = tilt * kPi / 180.0;
+    svg += fmt::format(
+        "<line x1=\"{}\" y1=\"{}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\" text-anchor=\"middle\">{}&#176;</text>\n",
+        kCentreX, kCentreY, kCentreX + kRadius * std::cos(a), kCentreY - kRadius * std::sin(a),
+        kCentreX + (kRadius + 18) * std::cos(a), kCentreY - (kRadius + 18) * std::sin(a) + 4, tilt);
+  }
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+x</text>\n", kCentreX + kRadius + 30,
+                     kCentreY + 16);
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+y</text>\n", kCentreX + 6,
+                     kCentreY - kRadius + 14);
+  return svg;
+}
+
+// Each recovered light joined to its reference, the references (red rings), then the recovered
+// lights (blue dots, numbered). `reference` is empty or one per recovered light.
+std::string LightMarksSvg(const std::vector<LightDirection>& recovered,
+                          const std::vector<LightDirection>& reference) {
+  std::string svg;
+  for (std::size_t i = 0; !reference.empty() && i < recovered.size(); ++i) {
+    const auto [x1, y1] = PlotPoint(recovered[i]);
+    const auto [x2, y2] = PlotPoint(reference[i]);
+    svg += fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" "
+        "stroke=\"#999\"/>\n",
+        x1, y1, x2, y2);
+  }
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    const auto [x, y] = PlotPoint(reference[i]);
+    svg += fmt::format(
+        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"6\" fill=\"none\" "
+        "stroke=\"#d22\" stroke-width=\"1.5\"/>\n",
+        x, y);
+  }
+  for (std::size_t i = 0; i < recovered.size(); ++i) {
+    const auto [x, y] = PlotPoint(recovered[i]);
+    svg += fmt::format(
+        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"#1559c4\"/>\n"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"10\" fill=\"#1559c4\">{}</text>\n",
+        x, y, x + 5, y - 5, i);
+  }
+  return svg;
+}
+
+std::string LegendSvg(bool has_reference) {
+  std::string svg;
+  const double legend_y = kCentreY + kRadius + 50;
+  svg += fmt::format(
+      "<circle cx=\"40\" cy=\"{0:.0f}\" r=\"3.5\" fill=\"#1559c4\"/>"
+      "<text x=\"50\" y=\"{1:.0f}\">recovered</text>\n",
+      legend_y, legend_y + 4);
+  if (has_reference) {
+    svg += fmt::format(
+        "<circle cx=\"150\" cy=\"{0:.0f}\" r=\"6\" fill=\"none\" stroke=\"#d22\" "
+        "stroke-width=\"1.5\"/><text x=\"162\" y=\"{1:.0f}\">given</text>\n",
+        legend_y, legend_y + 4);
+  }
+  return svg;
+}
+
+}  // namespace
+
 std::string LightCalibrationReport::ToSvg() const {
   const std::vector<double> differences = AngularDifferences();
   const bool has_reference = !differences.empty();
@@ -123,63 +200,9 @@ std::string LightCalibrationReport::ToSvg() const {
         "{:.2f}, max {:.2f} degrees</text>\n",
         s.mean, s.median, s.max);
   }
-  // The hemisphere: slant rings and tilt spokes.
-  // Slant labels along the 315-degree spoke, clear of the tilt labels.
-  for (int slant : {30, 60, 90}) {
-    const double r = kRadius * slant / 90.0;
-    svg += fmt::format(
-        "<circle cx=\"{}\" cy=\"{}\" r=\"{:.1f}\" fill=\"none\" stroke=\"#bbb\"/>\n"
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\">{}&#176;</text>\n",
-        kCentreX, kCentreY, r, kCentreX + r * std::sqrt(0.5) + 3, kCentreY + r * std::sqrt(0.5) - 3,
-        slant);
-  }
-  for (int tilt = 0; tilt < 360; tilt += 30) {
-    const double a = tilt * kPi / 180.0;
-    svg += fmt::format(
-        "<line x1=\"{}\" y1=\"{}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#ddd\"/>\n"
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#888\" text-anchor=\"middle\">{}&#176;</text>\n",
-        kCentreX, kCentreY, kCentreX + kRadius * std::cos(a), kCentreY - kRadius * std::sin(a),
-        kCentreX + (kRadius + 18) * std::cos(a), kCentreY - (kRadius + 18) * std::sin(a) + 4, tilt);
-  }
-  svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+x</text>\n", kCentreX + kRadius + 30,
-                     kCentreY + 16);
-  svg += fmt::format("<text x=\"{}\" y=\"{}\" fill=\"#888\">+y</text>\n", kCentreX + 6,
-                     kCentreY - kRadius + 14);
-  // Pairs, then the given lights (red rings), then the recovered ones (blue dots, numbered).
-  for (std::size_t i = 0; has_reference && i < recovered.size(); ++i) {
-    const auto [x1, y1] = PlotPoint(recovered[i]);
-    const auto [x2, y2] = PlotPoint(reference[i]);
-    svg += fmt::format(
-        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" "
-        "stroke=\"#999\"/>\n",
-        x1, y1, x2, y2);
-  }
-  for (std::size_t i = 0; has_reference && i < reference.size(); ++i) {
-    const auto [x, y] = PlotPoint(reference[i]);
-    svg += fmt::format(
-        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"6\" fill=\"none\" "
-        "stroke=\"#d22\" stroke-width=\"1.5\"/>\n",
-        x, y);
-  }
-  for (std::size_t i = 0; i < recovered.size(); ++i) {
-    const auto [x, y] = PlotPoint(recovered[i]);
-    svg += fmt::format(
-        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3.5\" fill=\"#1559c4\"/>\n"
-        "<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"10\" fill=\"#1559c4\">{}</text>\n",
-        x, y, x + 5, y - 5, i);
-  }
-  // Legend.
-  const double legend_y = kCentreY + kRadius + 50;
-  svg += fmt::format(
-      "<circle cx=\"40\" cy=\"{0:.0f}\" r=\"3.5\" fill=\"#1559c4\"/>"
-      "<text x=\"50\" y=\"{1:.0f}\">recovered</text>\n",
-      legend_y, legend_y + 4);
-  if (has_reference) {
-    svg += fmt::format(
-        "<circle cx=\"150\" cy=\"{0:.0f}\" r=\"6\" fill=\"none\" stroke=\"#d22\" "
-        "stroke-width=\"1.5\"/><text x=\"162\" y=\"{1:.0f}\">given</text>\n",
-        legend_y, legend_y + 4);
-  }
+  svg += HemisphereSvg() +
+         LightMarksSvg(recovered, has_reference ? reference : std::vector<LightDirection>{}) +
+         LegendSvg(has_reference);
   // The table.
   double y = 90.0;
   svg += fmt::format(
