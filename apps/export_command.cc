@@ -566,60 +566,49 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
   }
 }
 
-void RunExport(const ExportCommandOptions& options) {
-  if (options.out.empty() && options.ptm.empty() && options.rti.empty() && options.viewer.empty() &&
-      options.relight_web.empty() && options.compact.empty()) {
-    throw Error(
-        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE, --relight-web DIR, "
-        "--compact DIR and/or --viewer DIR");
+// A map stack streamed band by band, when it can be and should (StreamsStack). Returns whether
+// it was.
+bool ExportStackStreamed(const ExportCommandOptions& options,
+                         const std::optional<std::string>& method) {
+  if (IsReadWholeStackInput(options.input)) return false;
+  const std::filesystem::path stack_path = ResolveStack(options.input, method);
+  if (!IsStreamableStack(stack_path)) return false;
+  StackBandReader stack(stack_path);
+  if (!StreamsStack(options, stack_path, stack)) return false;
+  if (!options.out.empty()) WriteMapsStreamed(options, stack);
+  WriteInterchangeFilesStreamed(options, stack);
+  if (!options.relight_web.empty()) {  // rbf or bilinear (StreamsStack)
+    const RelightWebOptions web =
+        RelightWebOptionsFor(options, stack.header().representation.method());
+    WriteRelightWebFolder(options, [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+      return RelightWebFromStack(stack, web, bands, made);
+    });
   }
-  const std::optional<std::string> method =
-      options.method.empty() ? std::nullopt : std::optional(options.method);
-  if (!options.viewer.empty() && IsStackInput(options.input)) {
-    WriteViewerOfStacks(options, method);
-    if (options.out.empty() && options.ptm.empty() && options.rti.empty() &&
-        options.relight_web.empty() && options.compact.empty()) {
-      return;
-    }
+  return true;
+}
+
+// A stack, a .ptm or .rti file, a compact or relight web folder, read whole.
+void ExportWholeStack(const ExportCommandOptions& options,
+                      const std::optional<std::string>& method) {
+  const LoadedStack stack = LoadStackFile(options.input, method);
+  const Representation& r = stack.representation;
+  // By rows, as the streamed export, so both write the same bytes (streamed_interchange.h).
+  WriteInterchangeFiles(options, r.method(), r.output_channels(),
+                        [&](const Method& target) { return RefitEncodedByRows(stack, target); });
+  if (!options.relight_web.empty()) {
+    const RelightWebOptions web = RelightWebOptionsFor(options, r.method());
+    WriteRelightWebFolder(options, [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+      return RelightWebFromStack(stack, web, bands, made);
+    });
   }
-  if (IsStackInput(options.input) && !IsReadWholeStackInput(options.input)) {
-    const std::filesystem::path stack_path = ResolveStack(options.input, method);
-    if (IsStreamableStack(stack_path)) {
-      StackBandReader stack(stack_path);
-      if (StreamsStack(options, stack_path, stack)) {
-        if (!options.out.empty()) WriteMapsStreamed(options, stack);
-        WriteInterchangeFilesStreamed(options, stack);
-        if (!options.relight_web.empty()) {  // rbf or bilinear (StreamsStack)
-          const RelightWebOptions web =
-              RelightWebOptionsFor(options, stack.header().representation.method());
-          WriteRelightWebFolder(options,
-                                [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
-                                  return RelightWebFromStack(stack, web, bands, made);
-                                });
-        }
-        return;
-      }
-    }
-  }
-  if (IsStackInput(options.input)) {
-    const LoadedStack stack = LoadStackFile(options.input, method);
-    const Representation& r = stack.representation;
-    // By rows, as the streamed export, so both write the same bytes (streamed_interchange.h).
-    WriteInterchangeFiles(options, r.method(), r.output_channels(),
-                          [&](const Method& target) { return RefitEncodedByRows(stack, target); });
-    if (!options.relight_web.empty()) {
-      const RelightWebOptions web = RelightWebOptionsFor(options, r.method());
-      WriteRelightWebFolder(options,
-                            [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
-                              return RelightWebFromStack(stack, web, bands, made);
-                            });
-    }
-    WriteCompact(options, stack);
-    WriteMaps(options, stack);
-    return;
-  }
-  // A photometric set: .ptm/.rti fitted to its encoded values (as PTMfitter and RTIBuilder do),
-  // maps from a linear fit (Gradient unless --method says otherwise).
+  WriteCompact(options, stack);
+  WriteMaps(options, stack);
+}
+
+// A photometric set: .ptm/.rti fitted to its encoded values (as PTMfitter and RTIBuilder do),
+// maps from a linear fit (Gradient unless --method says otherwise); streamed when it should be
+// (StreamsCapture).
+void ExportCapture(const ExportCommandOptions& options, const std::optional<std::string>& method) {
   LoadOptions load;
   load.apply_intensities = !options.raw_intensities;
   if (!options.colour_space.empty()) {
@@ -634,10 +623,10 @@ void RunExport(const ExportCommandOptions& options) {
     }
   }
   const LoadedSet loaded = LoadSetForCommand(options.input, load);
+  const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
+                                   loaded.encodings};
   if (!options.viewer.empty()) {
     // A photometric set: the viewer shows the --method fit, or every method.
-    const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
-                                     loaded.encodings};
     std::vector<LoadedStack> fits;
     for (const Method& m : method ? std::vector{Method::Parse(*method)} : AllMethods()) {
       fits.push_back({Fit(loaded.set, m), provenance});
@@ -653,107 +642,130 @@ void RunExport(const ExportCommandOptions& options) {
     });
   }
   if (options.out.empty() && options.compact.empty()) return;
-  const StackProvenance provenance{loaded.set.lights(), "linear", options.input.string(),
-                                   loaded.encodings};
   const LoadedStack fit{Fit(loaded.set, Method::Parse(method.value_or("gradient"))), provenance};
   WriteCompact(options, fit);
   WriteMaps(options, fit);
 }
 
-}  // namespace
+// Whether anything but the viewer is asked for.
+bool WritesMoreThanTheViewer(const ExportCommandOptions& options) {
+  return !options.out.empty() || !options.ptm.empty() || !options.rti.empty() ||
+         !options.relight_web.empty() || !options.compact.empty();
+}
 
-void AddExportCommand(CLI::App& app) {
-  auto options = std::make_shared<ExportCommandOptions>();
-  CLI::App* command = AddListedCommand(app, "export");
+void RunExport(const ExportCommandOptions& options) {
+  if (!WritesMoreThanTheViewer(options) && options.viewer.empty()) {
+    throw Error(
+        "nothing to write: give --out DIR (maps), --ptm FILE, --rti FILE, --relight-web DIR, "
+        "--compact DIR and/or --viewer DIR");
+  }
+  const std::optional<std::string> method =
+      options.method.empty() ? std::nullopt : std::optional(options.method);
+  if (!IsStackInput(options.input)) {
+    ExportCapture(options, method);
+    return;
+  }
+  if (!options.viewer.empty()) {
+    WriteViewerOfStacks(options, method);
+    if (!WritesMoreThanTheViewer(options)) return;
+  }
+  if (!ExportStackStreamed(options, method)) ExportWholeStack(options, method);
+}
+
+void AddExportOptions(CLI::App& command, ExportCommandOptions& options) {
   command
-      ->add_option(
-          "input", options->input,
-          "A map stack (.exr or fit folder), a .ptm or .rti file, a relight web folder, or "
-          "a photometric set (folder, .lp, manifest, DiLiGenT)")
+      .add_option("input", options.input,
+                  "A map stack (.exr or fit folder), a .ptm or .rti file, a relight web folder, or "
+                  "a photometric set (folder, .lp, manifest, DiLiGenT)")
       ->required();
-  command->add_option("--method", options->method,
-                      "Which stack of a fit folder; for a photometric set, the method the maps "
-                      "come from (default gradient)");
-  command->add_option("--out", options->out, "Folder for the maps and the glTF tile");
+  command.add_option("--method", options.method,
+                     "Which stack of a fit folder; for a photometric set, the method the maps "
+                     "come from (default gradient)");
+  command.add_option("--out", options.out, "Folder for the maps and the glTF tile");
   command
-      ->add_option("--normal-convention", options->normal_convention,
-                   "opengl (+Y up: glTF, Blender) or directx (+Y down)")
-      ->capture_default_str();
-  command
-      ->add_option("--height", options->height,
-                   "Height integrator: poisson (masked least squares, non-periodic samples) or "
-                   "fc (Frankot-Chellappa, periodic samples)")
-      ->capture_default_str();
-  command->add_flag("--no-gltf", options->no_gltf, "Do not write the glTF tile");
-  command->add_option("--ptm", options->ptm, "Also write a .ptm file (sRGB-encoded coefficients)");
-  command->add_option("--ptm-format", options->ptm_format,
-                      "rgb or lrgb (default: lrgb for colour data, as PTMfitter)");
-  command->add_option("--rti", options->rti, "Also write an HSH .rti file");
-  command->add_option("--hsh-terms", options->hsh_terms, "4, 9 or 16 (default 9)");
-  command->add_option("--colour-space", options->colour_space,
-                      "For a photometric set: how untagged integer images encode light (linear "
-                      "or srgb; a file's own colour tags come first)");
-  command->add_flag("--ignore-intensities", options->raw_intensities,
-                    "For a photometric set: do not divide by the light intensities it gives");
-  command->add_option("--relight-web", options->relight_web,
-                      "Also write relight's web format (info.json + plane_N.jpg, the interchange "
-                      "format relight and OpenLIME read) into this folder");
-  command->add_option("--relight-basis", options->relight_basis,
-                      "ptm, hsh, rbf or bilinear (default: the input's own, else ptm)");
-  command->add_option("--relight-planes", options->relight_planes,
-                      "rbf/bilinear: PCA planes (default 9)");
-  command->add_option("--relight-quality", options->relight_quality,
-                      "JPEG quality of the planes (default 95)");
-  command->add_option("--compact", options->compact,
-                      "Also write photomat's compact stack form (linear maps as 8-bit planes with "
-                      "per-plane scale and bias + compact_stack.json; photomat-only, read by "
-                      "relight and export like a stack) into this folder");
-  command
-      ->add_option("--compact-coding", options->compact_coding,
-                   "png (lossless planes) or jpeg (greyscale, --compact-quality)")
-      ->capture_default_str();
-  command->add_option("--compact-quality", options->compact_quality, "JPEG quality of the planes")
+      .add_option("--normal-convention", options.normal_convention,
+                  "opengl (+Y up: glTF, Blender) or directx (+Y down)")
       ->capture_default_str();
   command
-      ->add_option("--compact-range-quantile", options->compact_range_quantile,
-                   "Quantise each plane over its (1 - q) to q quantiles over the mask (tails "
-                   "clipped); 1: minimum to maximum")
+      .add_option("--height", options.height,
+                  "Height integrator: poisson (masked least squares, non-periodic samples) or "
+                  "fc (Frankot-Chellappa, periodic samples)")
+      ->capture_default_str();
+  command.add_flag("--no-gltf", options.no_gltf, "Do not write the glTF tile");
+  command.add_option("--ptm", options.ptm, "Also write a .ptm file (sRGB-encoded coefficients)");
+  command.add_option("--ptm-format", options.ptm_format,
+                     "rgb or lrgb (default: lrgb for colour data, as PTMfitter)");
+  command.add_option("--rti", options.rti, "Also write an HSH .rti file");
+  command.add_option("--hsh-terms", options.hsh_terms, "4, 9 or 16 (default 9)");
+  command.add_option("--colour-space", options.colour_space,
+                     "For a photometric set: how untagged integer images encode light (linear "
+                     "or srgb; a file's own colour tags come first)");
+  command.add_flag("--ignore-intensities", options.raw_intensities,
+                   "For a photometric set: do not divide by the light intensities it gives");
+  command.add_option("--relight-web", options.relight_web,
+                     "Also write relight's web format (info.json + plane_N.jpg, the interchange "
+                     "format relight and OpenLIME read) into this folder");
+  command.add_option("--relight-basis", options.relight_basis,
+                     "ptm, hsh, rbf or bilinear (default: the input's own, else ptm)");
+  command.add_option("--relight-planes", options.relight_planes,
+                     "rbf/bilinear: PCA planes (default 9)");
+  command.add_option("--relight-quality", options.relight_quality,
+                     "JPEG quality of the planes (default 95)");
+  command.add_option("--compact", options.compact,
+                     "Also write photomat's compact stack form (linear maps as 8-bit planes with "
+                     "per-plane scale and bias + compact_stack.json; photomat-only, read by "
+                     "relight and export like a stack) into this folder");
+  command
+      .add_option("--compact-coding", options.compact_coding,
+                  "png (lossless planes) or jpeg (greyscale, --compact-quality)")
+      ->capture_default_str();
+  command.add_option("--compact-quality", options.compact_quality, "JPEG quality of the planes")
       ->capture_default_str();
   command
-      ->add_option("--compact-pca", options->compact_pca,
-                   "Store the maps' principal components: K the K largest (all when the stack has "
-                   "no more maps), -1 all, 0 the maps themselves")
-      ->capture_default_str();
-  command->add_option("--viewer", options->viewer,
-                      "Also write the web relighting viewer into this folder: every stack of a fit "
-                      "folder (or --method's), or for a photometric set every method's fit");
-  command
-      ->add_option("--viewer-tiles", options->viewer_tiles,
-                   "auto: the viewer gets stacks of more than 4096 x 4096 pixels as deep-zoom "
-                   "tiles (read in bands, never whole); always; never")
+      .add_option("--compact-range-quantile", options.compact_range_quantile,
+                  "Quantise each plane over its (1 - q) to q quantiles over the mask (tails "
+                  "clipped); 1: minimum to maximum")
       ->capture_default_str();
   command
-      ->add_option("--viewer-tile-size", options->viewer_tile_size,
-                   "Pixels a side of the viewer's tiles")
+      .add_option("--compact-pca", options.compact_pca,
+                  "Store the maps' principal components: K the K largest (all when the stack has "
+                  "no more maps), -1 all, 0 the maps themselves")
       ->capture_default_str();
-  command->add_flag("--viewer-without-maps", options->viewer_without_maps,
-                    "Leave the normal, albedo and height views out of the viewer (for deep-zoom "
-                    "tiles they take a streamed export of the maps, whose tiled Poisson height "
-                    "costs more than the tiles themselves)");
-  command->add_option(
-      "--memory", options->memory_mb,
+  command.add_option("--viewer", options.viewer,
+                     "Also write the web relighting viewer into this folder: every stack of a fit "
+                     "folder (or --method's), or for a photometric set every method's fit");
+  command
+      .add_option("--viewer-tiles", options.viewer_tiles,
+                  "auto: the viewer gets stacks of more than 4096 x 4096 pixels as deep-zoom "
+                  "tiles (read in bands, never whole); always; never")
+      ->capture_default_str();
+  command
+      .add_option("--viewer-tile-size", options.viewer_tile_size,
+                  "Pixels a side of the viewer's tiles")
+      ->capture_default_str();
+  command.add_flag("--viewer-without-maps", options.viewer_without_maps,
+                   "Leave the normal, albedo and height views out of the viewer (for deep-zoom "
+                   "tiles they take a streamed export of the maps, whose tiled Poisson height "
+                   "costs more than the tiles themselves)");
+  command.add_option(
+      "--memory", options.memory_mb,
       fmt::format("Memory in MB for the maps of a stack (and the viewer's tiles); a stack or "
                   "photometric set whose export does not fit is exported streamed, in bands "
                   "(default: half the "
                   "physical memory or of this process's memory limits, here {} MB, of which "
                   "streamed bands take {} MB)",
                   DefaultMemoryBudget(kMinimumExportMemory) >> 20, kFastBandMemory >> 20));
-  command->add_flag("--stream", options->stream,
-                    "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size; "
-                    "a photometric set is fitted in bands into scratch stacks beside the outputs "
-                    "first, which its exports read (in bands, or the one stack whole for --height "
-                    "fc, --compact and --relight-web; not for relight's rbf and bilinear bases)");
-  command->callback([options] { RunExport(*options); });
+  command.add_flag("--stream", options.stream,
+                   "Export a stack's maps, .ptm and .rti streamed, in bands, whatever its size; "
+                   "a photometric set is fitted in bands into scratch stacks beside the outputs "
+                   "first, which its exports read (in bands, or the one stack whole for --height "
+                   "fc, --compact and --relight-web; not for relight's rbf and bilinear bases)");
+}
+
+}  // namespace
+
+void AddExportCommand(CLI::App& app) {
+  BindCommand(*AddListedCommand(app, "export"), AddExportOptions, RunExport);
 }
 
 }  // namespace photomat::app
