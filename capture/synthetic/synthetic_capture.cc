@@ -283,8 +283,8 @@ SyntheticMaterial MakeSyntheticMaterial(const SyntheticMaterialOptions& options)
   Image height(w, h, std::vector<std::string>{"height"});
   Image gradient(w, h, 2);
   SyntheticMaterial material{Image(w, h, 1), Image(w, h, std::vector<std::string>{"R", "G", "B"}),
-                             Image(w, h, std::vector<std::string>{"R", "G", "B"}),
-                             Image(), Image()};  // roughness and F0: AddMicrofacetMaps
+                             Image(w, h, std::vector<std::string>{"R", "G", "B"}), Image(),
+                             Image()};  // roughness and F0: AddMicrofacetMaps
   // Gradients by central differences of the smooth pattern, 1e-3 pixel apart: the truth is the
   // pattern's own slope at the pixel centre, not a finite difference between pixels.
   constexpr double kDelta = 1e-3;

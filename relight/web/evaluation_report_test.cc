@@ -95,7 +95,8 @@ TEST(EvaluationReportTest, WithoutTruthOrPredictionTheReportSaysLess) {
   EXPECT_EQ(testing::CountMatches(html, "<svg class=\"chart method-chart\""), 2u);
   EXPECT_EQ(testing::CountMatches(html, "normal-chart"), 0u);
   EXPECT_EQ(testing::CountMatches(html, "heat-map"), 0u);
-  EXPECT_EQ(testing::CountMatches(html, "class=\"relit-row\""), 3u);  // three spread-out lights by default
+  EXPECT_EQ(testing::CountMatches(html, "class=\"relit-row\""),
+            3u);  // three spread-out lights by default
   EXPECT_EQ(testing::CountMatches(html, "predicted-row"), 0u);
 }
 
