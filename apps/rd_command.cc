@@ -290,100 +290,100 @@ void RunOnMesh(const RdOptions& o, ReactionDiffusionModel& model, SimulationOpti
       result.total_iterations, seconds, o.out.string());
 }
 
+void AddRdOptions(CLI::App& command, RdOptions& o) {
+  command.add_option("--mesh", o.mesh,
+                     "Mesh file (OBJ, PLY, ...), or sphere[:RADIUS[:LEVEL]], torus[:R:r[:N]]");
+  command.add_option("--grid", o.grid, "Periodic grid WIDTHxHEIGHT instead of a mesh");
+  command.add_option("--model", o.model, "turk, grayscott, brusselator or fhn")
+      ->capture_default_str();
+  command.add_option("--steps", o.steps, "Time steps (at most, with --settle)")
+      ->capture_default_str();
+  command
+      .add_option("--settle", o.settle,
+                  "Stop once the RMS of du/dt falls below this (0: run all steps)")
+      ->capture_default_str();
+  command.add_option("--tau", o.tau, "Time step (default: the model's suggestion)");
+  command.add_option("--seed", o.seed, "Seed of the random initial state")->capture_default_str();
+  command.add_option("--s", o.s, "Turk: reaction rate s (0.025 .. 0.05)")->capture_default_str();
+  command.add_option("--beta-noise", o.beta_noise, "Turk: beta = 12 +- this")
+      ->capture_default_str();
+  command.add_option("--pearson", o.pearson,
+                     "Gray-Scott: a Ready pattern file (.vti) with the parameters, e.g. "
+                     "Pearson1993.vti");
+  command.add_option("--F", o.f, "Gray-Scott: feed rate F (default 0.040)");
+  command.add_option("--K", o.k, "Gray-Scott: kill rate K (default 0.060)");
+  command.add_option("--delta", o.delta, "Brusselator: diffusion of v")->capture_default_str();
+  command.add_option("--gamma", o.gamma, "Brusselator: forcing amplitude")->capture_default_str();
+  command.add_flag("--printed-form", o.printed_form,
+                   "Brusselator: the paper's printed -d u (its u + v grows without bound)");
+  command.add_option("--normalize", o.normalize, "Mesh normalisation: bbox or area")
+      ->capture_default_str();
+  command.add_option("--size", o.size,
+                     "Bounding-box diagonal (or sqrt of the area) after normalisation, in "
+                     "pattern units (default 100; Gray-Scott 2.5)");
+  command.add_option("--subdivide", o.subdivide, "Loop subdivision levels before solving")
+      ->capture_default_str();
+  command
+      .add_option("--smooth-steps", o.smooth_steps,
+                  "Anisotropic geometric diffusion steps coupled with the pattern (noisy "
+                  "meshes)")
+      ->capture_default_str();
+  command.add_option("--noise", o.noise, "Add normal noise, in mean edge lengths (for tests)")
+      ->capture_default_str();
+  command.add_option("--direction", o.direction,
+                     "Anisotropic diffusion along a field: around-x|y|z (rings) or "
+                     "along-x|y|z (meridians)");
+  command
+      .add_option("--anisotropy", o.anisotropy,
+                  "Diffusion along the direction field over across it")
+      ->capture_default_str();
+  command.add_option("--mass", o.mass,
+                     "consistent or lumped mass matrix (default: consistent on meshes, lumped on "
+                     "grids, where the consistent mass of the one-diagonal split bends patterns "
+                     "along the diagonal)");
+  command
+      .add_option("--cg-tolerance", o.cg_tolerance,
+                  "Relative residual at which conjugate gradients stop")
+      ->capture_default_str();
+  command.add_flag("--gauss-seidel", o.gauss_seidel,
+                   "Solve the second species with the first one's new values (allows longer "
+                   "steps: Turk tau s < 1/12 instead of 1/28)");
+  command.add_option("--colour-map", o.colour_map, "viridis, inferno, turbo or grey")
+      ->capture_default_str();
+  command.add_option("--preview-size", o.preview_size, "Preview image size")->capture_default_str();
+  command.add_option("--relief", o.relief, "Grid: height of the pattern's range, in pixels")
+      ->capture_default_str();
+  command.add_option("--out", o.out, "Output folder")->required();
+}
+
+// The simulation the options ask for, on the periodic grid or on the mesh.
+void RunRd(const RdOptions& o) {
+  if (o.mesh.empty() == o.grid.empty()) throw Error("give exactly one of --mesh and --grid");
+  if (o.steps < 1) throw Error("--steps must be at least 1");
+  auto model = MakeModel(o);
+  SimulationOptions options;
+  options.time_step = o.tau.value_or(model->suggested_time_step());
+  options.max_steps = o.steps;
+  options.settle_rate = o.settle;
+  options.min_steps = std::min(o.steps, 100);
+  options.seed = o.seed;
+  const std::string mass = o.mass.empty() ? (o.grid.empty() ? "consistent" : "lumped") : o.mass;
+  if (mass != "consistent" && mass != "lumped") {
+    throw Error(fmt::format("--mass {}: expected consistent or lumped", o.mass));
+  }
+  options.solver.lumped_mass = mass == "lumped";
+  options.solver.tolerance = o.cg_tolerance;
+  if (o.gauss_seidel) options.ordering = SpeciesOrdering::kGaussSeidel;
+  options.anisotropy = ParseDirection(o);
+  if (!o.grid.empty()) {
+    RunOnGrid(o, *model, options);
+  } else {
+    RunOnMesh(o, *model, options);
+  }
+}
+
 }  // namespace
 
-void AddRdCommand(CLI::App& app) {
-  auto o = std::make_shared<RdOptions>();
-  CLI::App* command = AddListedCommand(app, "rd");
-  command->add_option("--mesh", o->mesh,
-                      "Mesh file (OBJ, PLY, ...), or sphere[:RADIUS[:LEVEL]], torus[:R:r[:N]]");
-  command->add_option("--grid", o->grid, "Periodic grid WIDTHxHEIGHT instead of a mesh");
-  command->add_option("--model", o->model, "turk, grayscott, brusselator or fhn")
-      ->capture_default_str();
-  command->add_option("--steps", o->steps, "Time steps (at most, with --settle)")
-      ->capture_default_str();
-  command
-      ->add_option("--settle", o->settle,
-                   "Stop once the RMS of du/dt falls below this (0: run all steps)")
-      ->capture_default_str();
-  command->add_option("--tau", o->tau, "Time step (default: the model's suggestion)");
-  command->add_option("--seed", o->seed, "Seed of the random initial state")->capture_default_str();
-  command->add_option("--s", o->s, "Turk: reaction rate s (0.025 .. 0.05)")->capture_default_str();
-  command->add_option("--beta-noise", o->beta_noise, "Turk: beta = 12 +- this")
-      ->capture_default_str();
-  command->add_option("--pearson", o->pearson,
-                      "Gray-Scott: a Ready pattern file (.vti) with the parameters, e.g. "
-                      "Pearson1993.vti");
-  command->add_option("--F", o->f, "Gray-Scott: feed rate F (default 0.040)");
-  command->add_option("--K", o->k, "Gray-Scott: kill rate K (default 0.060)");
-  command->add_option("--delta", o->delta, "Brusselator: diffusion of v")->capture_default_str();
-  command->add_option("--gamma", o->gamma, "Brusselator: forcing amplitude")->capture_default_str();
-  command->add_flag("--printed-form", o->printed_form,
-                    "Brusselator: the paper's printed -d u (its u + v grows without bound)");
-  command->add_option("--normalize", o->normalize, "Mesh normalisation: bbox or area")
-      ->capture_default_str();
-  command->add_option("--size", o->size,
-                      "Bounding-box diagonal (or sqrt of the area) after normalisation, in "
-                      "pattern units (default 100; Gray-Scott 2.5)");
-  command->add_option("--subdivide", o->subdivide, "Loop subdivision levels before solving")
-      ->capture_default_str();
-  command
-      ->add_option("--smooth-steps", o->smooth_steps,
-                   "Anisotropic geometric diffusion steps coupled with the pattern (noisy "
-                   "meshes)")
-      ->capture_default_str();
-  command->add_option("--noise", o->noise, "Add normal noise, in mean edge lengths (for tests)")
-      ->capture_default_str();
-  command->add_option("--direction", o->direction,
-                      "Anisotropic diffusion along a field: around-x|y|z (rings) or "
-                      "along-x|y|z (meridians)");
-  command
-      ->add_option("--anisotropy", o->anisotropy,
-                   "Diffusion along the direction field over across it")
-      ->capture_default_str();
-  command->add_option("--mass", o->mass,
-                      "consistent or lumped mass matrix (default: consistent on meshes, lumped on "
-                      "grids, where the consistent mass of the one-diagonal split bends patterns "
-                      "along the diagonal)");
-  command
-      ->add_option("--cg-tolerance", o->cg_tolerance,
-                   "Relative residual at which conjugate gradients stop")
-      ->capture_default_str();
-  command->add_flag("--gauss-seidel", o->gauss_seidel,
-                    "Solve the second species with the first one's new values (allows longer "
-                    "steps: Turk tau s < 1/12 instead of 1/28)");
-  command->add_option("--colour-map", o->colour_map, "viridis, inferno, turbo or grey")
-      ->capture_default_str();
-  command->add_option("--preview-size", o->preview_size, "Preview image size")
-      ->capture_default_str();
-  command->add_option("--relief", o->relief, "Grid: height of the pattern's range, in pixels")
-      ->capture_default_str();
-  command->add_option("--out", o->out, "Output folder")->required();
-  command->callback([o] {
-    if (o->mesh.empty() == o->grid.empty()) throw Error("give exactly one of --mesh and --grid");
-    if (o->steps < 1) throw Error("--steps must be at least 1");
-    auto model = MakeModel(*o);
-    SimulationOptions options;
-    options.time_step = o->tau.value_or(model->suggested_time_step());
-    options.max_steps = o->steps;
-    options.settle_rate = o->settle;
-    options.min_steps = std::min(o->steps, 100);
-    options.seed = o->seed;
-    const std::string mass =
-        o->mass.empty() ? (o->grid.empty() ? "consistent" : "lumped") : o->mass;
-    if (mass != "consistent" && mass != "lumped") {
-      throw Error(fmt::format("--mass {}: expected consistent or lumped", o->mass));
-    }
-    options.solver.lumped_mass = mass == "lumped";
-    options.solver.tolerance = o->cg_tolerance;
-    if (o->gauss_seidel) options.ordering = SpeciesOrdering::kGaussSeidel;
-    options.anisotropy = ParseDirection(*o);
-    if (!o->grid.empty()) {
-      RunOnGrid(*o, *model, options);
-    } else {
-      RunOnMesh(*o, *model, options);
-    }
-  });
-}
+void AddRdCommand(CLI::App& app) { BindCommand(*AddListedCommand(app, "rd"), AddRdOptions, RunRd); }
 
 }  // namespace photomat::app
