@@ -731,21 +731,11 @@ void ForEachProfileBand(MrgbNodeSource& source, int dimension, int band_rows, Pr
   progress.Finish();
 }
 
-// relight's mrgb construction over `nodes` node values read from `source` in bands.
-RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStack stack,
-                               const RelightWebOptions& options, const RelightWebBands& bands,
-                               RelightWebBandsReport* report) {
-  const int dimension = 3 * nodes;
-  const int planes = std::min(options.planes, dimension);
-  if (planes < 1 || planes > 255) throw Error(fmt::format("{} planes: expected 1..255", planes));
+// (1) The mean profile: per image row a sum in double, in pixel order, the rows' sums added in
+// row order (the same bits for any band height).
+Eigen::VectorXd MeanProfile(MrgbNodeSource& source, int dimension, int band_rows,
+                            Progress& progress) {
   const int width = source.width();
-  const std::size_t pixels = static_cast<std::size_t>(width) * source.height();
-  const int band_rows = MrgbBandRows(source, dimension, bands);
-  if (report) *report = {band_rows, 3};
-  NullProgress none;
-  Progress& progress = OrNull(bands.progress, none);
-  // (1) The mean profile: per image row a sum in double, in pixel order, the rows' sums added in
-  // row order (the same bits for any band height).
   Eigen::VectorXd sums = Eigen::VectorXd::Zero(dimension);
   ForEachProfileBand(source, dimension, band_rows, progress, "relight planes: mean",
                      [&](int, Eigen::MatrixXf& profiles) {
@@ -757,10 +747,18 @@ RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStac
                          }
                        }
                      });
-  const Eigen::VectorXd mean = sums / static_cast<double>(pixels);
-  // (2) The covariance about it: the Gram matrix of the centred profiles (RowGram: float
-  // products per image row, summed in double in row order), less the centred sums' outer
-  // product (what centring at the float mean left).
+  return sums / (static_cast<double>(width) * source.height());
+}
+
+// (2) The `planes` principal axes of the covariance about `mean`: the Gram matrix of the centred
+// profiles (RowGram: float products per image row, summed in double in row order), less the
+// centred sums' outer product (what centring at the float mean left). Largest eigenvalues first;
+// the sign is fixed so that each axis's largest entry is positive (a deterministic choice, the
+// PCA itself does not fix it).
+Eigen::MatrixXd PrincipalAxes(MrgbNodeSource& source, const Eigen::VectorXd& mean, int planes,
+                              int band_rows, Progress& progress) {
+  const auto dimension = static_cast<int>(mean.size());
+  const double pixels = static_cast<double>(source.width()) * source.height();
   RowGram gram(dimension);
   const Eigen::RowVectorXf mean_f = mean.transpose().cast<float>();
   std::vector<std::size_t> indices;
@@ -769,14 +767,11 @@ RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStac
                        profiles.rowwise() -= mean_f;
                        indices.resize(static_cast<std::size_t>(profiles.rows()));
                        std::iota(indices.begin(), indices.end(), std::size_t{0});
-                       gram.Add(profiles, indices, width, 1);
+                       gram.Add(profiles, indices, source.width(), 1);
                      });
-  const Eigen::MatrixXd covariance = gram.gram() - gram.column_sums() *
-                                                       gram.column_sums().transpose() /
-                                                       static_cast<double>(pixels);
+  const Eigen::MatrixXd covariance =
+      gram.gram() - gram.column_sums() * gram.column_sums().transpose() / pixels;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(covariance);
-  // Largest eigenvalues last; the sign is fixed so that each axis's largest entry is positive
-  // (a deterministic choice, the PCA itself does not fix it).
   Eigen::MatrixXd axes(dimension, planes);
   for (int p = 0; p < planes; ++p) {
     Eigen::VectorXd axis = eigen.eigenvectors().col(dimension - 1 - p);
@@ -785,10 +780,18 @@ RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStac
     if (axis[largest] < 0) axis = -axis;
     axes.col(p) = axis;
   }
-  // relight's basis integers: the mean in codes, each axis as 127 + range E with range = 127 /
-  // max |E|. IMPLEMENTER CHOICE: rounded (relight truncates), and the coefficients are then
-  // projected onto the axes as the reader reconstructs them, so the rounding of the basis is
-  // partly absorbed by the planes.
+  return axes;
+}
+
+// relight's basis integers into `stack`: the mean in codes, each axis as 127 + range E with
+// range = 127 / max |E|. IMPLEMENTER CHOICE: rounded (relight truncates), and the coefficients are
+// then projected onto the axes as the reader reconstructs them, so the rounding of the basis is
+// partly absorbed by the planes. Returns the stored mean and axes, as the reader decodes them.
+std::pair<Eigen::VectorXd, Eigen::MatrixXd> StoreMrgbBasis(const Eigen::VectorXd& mean,
+                                                           const Eigen::MatrixXd& axes,
+                                                           RelightWebStack& stack) {
+  const auto dimension = static_cast<int>(mean.size());
+  const auto planes = static_cast<int>(axes.cols());
   stack.basis_values.resize(static_cast<std::size_t>(planes + 1) * dimension);
   stack.range.resize(planes);
   Eigen::VectorXd stored_mean(dimension);
@@ -807,8 +810,19 @@ RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStac
       stored_axes(d, p) = (code - 127.0) / stack.range[p];
     }
   }
-  // (3) Least-squares coefficients against the stored axes: (A^T A)^-1 A^T (profile - mean),
-  // pixel by pixel (the same bits in any band).
+  return {stored_mean, stored_axes};
+}
+
+// (3) Least-squares coefficients against the stored axes: (A^T A)^-1 A^T (profile - mean), pixel
+// by pixel (the same bits in any band); one plane of values per axis.
+std::vector<std::vector<float>> ProjectOntoStoredAxes(MrgbNodeSource& source,
+                                                      const Eigen::VectorXd& stored_mean,
+                                                      const Eigen::MatrixXd& stored_axes,
+                                                      int band_rows, Progress& progress) {
+  const auto dimension = static_cast<int>(stored_mean.size());
+  const auto planes = static_cast<int>(stored_axes.cols());
+  const int width = source.width();
+  const std::size_t pixels = static_cast<std::size_t>(width) * source.height();
   const Eigen::MatrixXd projection =
       (stored_axes.transpose() * stored_axes).ldlt().solve(stored_axes.transpose());
   std::vector<std::vector<float>> values(planes, std::vector<float>(pixels));
@@ -829,6 +843,26 @@ RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStac
           }
         });
       });
+  return values;
+}
+
+// relight's mrgb construction over `nodes` node values read from `source` in bands: three passes
+// (the mean, the covariance, the coefficients).
+RelightWebStack MrgbFromSource(MrgbNodeSource& source, int nodes, RelightWebStack stack,
+                               const RelightWebOptions& options, const RelightWebBands& bands,
+                               RelightWebBandsReport* report) {
+  const int dimension = 3 * nodes;
+  const int planes = std::min(options.planes, dimension);
+  if (planes < 1 || planes > 255) throw Error(fmt::format("{} planes: expected 1..255", planes));
+  const int band_rows = MrgbBandRows(source, dimension, bands);
+  if (report) *report = {band_rows, 3};
+  NullProgress none;
+  Progress& progress = OrNull(bands.progress, none);
+  const Eigen::VectorXd mean = MeanProfile(source, dimension, band_rows, progress);
+  const Eigen::MatrixXd axes = PrincipalAxes(source, mean, planes, band_rows, progress);
+  const auto [stored_mean, stored_axes] = StoreMrgbBasis(mean, axes, stack);
+  const std::vector<std::vector<float>> values =
+      ProjectOntoStoredAxes(source, stored_mean, stored_axes, band_rows, progress);
   QuantisePlanes(values, options.range_quantile, stack);
   return stack;
 }
