@@ -51,6 +51,26 @@ Image NormalisedHeight(const Image& height, const Mask& mask, const Range& range
 }
 
 // The derived layers the stack does not hold yet, for stack.exr.
+// How the exports write their PNGs, in memory and streamed alike: 16-bit codes (normals, height,
+// pbr maps), 8-bit sRGB (albedo), and the height's, with the range it was normalised over.
+ImageWriteOptions Png16() {
+  ImageWriteOptions png16;
+  png16.sample_type = SampleType::kUint16;
+  return png16;
+}
+ImageWriteOptions SrgbBytes() {
+  ImageWriteOptions srgb8;
+  srgb8.sample_type = SampleType::kUint8;
+  srgb8.encoding = ColourSpace::kSrgb;
+  return srgb8;
+}
+ImageWriteOptions HeightPngOptions(const Range& range) {
+  ImageWriteOptions height16 = Png16();
+  height16.attributes["photomat:height_min"] = fmt::format("{:.9g}", range.low);
+  height16.attributes["photomat:height_max"] = fmt::format("{:.9g}", range.high);
+  return height16;
+}
+
 Image ExtraLayers(const Representation& r, const MaterialMaps& maps) {
   std::vector<const Image*> parts;
   for (const Image* image : {&maps.normals, &maps.albedo}) {
@@ -261,24 +281,18 @@ nlohmann::json ExportMaps(const LoadedStack& stack, const fs::path& folder,
   const MaterialMaps maps = ExtractMaterialMaps(r, map_options);
   report.Advance();
 
-  ImageWriteOptions png16;
-  png16.sample_type = SampleType::kUint16;
+  const ImageWriteOptions png16 = Png16();
   WriteImage(folder / "normal.png", EncodeNormalMap(maps.normals, options.normal_convention),
              png16);
   report.Advance();
 
-  ImageWriteOptions srgb8;
-  srgb8.sample_type = SampleType::kUint8;
-  srgb8.encoding = ColourSpace::kSrgb;
-  WriteImage(folder / "albedo.png", maps.albedo, srgb8);
+  WriteImage(folder / "albedo.png", maps.albedo, SrgbBytes());
   report.Advance();
 
   const Range range = HeightRange(maps.height, maps.mask);
   WriteImage(folder / "height.exr", maps.height);
-  ImageWriteOptions height16 = png16;
-  height16.attributes["photomat:height_min"] = fmt::format("{:.9g}", range.low);
-  height16.attributes["photomat:height_max"] = fmt::format("{:.9g}", range.high);
-  WriteImage(folder / "height.png", NormalisedHeight(maps.height, maps.mask, range), height16);
+  WriteImage(folder / "height.png", NormalisedHeight(maps.height, maps.mask, range),
+             HeightPngOptions(range));
   report.Advance();
 
   SaveRepresentation(folder / "stack.exr", r, stack.provenance, ExtraLayers(r, maps));
@@ -457,12 +471,6 @@ HeightSummary FrankotChellappaHeight(const fs::path& surface_path, const fs::pat
   return {0.0, HeightRange(integrated, mask)};
 }
 
-ImageWriteOptions Png16() {
-  ImageWriteOptions png16;
-  png16.sample_type = SampleType::kUint16;
-  return png16;
-}
-
 // Pass 1's outputs, written band by band. Every output of a streamed export stays pending until
 // all passes are done, so that a fault anywhere leaves none of them.
 struct SurfaceOutputs {
@@ -475,12 +483,6 @@ struct SurfaceOutputs {
       gltf_normal_png.emplace(folder / kGltfNormalFile, width, height,
                               std::vector<std::string>{"R", "G", "B"}, Png16());
     }
-  }
-  static ImageWriteOptions SrgbBytes() {
-    ImageWriteOptions srgb8;
-    srgb8.sample_type = SampleType::kUint8;
-    srgb8.encoding = ColourSpace::kSrgb;
-    return srgb8;
   }
   void Commit() {
     normal_png.Commit();
@@ -591,12 +593,6 @@ struct HeightOutputs {
       pbr_writers.push_back(std::make_unique<ImageBandWriter>(
           folder / file.name, stack.width(), stack.height(), file.channels, file.options));
     }
-  }
-  static ImageWriteOptions HeightPngOptions(const Range& range) {
-    ImageWriteOptions height16 = Png16();
-    height16.attributes["photomat:height_min"] = fmt::format("{:.9g}", range.low);
-    height16.attributes["photomat:height_max"] = fmt::format("{:.9g}", range.high);
-    return height16;
   }
   static nlohmann::json StackExrDescription(const LoadedStack& header,
                                             const StackExrLayers& layers) {
