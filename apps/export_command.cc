@@ -609,12 +609,8 @@ void ExportWholeStack(const ExportCommandOptions& options,
 // maps from a linear fit (Gradient unless --method says otherwise); streamed when it should be
 // (StreamsCapture).
 void ExportCapture(const ExportCommandOptions& options, const std::optional<std::string>& method) {
-  LoadOptions load;
-  load.apply_intensities = !options.raw_intensities;
-  if (!options.colour_space.empty()) {
-    load.untagged_colour_space = ParseColourSpace(options.colour_space);
-    if (!load.untagged_colour_space) throw Error("--colour-space: expected linear or srgb");
-  }
+  const LoadOptions load =
+      SetInputOptions{options.input, options.raw_intensities, options.colour_space}.ToLoadOptions();
   if (CaptureCanStream(options)) {
     StreamedSet set = OpenStreamedSet(options.input, load);
     if (StreamsCapture(options, set)) {
