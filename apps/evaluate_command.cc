@@ -481,7 +481,6 @@ void EvaluateInMemoryCommand(const EvaluateCommandOptions& options,
                 fmt::format("normals are {}x{} but the images are {}x{}", truth->width(),
                             truth->height(), loaded.set.width(), loaded.set.height()));
   }
-  CheckReportImages(request.report_images, loaded.set.size());
   const Observations observations(loaded.set);
   TerminalProgressBar bar;
   EvaluationOptions evaluation;
