@@ -223,7 +223,8 @@ class NeuralTrainer {
         std::vector<std::int64_t> chosen(light_order_.begin(),
                                          light_order_.begin() + lights_per_batch_);
         std::sort(chosen.begin(), chosen.end());
-        loss = LossUnder(index, torch::tensor(chosen, torch::kInt64));
+        const torch::Tensor light_index = torch::tensor(chosen, torch::kInt64);
+        loss = Loss(index, &light_index);
       } else {
         loss = Loss(index);
       }
@@ -270,18 +271,17 @@ class NeuralTrainer {
     for (const torch::Tensor& p : decoder->parameters()) parameters.push_back(p);
     return parameters;
   }
-  // The minibatch `index`'s mean squared error under every light.
-  torch::Tensor Loss(const torch::Tensor& index) {
+  // The minibatch `index`'s mean squared error under every light, or under `light_index` only
+  // (ascending).
+  torch::Tensor Loss(const torch::Tensor& index, const torch::Tensor* light_index = nullptr) {
     const torch::Tensor codes = encoder_->forward(data_.inputs.index_select(0, index));
-    return torch::mse_loss(DecodeAllLights(decoder_, codes, data_.lights, channels_),
-                           data_.values.index_select(0, index));
-  }
-  // The same under a subset of the lights (`light_index`, ascending).
-  torch::Tensor LossUnder(const torch::Tensor& index, const torch::Tensor& light_index) {
-    const torch::Tensor codes = encoder_->forward(data_.inputs.index_select(0, index));
+    const torch::Tensor values = data_.values.index_select(0, index);
+    if (!light_index) {
+      return torch::mse_loss(DecodeAllLights(decoder_, codes, data_.lights, channels_), values);
+    }
     return torch::mse_loss(
-        DecodeAllLights(decoder_, codes, data_.lights.index_select(0, light_index), channels_),
-        data_.values.index_select(0, index).index_select(1, light_index));
+        DecodeAllLights(decoder_, codes, data_.lights.index_select(0, *light_index), channels_),
+        values.index_select(1, *light_index));
   }
 
   const TrainingData& data_;
