@@ -223,8 +223,8 @@ void CheckExportDiskSpace(const ExportCommandOptions& options, const Representat
 }
 
 void WriteMapsStreamed(const ExportCommandOptions& options, StackBandReader& stack) {
-  CreateFolder(options.out);
   CheckExportDiskSpace(options, stack.header().representation, stack.width(), stack.height());
+  CreateFolder(options.out);
   StreamedExportOptions streamed;
   streamed.maps = MapOptions(options);
   // Without --memory the bands take DefaultBandBudget's few tens of MB, not the whole budget.
@@ -295,9 +295,9 @@ void WriteInterchangeFilesStreamed(const ExportCommandOptions& options, StackBan
 
 void WriteMaps(const ExportCommandOptions& options, const LoadedStack& stack) {
   if (options.out.empty()) return;
-  CreateFolder(options.out);
   CheckExportDiskSpace(options, stack.representation, stack.representation.width(),
                        stack.representation.height());
+  CreateFolder(options.out);
   const ExportOptions export_options = MapOptions(options);
   TerminalProgressBar bar;
   const nlohmann::json description = ExportMaps(stack, options.out, export_options, &bar);

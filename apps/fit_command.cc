@@ -84,8 +84,9 @@ void AddFitCommand(CLI::App& app) {
     fit.provenance = {set.lights(), "linear", input.string(), set.encodings()};
     TerminalProgressBar bar;
     fit.progress = &bar;
-    CreateFolder(options->out);
+    // Before the folder is made, so that a fit refused for want of space leaves nothing behind.
     CheckDiskSpace(options->out, StreamedStackBytes(set, methods), "the map stacks");
+    CreateFolder(options->out);
     std::vector<std::filesystem::path> paths;
     for (const Method& method : methods) paths.push_back(options->out / (method.Name() + ".exr"));
     const StreamedFitReport report = FitStreamed(set, methods, paths, fit);

@@ -50,8 +50,8 @@ void CheckDiskSpace(const fs::path& folder, std::size_t needed_bytes, const std:
                     std::optional<std::size_t> available_bytes) {
   const std::size_t available = available_bytes ? *available_bytes : AvailableDiskBytes(folder);
   if (needed_bytes <= available) return;
-  throw Error(folder, fmt::format("not enough disk space: {} needs {} MB here, {} MB free", what,
-                                  MegabytesUp(needed_bytes), available >> 20));
+  throw Error(folder, fmt::format("not enough disk space for {}: {} MB needed here, {} MB free",
+                                  what, MegabytesUp(needed_bytes), available >> 20));
 }
 
 }  // namespace photomat

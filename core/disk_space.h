@@ -26,9 +26,9 @@ inline constexpr std::size_t kImageFileOverhead = std::size_t{64} << 10;
 // asked. Throws Error naming the path when the file system cannot be queried.
 std::size_t AvailableDiskBytes(const std::filesystem::path& path);
 
-// Throws Error "needs N MB in DIR for WHAT, M MB free" when `needed_bytes` exceed the space
-// available in `folder`'s file system: `available_bytes` when given (tests), else
-// AvailableDiskBytes(folder).
+// Throws Error "DIR: not enough disk space for WHAT: N MB needed here, M MB free" when
+// `needed_bytes` exceed the space available in `folder`'s file system: `available_bytes` when given
+// (tests), else AvailableDiskBytes(folder).
 void CheckDiskSpace(const std::filesystem::path& folder, std::size_t needed_bytes,
                     const std::string& what,
                     std::optional<std::size_t> available_bytes = std::nullopt);

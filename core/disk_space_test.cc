@@ -44,7 +44,7 @@ TEST(DiskSpaceTest, TooLittleSpaceIsAnErrorNamingTheFolderAndTheFigures) {
   EXPECT_THAT(
       [&] { CheckDiskSpace(dir.path(), (std::size_t{5} << 20) + 1, "relit images", 3u << 20); },
       ThrowsMessage<Error>(HasSubstr(dir.path().string() +
-                                     ": not enough disk space: relit images needs 6 MB here, "
+                                     ": not enough disk space for relit images: 6 MB needed here, "
                                      "3 MB free")));
 }
 
