@@ -474,38 +474,109 @@ bool StreamsCapture(const ExportCommandOptions& options, const StreamedSet& set)
 // however the export ends. The files equal the in-memory export's to float rounding (a fit's
 // matrix product rounds by band, streamed_interchange.h), so a quantised coefficient may differ
 // by one code.
-void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set) {
-  // The encoded fits, each method once: .ptm, .rti, then relight's planes (none for rbf).
+// What a streamed export of a photometric set fits: the encoded fits, each method once (.ptm,
+// .rti, then relight's planes; none for rbf, whose planes come from the photographs), and the
+// linear fits (the maps' and compact form's method first, then the viewer's others).
+struct CaptureExportFits {
   std::vector<Method> encoded;
-  const auto encoded_index = [&](const Method& method) {
-    for (std::size_t k = 0; k < encoded.size(); ++k) {
-      if (encoded[k].Name() == method.Name()) return k;
-    }
-    encoded.push_back(method);
-    return encoded.size() - 1;
-  };
-  std::optional<std::size_t> ptm_fit, rti_fit, relight_fit;
+  std::optional<std::size_t> ptm_fit, rti_fit, relight_fit;  // indices into `encoded`
   std::optional<RelightWebOptions> relight;
-  if (!options.ptm.empty()) ptm_fit = encoded_index(PtmMethod(options, "", set.channels()));
-  if (!options.rti.empty()) rti_fit = encoded_index(HshMethod(options, ""));
-  if (!options.relight_web.empty()) {
-    relight = RelightWebOptionsFor(options, "");
-    if (const std::optional<Method> method = RelightWebFitMethod(*relight)) {
-      relight_fit = encoded_index(*method);  // as RelightWebFromSet
-    }
-  }
-  // The linear fits: the maps' and compact form's method first, then the viewer's others.
-  const Method maps_method = Method::Parse(options.method.empty() ? "gradient" : options.method);
-  const std::vector<Method> viewer_methods =
-      options.method.empty() ? AllMethods() : std::vector{maps_method};
   std::vector<Method> linear;
-  if (!options.out.empty() || !options.compact.empty()) linear.push_back(maps_method);
-  for (const Method& m : options.viewer.empty() ? std::vector<Method>{} : viewer_methods) {
-    if (std::none_of(linear.begin(), linear.end(),
-                     [&](const Method& l) { return l.Name() == m.Name(); })) {
-      linear.push_back(m);
+  std::vector<Method> viewer_methods;
+};
+
+CaptureExportFits PlanCaptureExportFits(const ExportCommandOptions& options,
+                                        const StreamedSet& set) {
+  CaptureExportFits fits;
+  const auto encoded_index = [&](const Method& method) {
+    for (std::size_t k = 0; k < fits.encoded.size(); ++k) {
+      if (fits.encoded[k].Name() == method.Name()) return k;
+    }
+    fits.encoded.push_back(method);
+    return fits.encoded.size() - 1;
+  };
+  if (!options.ptm.empty()) fits.ptm_fit = encoded_index(PtmMethod(options, "", set.channels()));
+  if (!options.rti.empty()) fits.rti_fit = encoded_index(HshMethod(options, ""));
+  if (!options.relight_web.empty()) {
+    fits.relight = RelightWebOptionsFor(options, "");
+    if (const std::optional<Method> method = RelightWebFitMethod(*fits.relight)) {
+      fits.relight_fit = encoded_index(*method);  // as RelightWebFromSet
     }
   }
+  const Method maps_method = Method::Parse(options.method.empty() ? "gradient" : options.method);
+  fits.viewer_methods = options.method.empty() ? AllMethods() : std::vector{maps_method};
+  if (!options.out.empty() || !options.compact.empty()) fits.linear.push_back(maps_method);
+  for (const Method& m : options.viewer.empty() ? std::vector<Method>{} : fits.viewer_methods) {
+    if (std::none_of(fits.linear.begin(), fits.linear.end(),
+                     [&](const Method& l) { return l.Name() == m.Name(); })) {
+      fits.linear.push_back(m);
+    }
+  }
+  return fits;
+}
+
+// The .ptm, .rti and relight's planes, from the encoded fits' scratch stacks (rbf's planes from
+// the photographs).
+void WriteEncodedExports(const ExportCommandOptions& options, StreamedSet& set,
+                         const CaptureExportFits& fits, const std::filesystem::path& scratch,
+                         StreamedFitOptions fit) {
+  if (!fits.encoded.empty()) {
+    fit.encoded_values = true;
+    const std::vector<std::filesystem::path> stacks =
+        FitIntoFolder(set, fits.encoded, scratch, options.input.string(), fit, true);
+    if (fits.ptm_fit) {
+      StackBandReader stack(stacks[*fits.ptm_fit]);
+      WritePtmFileStreamed(options, stack, fits.encoded[*fits.ptm_fit]);
+    }
+    if (fits.rti_fit) {
+      StackBandReader stack(stacks[*fits.rti_fit]);
+      WriteRtiFileStreamed(options, stack, fits.encoded[*fits.rti_fit]);
+    }
+    if (fits.relight_fit) {
+      StackBandReader stack(stacks[*fits.relight_fit]);
+      WriteRelightWebFolder(options,
+                            [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+                              return RelightWebFromStack(stack, *fits.relight, bands, made);
+                            });
+    }
+  }
+  if (fits.relight && !fits.relight_fit) {  // rbf: the photographs are the node values
+    WriteRelightWebFolder(options, [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
+      return RelightWebFromSet(set, *fits.relight, bands, made);
+    });
+  }
+}
+
+// The maps, the compact form and the viewer, from the linear fits' scratch stacks.
+void WriteLinearExports(const ExportCommandOptions& options, StreamedSet& set,
+                        const CaptureExportFits& fits, const std::filesystem::path& scratch,
+                        const StreamedFitOptions& fit) {
+  if (fits.linear.empty()) return;
+  const std::vector<std::filesystem::path> stacks =
+      FitIntoFolder(set, fits.linear, scratch, options.input.string(), fit,
+                    /*warn_clipped=*/fits.encoded.empty());
+  if (!options.out.empty()) {
+    StackBandReader stack(stacks.front());
+    WriteMapsStreamed(options, stack);
+  }
+  if (!options.compact.empty()) WriteCompact(options, LoadRepresentation(stacks.front()));
+  if (options.viewer.empty()) return;
+  // In photomat's method order, as a fit folder's viewer.
+  std::vector<std::filesystem::path> viewer_stacks;
+  for (const Method& m : fits.viewer_methods) {
+    for (std::size_t k = 0; k < fits.linear.size(); ++k) {
+      if (fits.linear[k].Name() == m.Name()) viewer_stacks.push_back(stacks[k]);
+    }
+  }
+  if (!WriteTiledViewerOfStackFiles(options, viewer_stacks)) {
+    std::vector<LoadedStack> loaded;
+    for (const auto& path : viewer_stacks) loaded.push_back(LoadRepresentation(path));
+    WriteViewer(options, loaded);
+  }
+}
+
+void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set) {
+  const CaptureExportFits fits = PlanCaptureExportFits(options, set);
   std::filesystem::path beside = FolderOf(options.viewer);
   for (const std::filesystem::path& output :
        {options.compact, options.relight_web, options.rti, options.ptm, options.out}) {
@@ -517,53 +588,8 @@ void ExportCaptureStreamed(const ExportCommandOptions& options, StreamedSet& set
   StreamedFitOptions fit;
   fit.memory_bytes = options.memory_mb << 20;
   fit.progress = &bar;
-  if (!encoded.empty()) {
-    StreamedFitOptions encoded_fit = fit;
-    encoded_fit.encoded_values = true;
-    const std::vector<std::filesystem::path> stacks =
-        FitIntoFolder(set, encoded, scratch.path(), options.input.string(), encoded_fit, true);
-    if (ptm_fit) {
-      StackBandReader stack(stacks[*ptm_fit]);
-      WritePtmFileStreamed(options, stack, encoded[*ptm_fit]);
-    }
-    if (rti_fit) {
-      StackBandReader stack(stacks[*rti_fit]);
-      WriteRtiFileStreamed(options, stack, encoded[*rti_fit]);
-    }
-    if (relight_fit) {
-      StackBandReader stack(stacks[*relight_fit]);
-      WriteRelightWebFolder(options,
-                            [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
-                              return RelightWebFromStack(stack, *relight, bands, made);
-                            });
-    }
-  }
-  if (relight && !relight_fit) {  // rbf: the photographs are the node values
-    WriteRelightWebFolder(options, [&](const RelightWebBands& bands, RelightWebBandsReport* made) {
-      return RelightWebFromSet(set, *relight, bands, made);
-    });
-  }
-  if (linear.empty()) return;
-  const std::vector<std::filesystem::path> stacks = FitIntoFolder(
-      set, linear, scratch.path(), options.input.string(), fit, /*warn_clipped=*/encoded.empty());
-  if (!options.out.empty()) {
-    StackBandReader stack(stacks.front());
-    WriteMapsStreamed(options, stack);
-  }
-  if (!options.compact.empty()) WriteCompact(options, LoadRepresentation(stacks.front()));
-  if (options.viewer.empty()) return;
-  // In photomat's method order, as a fit folder's viewer.
-  std::vector<std::filesystem::path> viewer_stacks;
-  for (const Method& m : viewer_methods) {
-    for (std::size_t k = 0; k < linear.size(); ++k) {
-      if (linear[k].Name() == m.Name()) viewer_stacks.push_back(stacks[k]);
-    }
-  }
-  if (!WriteTiledViewerOfStackFiles(options, viewer_stacks)) {
-    std::vector<LoadedStack> fits;
-    for (const auto& path : viewer_stacks) fits.push_back(LoadRepresentation(path));
-    WriteViewer(options, fits);
-  }
+  WriteEncodedExports(options, set, fits, scratch.path(), fit);
+  WriteLinearExports(options, set, fits, scratch.path(), fit);
 }
 
 // A map stack streamed band by band, when it can be and should (StreamsStack). Returns whether
