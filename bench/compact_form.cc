@@ -27,6 +27,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -158,8 +159,16 @@ double PsnrOfFolder(const fs::path& folder, const HeldOut& held_out) {
               StackValueEncoding(stack.provenance) == ColourSpace::kSrgb);
 }
 
-int Run(int argc, char** argv) {
-  const Arguments arguments = Parse(argc, argv);
+// The set scaled so that its largest value over the mask is 1, split into every `every`-th light
+// held out and the rest.
+struct Split {
+  std::unique_ptr<PhotometricSet> all;  // held_out points at it
+  HeldOut held_out;
+  PhotometricSet train;
+  float peak;
+};
+
+Split SplitScaledSet(const Arguments& arguments) {
   const LoadedSet loaded = LoadPhotometricSet(arguments.set);
   const Mask mask = loaded.set.MaskOrAll();
   float peak = 0;
@@ -175,41 +184,149 @@ int Run(int argc, char** argv) {
   for (Image& image : scaled) {
     for (float& v : image.values()) v /= peak;
   }
-  PhotometricSet all(scaled, loaded.set.lights(), loaded.set.image_names(), arguments.set);
+  auto all = std::make_unique<PhotometricSet>(scaled, loaded.set.lights(), loaded.set.image_names(),
+                                              arguments.set);
   std::vector<Image> train_images;
   std::vector<LightDirection> train_lights;
-  HeldOut held_out{&all, {}, mask};
-  for (int i = 0; i < all.size(); ++i) {
+  HeldOut held_out{all.get(), {}, mask};
+  for (int i = 0; i < all->size(); ++i) {
     if (i % arguments.every == 0) {
       held_out.lights.push_back(i);
     } else {
       train_images.push_back(scaled[i]);
-      train_lights.push_back(all.light(i));
+      train_lights.push_back(all->light(i));
     }
   }
   PhotometricSet train(std::move(train_images), train_lights, {}, arguments.set);
   train.set_mask(mask);
-  fmt::print("{}: {} images {}x{}, {} held out (every {}th), scaled by 1 / {:.4g}\n",
-             arguments.set.string(), all.size(), all.width(), all.height(), held_out.lights.size(),
-             arguments.every, peak);
+  return {std::move(all), std::move(held_out), std::move(train), peak};
+}
 
+// The training photographs as 8-bit sRGB JPEGs with an .lp file, relight-cli's input.
+void WriteTrainingJpegs(const PhotometricSet& train, const fs::path& folder) {
+  fs::create_directories(folder);
+  std::ofstream lp(folder / "lights.lp");
+  lp << train.size() << "\n";
+  ImageWriteOptions jpeg;
+  jpeg.sample_type = SampleType::kUint8;
+  jpeg.encoding = ColourSpace::kSrgb;
+  for (int i = 0; i < train.size(); ++i) {
+    const std::string name = fmt::format("img{:03d}.jpg", i);
+    WriteImage(folder / name, train.images()[i], jpeg);
+    const auto& l = train.light(i);
+    lp << fmt::format("{} {:.6f} {:.6f} {:.6f}\n", name, l.x(), l.y(), l.z());
+  }
+}
+
+// The relight web columns of a basis: the encoded refit (ptm and hsh), the folders from the
+// float stack and from the photographs.
+struct WebColumns {
+  std::string refit = "-";
+  std::string from_stack = "-";
+  std::string from_photos = "-";
+  std::uintmax_t photos_bytes = 0;
+};
+
+WebColumns MeasureRelightWeb(const Arguments& arguments, const std::string& basis,
+                             const LoadedStack& float_stack, double float_db, const Split& split,
+                             const fs::path& work) {
+  WebColumns columns;
+  // The float stack refitted in sRGB-encoded values (what ptm/hsh folders hold), before any
+  // quantisation: how much of the loss is the change of domain.
+  if (basis == "ptm" || basis == "hsh") {
+    const Representation encoded = ConvertToEncoded(float_stack, Method::Parse(FloatMethod(basis)));
+    columns.refit = fmt::format("{:.2f}", Psnr(encoded, split.held_out, true));
+  }
+  RelightWebOptions options = arguments.web;
+  options.basis = BasisNamed(basis);
+  const fs::path from_stack = work / (basis + "-stack");
+  WriteRelightWeb(from_stack, RelightWebFromStack(float_stack, options));
+  const double stack_db = PsnrOfFolder(from_stack, split.held_out);
+  columns.from_stack = fmt::format("{:.2f}, {:+.2f}, {:.0f}", stack_db, stack_db - float_db,
+                                   FolderBytes(from_stack, false) / 1024.0);
+  const fs::path from_photos = work / (basis + "-photos");
+  WriteRelightWeb(from_photos, RelightWebFromSet(split.train, options));
+  columns.photos_bytes = FolderBytes(from_photos, false);
+  columns.from_photos = fmt::format("{:.2f}, {:.0f}", PsnrOfFolder(from_photos, split.held_out),
+                                    columns.photos_bytes / 1024.0);
+  return columns;
+}
+
+// relight-cli's folder of a basis from the training JPEGs: its PSNR and size, and the size
+// ratios of photomat's folders to it.
+struct RelightCliColumns {
+  std::string theirs = "-";
+  std::string ratio = "-";
+  std::string compact_ratio = "-";
+  double compact_over_theirs = 0;
+};
+
+RelightCliColumns MeasureRelightCli(const Arguments& arguments, const std::string& basis,
+                                    const fs::path& photos, const HeldOut& held_out,
+                                    std::uintmax_t photos_bytes, std::uintmax_t compact_bytes,
+                                    const fs::path& work) {
+  RelightCliColumns columns;
+  const fs::path folder = work / (basis + "-relight-cli");
+  const std::string command = fmt::format("{} {} {} {} > {} 2>&1", arguments.relight_cli->string(),
+                                          RelightCliArguments(basis), photos.string(),
+                                          folder.string(), (work / "relight-cli.log").string());
+  if (std::system(command.c_str()) != 0) throw Error("relight-cli failed: " + command);
+  const double db = PsnrOfFolder(folder, held_out);
+  const auto bytes = FolderBytes(folder, false);
+  columns.theirs = fmt::format("{:.2f}, {:.0f} (+ {:.0f})", db, bytes / 1024.0,
+                               FolderBytes(folder, true) / 1024.0);
+  if (photos_bytes > 0) {
+    columns.ratio = fmt::format("{:.2f}", static_cast<double>(photos_bytes) / bytes);
+  }
+  columns.compact_over_theirs = static_cast<double>(compact_bytes) / bytes;
+  columns.compact_ratio = fmt::format("{:.2f}", columns.compact_over_theirs);
+  return columns;
+}
+
+// One row of the table; returns the EXPECTED FAILURE line when the compact stack misses the
+// target, else nothing.
+std::optional<std::string> MeasureBasis(const Arguments& arguments, const std::string& basis,
+                                        const Split& split, const std::optional<fs::path>& photos,
+                                        const fs::path& work) {
+  const Representation fit = Fit(split.train, Method::Parse(FloatMethod(basis)));
+  const double float_db = Psnr(fit, split.held_out, false);
+  const LoadedStack float_stack{fit, StackProvenance(split.train.lights(), "linear")};
+  const fs::path compact_folder = work / (basis + "-compact");
+  WriteCompactStack(compact_folder, float_stack, arguments.compact);
+  const double compact_db =
+      Psnr(ReadCompactStack(compact_folder).representation, split.held_out, false);
+  const auto compact_bytes = StoredBytes(compact_folder);
+  const WebColumns web = arguments.compact_only ? WebColumns{}
+                                                : MeasureRelightWeb(arguments, basis, float_stack,
+                                                                    float_db, split, work);
+  const RelightCliColumns theirs =
+      photos ? MeasureRelightCli(arguments, basis, *photos, split.held_out, web.photos_bytes,
+                                 compact_bytes, work)
+             : RelightCliColumns{};
+  const double loss = float_db - compact_db;
+  fmt::print("| {} | {:.2f} | {:.2f}, {:+.2f}, {:.0f} | {} | {} | {} | {} | {} | {} |\n", basis,
+             float_db, compact_db, -loss, compact_bytes / 1024.0, theirs.compact_ratio, web.refit,
+             web.from_stack, web.from_photos, theirs.theirs, theirs.ratio);
+  if (loss < 0.3 && theirs.compact_over_theirs <= 2.0) return std::nullopt;
+  return fmt::format(
+      "EXPECTED FAILURE: target \"{} compact stack under 0.3 dB loss against the float stack, "
+      "within 2 x relight-cli's size\" not met (measured loss {:.2f} dB, {} x relight-cli's "
+      "size) because 8-bit planes over the mask's range at this coding lose that much",
+      basis, loss, theirs.compact_ratio);
+}
+
+int Run(int argc, char** argv) {
+  const Arguments arguments = Parse(argc, argv);
+  const Split split = SplitScaledSet(arguments);
+  fmt::print("{}: {} images {}x{}, {} held out (every {}th), scaled by 1 / {:.4g}\n",
+             arguments.set.string(), split.all->size(), split.all->width(), split.all->height(),
+             split.held_out.lights.size(), arguments.every, split.peak);
   const fs::path work = fs::temp_directory_path() / fmt::format("compact_form.{}", ::getpid());
   fs::create_directories(work);
   std::optional<fs::path> photos;
   if (arguments.relight_cli) {
     photos = work / "photos";
-    fs::create_directories(*photos);
-    std::ofstream lp(*photos / "lights.lp");
-    lp << train.size() << "\n";
-    ImageWriteOptions jpeg;
-    jpeg.sample_type = SampleType::kUint8;
-    jpeg.encoding = ColourSpace::kSrgb;
-    for (int i = 0; i < train.size(); ++i) {
-      const std::string name = fmt::format("img{:03d}.jpg", i);
-      WriteImage(*photos / name, train.images()[i], jpeg);
-      const auto& l = train.light(i);
-      lp << fmt::format("{} {:.6f} {:.6f} {:.6f}\n", name, l.x(), l.y(), l.z());
-    }
+    WriteTrainingJpegs(split.train, *photos);
   } else {
     fmt::print("relight-cli: not available (set PHOTOMAT_RELIGHT_CLI), its columns are empty\n");
   }
@@ -221,69 +338,8 @@ int Run(int argc, char** argv) {
       "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   std::vector<std::string> failures;
   for (const std::string& basis : arguments.methods) {
-    const Representation fit = Fit(train, Method::Parse(FloatMethod(basis)));
-    const double float_db = Psnr(fit, held_out, false);
-    const LoadedStack float_stack{fit, StackProvenance(train_lights, "linear")};
-    const fs::path compact_folder = work / (basis + "-compact");
-    WriteCompactStack(compact_folder, float_stack, arguments.compact);
-    const double compact_db =
-        Psnr(ReadCompactStack(compact_folder).representation, held_out, false);
-    const auto compact_bytes = StoredBytes(compact_folder);
-    // The float stack refitted in sRGB-encoded values (what ptm/hsh folders hold), before any
-    // quantisation: how much of the loss is the change of domain.
-    std::string refit = "-";
-    std::string web_stack = "-";
-    std::string web_photos = "-";
-    std::uintmax_t photos_bytes = 0;
-    if (!arguments.compact_only) {
-      if (basis == "ptm" || basis == "hsh") {
-        const Representation encoded =
-            ConvertToEncoded(float_stack, Method::Parse(FloatMethod(basis)));
-        refit = fmt::format("{:.2f}", Psnr(encoded, held_out, true));
-      }
-      RelightWebOptions options = arguments.web;
-      options.basis = BasisNamed(basis);
-      const fs::path from_stack = work / (basis + "-stack");
-      WriteRelightWeb(from_stack, RelightWebFromStack(float_stack, options));
-      const double stack_db = PsnrOfFolder(from_stack, held_out);
-      web_stack = fmt::format("{:.2f}, {:+.2f}, {:.0f}", stack_db, stack_db - float_db,
-                              FolderBytes(from_stack, false) / 1024.0);
-      const fs::path from_photos = work / (basis + "-photos");
-      WriteRelightWeb(from_photos, RelightWebFromSet(train, options));
-      photos_bytes = FolderBytes(from_photos, false);
-      web_photos =
-          fmt::format("{:.2f}, {:.0f}", PsnrOfFolder(from_photos, held_out), photos_bytes / 1024.0);
-    }
-    std::string theirs = "-";
-    std::string ratio = "-";
-    std::string compact_ratio = "-";
-    double compact_over_theirs = 0;
-    if (photos) {
-      const fs::path folder = work / (basis + "-relight-cli");
-      const std::string command = fmt::format(
-          "{} {} {} {} > {} 2>&1", arguments.relight_cli->string(), RelightCliArguments(basis),
-          photos->string(), folder.string(), (work / "relight-cli.log").string());
-      if (std::system(command.c_str()) != 0) throw Error("relight-cli failed: " + command);
-      const double db = PsnrOfFolder(folder, held_out);
-      const auto bytes = FolderBytes(folder, false);
-      theirs = fmt::format("{:.2f}, {:.0f} (+ {:.0f})", db, bytes / 1024.0,
-                           FolderBytes(folder, true) / 1024.0);
-      if (photos_bytes > 0) {
-        ratio = fmt::format("{:.2f}", static_cast<double>(photos_bytes) / bytes);
-      }
-      compact_over_theirs = static_cast<double>(compact_bytes) / bytes;
-      compact_ratio = fmt::format("{:.2f}", compact_over_theirs);
-    }
-    const double loss = float_db - compact_db;
-    fmt::print("| {} | {:.2f} | {:.2f}, {:+.2f}, {:.0f} | {} | {} | {} | {} | {} | {} |\n", basis,
-               float_db, compact_db, -loss, compact_bytes / 1024.0, compact_ratio, refit, web_stack,
-               web_photos, theirs, ratio);
-    if (loss >= 0.3 || compact_over_theirs > 2.0) {
-      failures.push_back(fmt::format(
-          "EXPECTED FAILURE: target \"{} compact stack under 0.3 dB loss against the float stack, "
-          "within 2 x relight-cli's size\" not met (measured loss {:.2f} dB, {} x relight-cli's "
-          "size) because 8-bit planes over the mask's range at this coding lose that much",
-          basis, loss, compact_ratio));
+    if (auto failure = MeasureBasis(arguments, basis, split, photos, work)) {
+      failures.push_back(std::move(*failure));
     }
   }
   for (const std::string& failure : failures) fmt::print("{}\n", failure);
