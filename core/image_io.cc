@@ -30,12 +30,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// OpenImageIO's message on one line: a reader may append several (a truncated PNG: the read
+// error, libpng's, then "PNG library error"), and photomat's errors are one line each.
 std::string OiioError(const std::string& own) {
-  std::string message = own.empty() ? OIIO::geterror() : own;
-  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) {
-    message.pop_back();
+  const std::string message = own.empty() ? OIIO::geterror() : own;
+  std::string joined;
+  for (const std::string_view line : OIIO::Strutil::splitsv(message, "\n")) {
+    const std::string_view trimmed = OIIO::Strutil::strip(line);
+    if (trimmed.empty()) continue;
+    if (!joined.empty()) joined += "; ";
+    joined += trimmed;
   }
-  return message.empty() ? "unknown OpenImageIO error" : message;
+  return joined.empty() ? "unknown OpenImageIO error" : joined;
 }
 
 // Rows decoded per call for scanline files: a small interleaved buffer whose channels are then
