@@ -9,6 +9,8 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <string>
+#include <string_view>
 
 #include "core/error.h"
 #include "represent/fitting/light_profile_fit.h"
@@ -106,15 +108,39 @@ Representation FitGradient(const FitContext& fit) {
                         LinearLightBasis::Lambertian());
 }
 
+// The conic that lights leaving PTM's biquadratic undetermined lie on: the weakest left singular
+// vector w of the 6 x |S| term matrix has sum_j w_j term_j(l) ~ 0 at every light. Written with
+// its largest coefficient 1 and terms below 1e-3 of it left out: "lu^2 + lv^2 - 0.413 = 0" for a
+// ring of equal slant, "lu*lv = 0" for lights only on the image axes. Tells a user which lights
+// to add, where "degenerate" alone would not.
+std::string PtmDegenerateConic(const Eigen::VectorXd& w) {
+  static constexpr std::array<const char*, 6> kTerms = {"lu^2", "lv^2", "lu*lv", "lu", "lv", ""};
+  Eigen::Index largest = 0;
+  w.cwiseAbs().maxCoeff(&largest);
+  const Eigen::VectorXd scaled = w / w[largest];
+  std::string conic;
+  for (int j = 0; j < 6; ++j) {
+    const double c = scaled[j];
+    if (std::abs(c) < 1e-3) continue;
+    const std::string_view sign =
+        c < 0 ? (conic.empty() ? "-" : " - ") : (conic.empty() ? "" : " + ");
+    const std::string magnitude =
+        std::abs(std::abs(c) - 1.0) < 1e-3 && *kTerms[j] ? "" : fmt::format("{:.3g}", std::abs(c));
+    conic += fmt::format("{}{}{}", sign, magnitude, kTerms[j]);
+  }
+  return conic + " = 0";
+}
+
 Eigen::MatrixXd PtmPseudoInverse(const FitContext& fit) {
   const Eigen::MatrixXd terms = PtmTerms(fit.SelectedLights());
   const auto svd = CheckedSvd(terms);
   const Eigen::VectorXd s = svd.singularValues();
   if (s[5] < kPtmConditionLimit * s[0]) {
     fit.Fail(fmt::format(
-        "ptm: the {} lights do not determine the 6 PTM coefficients (lights on one ring of equal "
-        "slant or on one line leave the biquadratic degenerate); add lights at other slants",
-        fit.selected.size()));
+        "ptm: the {} lights do not determine the 6 PTM coefficients: their directions' (lu, lv) "
+        "all lie on the conic {} (as lights on one ring of equal slant, on one line or on the "
+        "image axes do); add lights off it, at other slants or tilts",
+        fit.selected.size(), PtmDegenerateConic(svd.matrixU().col(5))));
   }
   return PseudoInverseTransposed(svd);
 }

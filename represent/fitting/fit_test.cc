@@ -15,6 +15,7 @@
 namespace photomat {
 namespace {
 
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
@@ -198,9 +199,23 @@ TEST(FitErrorTest, CoplanarLightsForGradientAnd3I) {
 TEST(FitErrorTest, SingleRingLeavesPtmDegenerate) {
   std::vector<LightDirection> ring;
   for (int t = 0; t < 360; t += 30) ring.push_back(LightDirection::FromSlantTilt(40, t));
+  // The message names the circle the ring lies on: lu^2 + lv^2 = sin^2 40 deg = 0.413.
   EXPECT_THAT([&] { Fit(FlatSet(ring), Method::Parse("ptm")); },
-              ThrowsMessage<Error>(HasSubstr("do not determine the 6 PTM coefficients")));
+              ThrowsMessage<Error>(AllOf(HasSubstr("do not determine the 6 PTM coefficients"),
+                                         HasSubstr("on the conic lu^2 + lv^2 - 0.413 = 0"))));
   EXPECT_NO_THROW(Fit(FlatSet(ring), Method::Parse("gradient")));
+}
+
+TEST(FitErrorTest, LightsOnTheImageAxesLeavePtmsCrossTermUndetermined) {
+  // Three rings, but only at tilts 0, 90, 180 and 270: lu * lv is 0 at every light.
+  std::vector<LightDirection> axes;
+  for (int slant : {30, 45, 60}) {
+    for (int t = 0; t < 360; t += 90) axes.push_back(LightDirection::FromSlantTilt(slant, t));
+  }
+  EXPECT_THAT([&] { Fit(FlatSet(axes), Method::Parse("ptm")); },
+              ThrowsMessage<Error>(HasSubstr("the 12 lights do not determine the 6 PTM "
+                                             "coefficients: their directions' (lu, lv) all lie "
+                                             "on the conic lu*lv = 0")));
 }
 
 // Representations as fits make them.
