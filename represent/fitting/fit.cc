@@ -124,9 +124,10 @@ std::string PtmDegenerateConic(const Eigen::VectorXd& w) {
     if (std::abs(c) < 1e-3) continue;
     const std::string_view sign =
         c < 0 ? (conic.empty() ? "-" : " - ") : (conic.empty() ? "" : " + ");
-    const std::string magnitude =
-        std::abs(std::abs(c) - 1.0) < 1e-3 && *kTerms[j] ? "" : fmt::format("{:.3g}", std::abs(c));
-    conic += fmt::format("{}{}{}", sign, magnitude, kTerms[j]);
+    const std::string_view term = kTerms[j];
+    const bool unit = std::abs(std::abs(c) - 1.0) < 1e-3 && !term.empty();
+    const std::string magnitude = unit ? "" : fmt::format("{:.3g}", std::abs(c));
+    conic += fmt::format("{}{}{}{}", sign, magnitude, unit || term.empty() ? "" : " ", term);
   }
   return conic + " = 0";
 }
