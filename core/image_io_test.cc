@@ -275,6 +275,24 @@ TEST(ImageIoTest, TruncatedImageIsAnErrorNotAPartialImage) {
   EXPECT_THAT(message, HasSubstr("hit end of file"));
 }
 
+// libjpeg decodes a JPEG cut short with a warning only, its missing rows grey; photomat refuses it
+// (FindJpegTruncation) before any pixel is used.
+TEST(ImageIoTest, TruncatedJpegIsAnErrorNotGreyRows) {
+  TempDir dir;
+  Image image(64, 48, 3);
+  for (std::size_t i = 0; i < image.values().size(); ++i) image.values()[i] = (i % 89) / 89.0f;
+  ImageWriteOptions options;
+  options.sample_type = SampleType::kUint8;
+  WriteImage(dir / "whole.jpg", image, options);
+  EXPECT_EQ(ReadImage(dir / "whole.jpg").image.width(), 64);
+  const std::string bytes = ReadTextFile(dir / "whole.jpg");
+  WriteFile(dir / "cut.jpg", bytes.substr(0, bytes.size() * 2 / 3));
+  const std::string message = MessageOf([&] { ReadImage(dir / "cut.jpg"); });
+  EXPECT_THAT(message, HasSubstr((dir / "cut.jpg").string() + ": truncated JPEG: the file ends at "
+                                                              "byte"));
+  EXPECT_THAT(message, HasSubstr("it is cut short"));
+}
+
 TEST(ImageIoTest, NanInFloatImageIsRejected) {
   TempDir dir;
   Image image(2, 2, 1);

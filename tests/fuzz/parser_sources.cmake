@@ -9,6 +9,7 @@ set(PHOTOMAT_FUZZ_PARSER_SOURCES
     core/error.cc
     core/image.cc
     core/image_io.cc
+    core/jpeg_structure.cc
     core/sample_encoding.cc
     core/json_file.cc
     core/light_direction.cc
