@@ -271,11 +271,7 @@ ImageBandReader::ImageBandReader(const fs::path& path, const ImageReadOptions& o
   if (!options.keep_alpha) config.attribute("oiio:UnassociatedAlpha", 1);
   decoder_->input = OIIO::ImageInput::open(path.string(), &config);
   if (!decoder_->input) throw Error(path, fmt::format("cannot read image: {}", OiioError("")));
-  if (std::string_view(decoder_->input->format_name()) == "jpeg") {
-    if (const std::optional<std::string> fault = FindJpegTruncation(path)) {
-      throw Error(path, "truncated JPEG: " + *fault);
-    }
-  }
+  if (std::string_view(decoder_->input->format_name()) == "jpeg") CheckJpegIsWhole(path);
   const OIIO::ImageSpec& spec = decoder_->spec = decoder_->input->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
     throw Error(path, "image has no pixels");

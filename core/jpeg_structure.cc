@@ -148,4 +148,10 @@ std::optional<std::string> FindJpegTruncation(const fs::path& path) {
   return WalkMarkers(bytes);
 }
 
+void CheckJpegIsWhole(const fs::path& path) {
+  if (const std::optional<std::string> fault = FindJpegTruncation(path)) {
+    throw Error(path, "truncated JPEG: " + *fault);
+  }
+}
+
 }  // namespace photomat

@@ -20,4 +20,7 @@ namespace photomat {
 // Throws Error when the file cannot be read.
 std::optional<std::string> FindJpegTruncation(const std::filesystem::path& path);
 
+// Throws Error "PATH: truncated JPEG: FAULT" when FindJpegTruncation finds a fault.
+void CheckJpegIsWhole(const std::filesystem::path& path);
+
 }  // namespace photomat

@@ -51,14 +51,12 @@ TEST_P(FuzzCorpusTest, ValidSeedsParseAndBadOnesAreRejected) {
   EXPECT_GE(bad, 1) << folder;
 }
 
-INSTANTIATE_TEST_SUITE_P(Parsers, FuzzCorpusTest,
-                         ::testing::Values(Corpus{"lp", FuzzLpFile},
-                                           Corpus{"manifest", FuzzCaptureManifest},
-                                           Corpus{"ptm", FuzzPtmFile}, Corpus{"rti", FuzzRtiFile},
-                                           Corpus{"stack", FuzzStackDescription}),
-                         [](const auto& param_info) {
-                           return std::string(param_info.param.folder);
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Parsers, FuzzCorpusTest,
+    ::testing::Values(Corpus{"lp", FuzzLpFile}, Corpus{"manifest", FuzzCaptureManifest},
+                      Corpus{"ptm", FuzzPtmFile}, Corpus{"rti", FuzzRtiFile},
+                      Corpus{"stack", FuzzStackDescription}, Corpus{"jpeg", FuzzJpegStructure}),
+    [](const auto& param_info) { return std::string(param_info.param.folder); });
 
 }  // namespace
 }  // namespace photomat::fuzz

@@ -14,6 +14,7 @@
 #include "capture/io/lp_file.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/jpeg_structure.h"
 #include "relight/formats/ptm_file.h"
 #include "relight/formats/rti_file.h"
 #include "represent/stack/map_stack.h"
@@ -99,6 +100,12 @@ void FuzzStackDescription(std::span<const std::uint8_t> data) {
   const Image stored(3, 2, names);
   const LoadedStack stack = StackFromDescription(text, stored, "fuzz.exr");
   RelightOnce(stack.representation);
+}
+
+// The marker walk that checks every JPEG photomat opens for truncation, through a scratch file.
+void FuzzJpegStructure(std::span<const std::uint8_t> data) {
+  static ScratchFile scratch;
+  CheckJpegIsWhole(scratch.Write(data));
 }
 
 void RunExpectingOnlyPhotomatErrors(FuzzTarget target, const std::uint8_t* data, std::size_t size) {

@@ -17,6 +17,7 @@ void FuzzCaptureManifest(std::span<const std::uint8_t> data);
 void FuzzPtmFile(std::span<const std::uint8_t> data);
 void FuzzRtiFile(std::span<const std::uint8_t> data);
 void FuzzStackDescription(std::span<const std::uint8_t> data);
+void FuzzJpegStructure(std::span<const std::uint8_t> data);
 
 // Runs `target` on `data`, swallowing photomat::Error (the expected outcome for bad input).
 using FuzzTarget = void (*)(std::span<const std::uint8_t>);
