@@ -258,17 +258,26 @@ TEST(ImageIoTest, CorruptImageIsNamed) {
   EXPECT_THAT(MessageOf([&] { ReadImage(dir / "bad.png"); }), HasSubstr("bad.png"));
 }
 
+// A 64 x 48 RGB ramp written as `name` with `type` samples, and a copy of it cut to `kept` of its
+// bytes, "cut" with the same extension, whose path is returned.
+fs::path WriteImageCutShort(const TempDir& dir, const std::string& name, SampleType type,
+                            double kept) {
+  Image image(64, 48, 3);
+  for (std::size_t i = 0; i < image.values().size(); ++i) image.values()[i] = (i % 89) / 89.0f;
+  ImageWriteOptions options;
+  options.sample_type = type;
+  WriteImage(dir / name, image, options);
+  EXPECT_EQ(ReadImage(dir / name).image.width(), 64);
+  const std::string bytes = ReadTextFile(dir / name);
+  const fs::path cut = dir / ("cut" + fs::path(name).extension().string());
+  WriteFile(cut, bytes.substr(0, static_cast<std::size_t>(bytes.size() * kept)));
+  return cut;
+}
+
 TEST(ImageIoTest, TruncatedImageIsAnErrorNotAPartialImage) {
   TempDir dir;
-  Image image(64, 64, 3);
-  for (std::size_t i = 0; i < image.values().size(); ++i) image.values()[i] = (i % 97) / 97.0f;
-  ImageWriteOptions options;
-  options.sample_type = SampleType::kUint16;
-  WriteImage(dir / "full.png", image, options);
-  const auto size = std::filesystem::file_size(dir / "full.png");
-  std::filesystem::copy_file(dir / "full.png", dir / "cut.png");
-  std::filesystem::resize_file(dir / "cut.png", size / 2);
-  const std::string message = MessageOf([&] { ReadImage(dir / "cut.png"); });
+  const fs::path cut = WriteImageCutShort(dir, "full.png", SampleType::kUint16, 0.5);
+  const std::string message = MessageOf([&] { ReadImage(cut); });
   EXPECT_THAT(message, HasSubstr("cut.png"));
   // One line: OpenImageIO's PNG reader gives three messages for this fault, joined by "; ".
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
@@ -279,17 +288,9 @@ TEST(ImageIoTest, TruncatedImageIsAnErrorNotAPartialImage) {
 // (FindJpegTruncation) before any pixel is used.
 TEST(ImageIoTest, TruncatedJpegIsAnErrorNotGreyRows) {
   TempDir dir;
-  Image image(64, 48, 3);
-  for (std::size_t i = 0; i < image.values().size(); ++i) image.values()[i] = (i % 89) / 89.0f;
-  ImageWriteOptions options;
-  options.sample_type = SampleType::kUint8;
-  WriteImage(dir / "whole.jpg", image, options);
-  EXPECT_EQ(ReadImage(dir / "whole.jpg").image.width(), 64);
-  const std::string bytes = ReadTextFile(dir / "whole.jpg");
-  WriteFile(dir / "cut.jpg", bytes.substr(0, bytes.size() * 2 / 3));
-  const std::string message = MessageOf([&] { ReadImage(dir / "cut.jpg"); });
-  EXPECT_THAT(message, HasSubstr((dir / "cut.jpg").string() + ": truncated JPEG: the file ends at "
-                                                              "byte"));
+  const fs::path cut = WriteImageCutShort(dir, "whole.jpg", SampleType::kUint8, 2.0 / 3.0);
+  const std::string message = MessageOf([&] { ReadImage(cut); });
+  EXPECT_THAT(message, HasSubstr(cut.string() + ": truncated JPEG: the file ends at byte"));
   EXPECT_THAT(message, HasSubstr("it is cut short"));
 }
 
