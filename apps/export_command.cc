@@ -485,15 +485,20 @@ struct CaptureExportFits {
   std::vector<Method> viewer_methods;
 };
 
+// The index of `method` (by name) in `methods`, appended when missing: each method is fitted once.
+std::size_t IndexOfOrAppend(std::vector<Method>& methods, const Method& method) {
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    if (methods[k].Name() == method.Name()) return k;
+  }
+  methods.push_back(method);
+  return methods.size() - 1;
+}
+
 CaptureExportFits PlanCaptureExportFits(const ExportCommandOptions& options,
                                         const StreamedSet& set) {
   CaptureExportFits fits;
   const auto encoded_index = [&](const Method& method) {
-    for (std::size_t k = 0; k < fits.encoded.size(); ++k) {
-      if (fits.encoded[k].Name() == method.Name()) return k;
-    }
-    fits.encoded.push_back(method);
-    return fits.encoded.size() - 1;
+    return IndexOfOrAppend(fits.encoded, method);
   };
   if (!options.ptm.empty()) fits.ptm_fit = encoded_index(PtmMethod(options, "", set.channels()));
   if (!options.rti.empty()) fits.rti_fit = encoded_index(HshMethod(options, ""));
@@ -506,11 +511,8 @@ CaptureExportFits PlanCaptureExportFits(const ExportCommandOptions& options,
   const Method maps_method = Method::Parse(options.method.empty() ? "gradient" : options.method);
   fits.viewer_methods = options.method.empty() ? AllMethods() : std::vector{maps_method};
   if (!options.out.empty() || !options.compact.empty()) fits.linear.push_back(maps_method);
-  for (const Method& m : options.viewer.empty() ? std::vector<Method>{} : fits.viewer_methods) {
-    if (std::none_of(fits.linear.begin(), fits.linear.end(),
-                     [&](const Method& l) { return l.Name() == m.Name(); })) {
-      fits.linear.push_back(m);
-    }
+  if (!options.viewer.empty()) {
+    for (const Method& m : fits.viewer_methods) IndexOfOrAppend(fits.linear, m);
   }
   return fits;
 }
